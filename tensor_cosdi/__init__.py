@@ -1,0 +1,17 @@
+"""tensor_cosdi — compressive spectral and spectral-depth imaging on TensorLy.
+
+The public API, re-exported.  See ``SPEC.md``/``DESIGN.md`` in the project
+docs for the systems and the operator protocol.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from . import operators, testing
+from .operators import TensorOperator
+
+try:
+    __version__ = version("tensor_cosdi")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = ["operators", "testing", "TensorOperator", "__version__"]

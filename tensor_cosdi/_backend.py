@@ -1,0 +1,184 @@
+"""Thin glue over TensorLy backends.
+
+Everything backend-specific in tensor_cosdi goes through this module: creating
+tensors that follow the context (backend, dtype, device) of another tensor,
+converting to NumPy, finiteness checks, FFTs and batched small solves, for which
+TensorLy has no backend-neutral function.  Operators keep their parameters as
+NumPy arrays and convert them once per context (see :class:`ParamCache`).
+"""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import tensorly as tl
+
+__all__ = [
+    "backend_name",
+    "to_numpy",
+    "tensor_like",
+    "zeros_like_shape",
+    "all_finite",
+    "check_floating",
+    "default_rng",
+    "ParamCache",
+    "rfftn",
+    "irfftn",
+    "batched_solve",
+    "real_dtype_name",
+]
+
+
+def backend_name() -> str:
+    """Name of the active TensorLy backend (``"numpy"``, ``"pytorch"`` …)."""
+    return tl.get_backend()
+
+
+def dtype(name: str):
+    """The active backend's dtype object for ``"float32"``/``"float64"``.
+
+    (``tensorly.float64`` is bound to NumPy's at import time; the backend
+    module dispatches to the active backend.)
+    """
+    import tensorly.backend as tb
+
+    return getattr(tb, name)
+
+
+def as_tensor(array, dtype_name: str = "float64"):
+    """NumPy array → tensor of the active backend with the named dtype."""
+    return tl.tensor(np.asarray(array), dtype=dtype(dtype_name))
+
+
+def to_numpy(x) -> np.ndarray:
+    """Return ``x`` as a NumPy array (no copy for NumPy inputs)."""
+    if isinstance(x, np.ndarray):
+        return x
+    return tl.to_numpy(x)
+
+
+def context_key(x) -> tuple:
+    """Hashable key of the backend, dtype and device of tensor ``x``."""
+    ctx = tl.context(x)
+    return (backend_name(), str(ctx.get("dtype")), str(ctx.get("device", "")))
+
+
+def tensor_like(array, like):
+    """Create a tensor from ``array`` with the backend, dtype and device of ``like``."""
+    ctx = tl.context(like)
+    ctx.pop("requires_grad", None)
+    return tl.tensor(array, **ctx)
+
+
+def zeros_like_shape(shape, like):
+    """Zeros of ``shape`` with the backend, dtype and device of ``like``."""
+    ctx = tl.context(like)
+    ctx.pop("requires_grad", None)
+    return tl.zeros(tuple(shape), **ctx)
+
+
+def real_dtype_name(x) -> str:
+    """``"float32"``, ``"float64"`` … for any backend tensor."""
+    return str(tl.context(x)["dtype"]).replace("torch.", "")
+
+
+def check_floating(x, what: str = "input") -> None:
+    """Raise ``ValueError`` unless ``x`` holds real floating-point numbers."""
+    name = real_dtype_name(x)
+    if not name.startswith(("float", "bfloat")):
+        raise ValueError(
+            f"{what} must be a real floating-point tensor (float32 or float64), got dtype {name}"
+        )
+
+
+def all_finite(x) -> bool:
+    """True when no entry of ``x`` is NaN or ±inf (exact, one pass)."""
+    if isinstance(x, np.ndarray):
+        return bool(np.isfinite(x).all())
+    if backend_name() == "pytorch":
+        import torch
+
+        return bool(torch.isfinite(x).all())
+    return bool(np.isfinite(to_numpy(x)).all())
+
+
+def default_rng(seed=None) -> np.random.Generator:
+    """Seeded NumPy generator; passes an existing ``Generator`` through."""
+    if isinstance(seed, np.random.Generator):
+        return seed
+    return np.random.default_rng(seed)
+
+
+class ParamCache:
+    """Per-context cache of an operator's NumPy parameters.
+
+    Operators are immutable; converting a 256×256 code to a float32 torch
+    tensor on every call would cost more than the sensing itself, so the
+    converted copy is kept per (backend, dtype, device).
+    """
+
+    def __init__(self):
+        self._store: dict = {}
+        self._lock = threading.Lock()
+
+    def get(self, name: str, array: np.ndarray, like):
+        if isinstance(like, np.ndarray):
+            key = (name, "numpy", like.dtype.str, "")
+            hit = self._store.get(key)
+            if hit is None:
+                hit = np.ascontiguousarray(array, dtype=like.dtype)
+                with self._lock:
+                    self._store[key] = hit
+            return hit
+        key = (name,) + context_key(like)
+        hit = self._store.get(key)
+        if hit is None:
+            hit = tensor_like(np.ascontiguousarray(array), like)
+            with self._lock:
+                self._store[key] = hit
+        return hit
+
+    def __getstate__(self):
+        return {}
+
+    def __setstate__(self, state):
+        self.__init__()
+
+
+# ---------------------------------------------------------------- FFT and solves
+def rfftn(x, s, axes):
+    """Real FFT over ``axes`` with zero padding to sizes ``s`` (any backend)."""
+    if isinstance(x, np.ndarray):
+        import scipy.fft
+
+        return scipy.fft.rfftn(x, s=s, axes=axes, workers=-1)
+    if backend_name() == "pytorch":
+        import torch
+
+        return torch.fft.rfftn(x, s=s, dim=axes)
+    raise NotImplementedError(f"FFT is not wired for the {backend_name()!r} backend")
+
+
+def irfftn(X, s, axes):
+    """Inverse of :func:`rfftn` for real outputs of sizes ``s``."""
+    if isinstance(X, np.ndarray):
+        import scipy.fft
+
+        return scipy.fft.irfftn(X, s=s, axes=axes, workers=-1)
+    if backend_name() == "pytorch":
+        import torch
+
+        return torch.fft.irfftn(X, s=s, dim=axes)
+    raise NotImplementedError(f"FFT is not wired for the {backend_name()!r} backend")
+
+
+def batched_solve(A, b):
+    """Solve ``A[..., :, :] x[..., :] = b[..., :]`` for every leading index."""
+    if isinstance(A, np.ndarray):
+        return np.linalg.solve(A, b[..., None])[..., 0]
+    if backend_name() == "pytorch":
+        import torch
+
+        return torch.linalg.solve(A, b)
+    return tl.tensor(np.linalg.solve(to_numpy(A), to_numpy(b)[..., None])[..., 0])

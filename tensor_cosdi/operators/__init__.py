@@ -1,0 +1,61 @@
+"""Matrix-free linear operators on tensors (SPEC §2, §4).
+
+Every imager in :mod:`tensor_cosdi.systems` is a composition of these
+primitives; each has an exact adjoint and an explicit sparse matrix for tests.
+"""
+
+from ._base import (
+    Adjoint,
+    Composition,
+    Identity,
+    OperatorSum,
+    Routing,
+    Scaled,
+    Stack,
+    TensorOperator,
+    unvec,
+    validate_shape,
+    vec,
+    vec_index,
+    weighted_sum,
+)
+from .blur import Blur
+from .codes import Code
+from .integrate import Replicate, SumAxis
+from .layout import LAYOUTS, LightFieldLayout, Pad, Transpose
+from .modes import ModeProduct
+from .shear import Shear, parse_shifts, shear_bands, unshear_bands
+from .woodbury import Diagonal, PixelBlocks, RowBanded, conjugate_gradient
+
+__all__ = [
+    "TensorOperator",
+    "Composition",
+    "OperatorSum",
+    "Scaled",
+    "Adjoint",
+    "Stack",
+    "Identity",
+    "weighted_sum",
+    "ModeProduct",
+    "Code",
+    "Shear",
+    "parse_shifts",
+    "shear_bands",
+    "unshear_bands",
+    "SumAxis",
+    "Replicate",
+    "Blur",
+    "Transpose",
+    "Pad",
+    "LightFieldLayout",
+    "LAYOUTS",
+    "Diagonal",
+    "PixelBlocks",
+    "RowBanded",
+    "conjugate_gradient",
+    "Routing",
+    "vec",
+    "unvec",
+    "vec_index",
+    "validate_shape",
+]

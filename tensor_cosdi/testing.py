@@ -1,0 +1,183 @@
+"""Testing helpers: the dot test and a registry of small operator instances.
+
+The generic tests loop over :func:`registry` (every primitive and the
+compositions the imagers are made of); later modules add their own instances
+with :func:`register`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import tensorly as tl
+
+from . import _backend as B
+from .operators import (
+    Blur,
+    Code,
+    LightFieldLayout,
+    ModeProduct,
+    Pad,
+    Replicate,
+    Shear,
+    Stack,
+    SumAxis,
+    TensorOperator,
+    Transpose,
+    weighted_sum,
+)
+
+__all__ = ["dot_test", "register", "registry", "random_tensor"]
+
+
+def random_tensor(shape, *, rng=None, dtype="float64"):
+    """Seeded standard-normal tensor of ``shape`` on the active backend."""
+    rng = B.default_rng(rng)
+    return B.as_tensor(rng.standard_normal(tuple(shape)), dtype)
+
+
+def dot_test(op: TensorOperator, *, rng=0, dtype: str = "float64") -> float:
+    """Relative error of ``⟨A x, y⟩ = ⟨x, Aᵀ y⟩`` on seeded random ``x``, ``y``.
+
+    Returns ``|⟨Ax, y⟩ − ⟨x, Aᵀy⟩| / (‖Ax‖ ‖y‖)``: the mismatch relative to the
+    largest value the inner product can take (Cauchy–Schwarz), which does not
+    blow up when the inner product happens to be near zero.
+
+    Examples
+    --------
+    >>> from tensor_cosdi.operators import Shear
+    >>> dot_test(Shear((4, 5, 3), 2)) < 1e-12
+    True
+    """
+    rng = B.default_rng(rng)
+    x = random_tensor(op.input_shape, rng=rng, dtype=dtype)
+    y = random_tensor(op.output_shape, rng=rng, dtype=dtype)
+    ax = op.forward(x)
+    aty = op.adjoint(y)
+    lhs = float(tl.sum(ax * y))
+    rhs = float(tl.sum(x * aty))
+    scale = float(tl.norm(ax)) * float(tl.norm(y))
+    if scale == 0.0:
+        return abs(lhs - rhs)
+    return abs(lhs - rhs) / scale
+
+
+_REGISTRY: dict[str, Callable[[np.random.Generator], TensorOperator]] = {}
+
+
+def register(name: str, factory: Callable[[np.random.Generator], TensorOperator]) -> None:
+    """Add a small operator instance (``factory(rng) -> TensorOperator``) to the registry."""
+    if name in _REGISTRY:
+        raise ValueError(f"an operator named {name!r} is already registered")
+    _REGISTRY[name] = factory
+
+
+def registry() -> dict[str, Callable[[np.random.Generator], TensorOperator]]:
+    """Name → factory of every registered small operator instance."""
+    return dict(_REGISTRY)
+
+
+def _binary(rng, shape, transmittance=0.5):
+    return (rng.random(shape) < transmittance).astype(float)
+
+
+def _sd_cassi(rng, shape=(6, 7, 4), shifts=1):
+    code = Code(_binary(rng, shape[:2]), shape)
+    shear = Shear(shape, shifts)
+    return SumAxis(shear.output_shape, 2) @ shear @ code
+
+
+def _builtin():
+    r = register
+    r("code", lambda g: Code(g.random((5, 6)), (5, 6, 3)))
+    r("code_axes", lambda g: Code(g.random((3, 4)), (4, 5, 3), axes=(2, 0)))
+    r("code_full", lambda g: Code(g.standard_normal((3, 4, 2)), (3, 4, 2)))
+    r("shear_step1", lambda g: Shear((4, 5, 3), 1))
+    r("shear_step2", lambda g: Shear((4, 5, 3), 2))
+    r("shear_per_band", lambda g: Shear((3, 4, 4), [0, 1, 1, 4]))
+    r("shear_fractional", lambda g: Shear((3, 5, 4), [0.0, 0.6, 1.5, 2.25]))
+    r("shear_axes", lambda g: Shear((4, 3, 5, 2), 1, axis=2, band_axis=1))
+    r("sum_axis", lambda g: SumAxis((3, 4, 5), 2))
+    r("sum_axis0", lambda g: SumAxis((3, 4, 5), 0))
+    r("replicate", lambda g: Replicate((3, 4), 2, 3))
+    r("mode_product_one", lambda g: ModeProduct((4, 5, 6), {2: g.standard_normal((3, 6))}))
+    r(
+        "mode_product_all",
+        lambda g: ModeProduct(
+            (3, 4, 5), [g.standard_normal((2, 3)), g.standard_normal((4, 4)), g.standard_normal((6, 5))]
+        ),
+    )
+    r("blur", lambda g: Blur((6, 7, 2), g.random((3, 3, 2))))
+    r("blur_even", lambda g: Blur((5, 6, 2, 3), g.random((4, 2, 2, 3))))
+    r("transpose", lambda g: Transpose((2, 3, 4), (2, 0, 1)))
+    r("pad", lambda g: Pad((3, 4), axis=1, before=2, after=1))
+    r("lightfield_interleaved", lambda g: LightFieldLayout((3, 2, 2, 2, 3), "interleaved"))
+    r("lightfield_tiled", lambda g: LightFieldLayout((3, 2, 2, 2, 3), "tiled"))
+    r(
+        "lightfield_tiled_to_interleaved",
+        lambda g: LightFieldLayout((2, 3, 2, 3, 2), "tiled")
+        @ LightFieldLayout((2, 3, 2, 3, 2), "interleaved").T,
+    )
+    r("sd_cassi", lambda g: _sd_cassi(g))
+    r("sd_cassi_step2", lambda g: _sd_cassi(g, (5, 6, 4), 2))
+    r("sd_cassi_fractional", lambda g: _sd_cassi(g, (5, 6, 4), [0.0, 0.5, 1.25, 3.0]))
+    r("sd_cassi_adjoint", lambda g: _sd_cassi(g).T)
+    r("multishot_cassi", lambda g: Stack([_sd_cassi(np.random.default_rng(k)) for k in range(3)]))
+
+    def dd_cassi(g, shape=(5, 6, 4)):
+        wide = _binary(g, (shape[0], shape[1] + shape[2] - 1))
+        sheared = np.stack([wide[:, l : l + shape[1]] for l in range(shape[2])], axis=2)
+        return SumAxis(shape, 2) @ Code(sheared, shape)
+
+    r("dd_cassi", dd_cassi)
+
+    def vsi(g, shape=(4, 6, 3), beta=1):
+        code = Code(_binary(g, shape[:2]), shape)
+        shear = Shear(shape, 1)
+        dispersed = SumAxis(shear.output_shape, 2) @ shear @ code
+        width = shape[2] - 1
+        direct = Pad(shape[:2], axis=1, before=beta, after=width - beta) @ SumAxis(shape, 2) @ code
+        return weighted_sum([dispersed, direct], [0.7, 0.3])
+
+    r("vsi", vsi)
+
+    def dfa(g, shape=(4, 5, 3, 2)):
+        code = Code(_binary(g, (shape[0], shape[1], shape[3])), shape, axes=(0, 1, 3))
+        shear = Shear(shape, 1)
+        s1 = SumAxis(shear.output_shape, 2)
+        return SumAxis(s1.output_shape, 2) @ s1 @ shear @ code
+
+    r("dfa", dfa)
+
+    def dfa_psf(g, shape=(5, 5, 2, 2)):
+        blur = Blur(shape, g.random((3, 3, 2, 2)))
+        return dfa(g, shape) @ blur
+
+    r("dfa_psf", dfa_psf)
+
+    def cs2li(g, shape=(4, 5, 3, 2)):
+        wide = _binary(g, (shape[0], shape[1] + shape[2] - 1))
+        ceff = np.stack([wide[:, l : l + shape[1]] for l in range(shape[2])], axis=2)
+        return SumAxis(shape, 2) @ Code(ceff, shape, axes=(0, 1, 2))
+
+    r("cs2li", cs2li)
+
+    def c3slfi(g, shape=(3, 2, 4, 2, 2), K=2):
+        raw = g.random(shape + (K,))
+        codes = raw / raw.sum(-1, keepdims=True)  # complementary: Σ_k T = 1
+        ops = [SumAxis(shape, 2) @ Code(codes[..., k], shape) for k in range(K)]
+        return Stack(ops, axis=2)
+
+    r("c3slfi", c3slfi)
+    r(
+        "c3slfi_3d",
+        lambda g: Stack(
+            [SumAxis((4, 6, 3), 2) @ Code(g.random((4, 6, 3)), (4, 6, 3)) for _ in range(3)]
+        )
+        @ LightFieldLayout((2, 3, 3, 2, 2), "interleaved"),
+    )
+    r("scaled_difference", lambda g: 2.0 * _sd_cassi(g) - 0.5 * _sd_cassi(g))
+
+
+_builtin()

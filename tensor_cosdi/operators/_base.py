@@ -52,7 +52,7 @@ def validate_shape(shape, what: str = "shape") -> tuple[int, ...]:
     out = []
     for n in items:
         if isinstance(n, bool) or not isinstance(n, numbers.Integral):
-            if isinstance(n, numbers.Real) and float(n).is_integer():
+            if not isinstance(n, bool) and isinstance(n, numbers.Real) and float(n).is_integer():
                 n = int(n)
             else:
                 raise ValueError(
@@ -323,12 +323,18 @@ class TensorOperator:
 
         Uses the Woodbury identity ``(AᵀA + μI)⁻¹ = μ⁻¹ [I − Aᵀ (μI + AAᵀ)⁻¹ A]``
         when ``gram_dual()`` has a structure, else conjugate gradients on the
-        normal equations directly.
+        normal equations directly.  For tall operators (more outputs than
+        inputs) whose ``AᵀA`` itself is structured, that structure is solved
+        directly: no division by a small ``μ``, no cancellation.
         """
         from .woodbury import conjugate_gradient
 
         mu = _check_mu(mu)
         r = self._check(r, self.input_shape, "solve_normal", "input")
+        if self.shape[0] > self.shape[1]:
+            primal = self.T.gram_dual()
+            if primal is not None:
+                return primal.solve(r, mu)
         gram = self.gram_dual()
         if gram is not None:
             return (r - self._adjoint(gram.solve(self._forward(r), mu))) / mu

@@ -24,6 +24,7 @@ needed and compositions, sums and stacks are covered alike.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -331,11 +332,14 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
     Backend-neutral (works on GPU tensors), so it is written on TensorLy
     operations rather than ``scipy.sparse.linalg.cg``, which needs NumPy
     vectors.  Stops when ``‖b − apply(x)‖ ≤ rtol ‖b‖`` or after ``maxiter``
-    iterations (default: the number of unknowns, at most 10 000).
+    iterations (default: ten times the number of unknowns, between 100 and
+    10 000 — round-off makes ill-conditioned systems need more than ``n``).
+    Emits a ``RuntimeWarning`` with the reached residual when it stops
+    before the tolerance.
     """
     n = int(np.prod(tl.shape(b)))
     if maxiter is None:
-        maxiter = min(n, 10_000)
+        maxiter = int(min(max(10 * n, 100), 10_000))
     x = tl.zeros(tl.shape(b), **_ctx(b)) if x0 is None else x0
     r = b - apply(x) if x0 is not None else b
     p = r
@@ -354,6 +358,14 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
         rs_new = float(tl.sum(r * r))
         p = r + (rs_new / rs) * p
         rs = rs_new
+    else:
+        if rs > tol2:
+            warnings.warn(
+                f"conjugate gradients stopped after {maxiter} iterations at relative residual "
+                f"{np.sqrt(rs / bnorm2):.2e} (> rtol={rtol:.0e})",
+                RuntimeWarning,
+                stacklevel=2,
+            )
     return x
 
 

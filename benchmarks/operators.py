@@ -1,0 +1,127 @@
+"""Speed of the SD-CASSI operator against a memory copy (issue: foundation).
+
+For a 256×256×28 float32 cube, a 256×256 mask and a 2-px-per-band shear
+(measurement 256×310), prints the median time of the SD-CASSI forward
+(code → shear → sum over bands) and of its adjoint, each as a ratio to a copy
+of the cube measured in the same run, for two memory layouts of the same
+logical ``(x, y, λ)`` tensor:
+
+* ``C``: NumPy's default, λ fastest in memory;
+* ``band-major``: each band slice ``cube[:, :, l]`` contiguous (what the
+  adjoint returns, so solver iterates stay in it).
+
+Reference rows: the same composition executed factor by factor (no fusion)
+and a plain per-band loop over the C layout.
+
+    python benchmarks/operators.py [--repeats 50] [--mask PATH] [--out FILE]
+
+Never asserts anything: machines are shared and noisy; read the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tensor_cosdi.operators import Code, Shear, SumAxis
+
+DEFAULT_MASK = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
+
+
+def median_seconds(fn, repeats):
+    fn()  # warm-up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def load_mask(path):
+    if path is not None and Path(path).exists():
+        import scipy.io
+
+        return scipy.io.loadmat(path)["mask"].astype(np.float32), f"real mask {Path(path).name}"
+    rng = np.random.default_rng(0)
+    return (rng.random((256, 256)) < 0.5).astype(np.float32), "random binary mask (real mask not found)"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=50)
+    ap.add_argument("--mask", default=str(DEFAULT_MASK))
+    ap.add_argument("--out", default=None, help="also write the Markdown table to this file")
+    args = ap.parse_args(argv)
+
+    nx, ny, nb, step = 256, 256, 28, 2
+    mask, mask_note = load_mask(args.mask)
+    shape = (nx, ny, nb)
+    shear = Shear(shape, step)
+    op = SumAxis(shear.output_shape, 2) @ shear @ Code(mask, shape)
+    assert op.output_shape == (256, 310)
+
+    rng = np.random.default_rng(1)
+    cube_c = rng.random(shape, dtype=np.float32)
+    cube_b = np.moveaxis(np.ascontiguousarray(np.moveaxis(cube_c, 2, 0)), 0, 2)
+    y = op.forward(cube_c)
+
+    def naive_forward(x):
+        w = x * mask[:, :, None]
+        out = np.zeros(op.output_shape, np.float32)
+        for l in range(nb):
+            out[:, step * l : step * l + ny] += w[:, :, l]
+        return out
+
+    def unfused_forward(x):
+        for f in reversed(op.factors):
+            x = f._forward(x)
+        return x
+
+    def unfused_adjoint(v):
+        for f in op.factors:
+            v = f._adjoint(v)
+        return v
+
+    rows = []
+    r = args.repeats
+    for layout, cube in (("C", cube_c), ("band-major", cube_b)):
+        t_copy = median_seconds(lambda: np.copy(cube, order="K"), r)
+        entries = [
+            ("forward (checked)", lambda: op.forward(cube)),
+            ("forward (kernel)", lambda: op._forward(cube)),
+            ("adjoint (checked)", lambda: op.adjoint(y)),
+            ("forward, unfused factors", lambda: unfused_forward(cube)),
+            ("adjoint, unfused factors", lambda: unfused_adjoint(y)),
+        ]
+        if layout == "C":
+            entries.append(("forward, naive per-band loop", lambda: naive_forward(cube)))
+        for name, fn in entries:
+            t = median_seconds(fn, r)
+            rows.append((layout, name, t * 1e3, t / t_copy, t_copy * 1e3))
+    # the adjoint returns band-major output whatever the input layout
+    lines = [
+        f"SD-CASSI 256×256×28 float32, 2 px/band shear → 256×310, {mask_note}; "
+        f"median of {r} repeats; {platform.processor() or platform.machine()}, "
+        f"numpy {np.__version__}",
+        "",
+        "| cube layout | operation | ms | × copy | copy ms |",
+        "|---|---|---:|---:|---:|",
+    ]
+    for layout, name, ms, ratio, copy_ms in rows:
+        lines.append(f"| {layout} | {name} | {ms:.3f} | {ratio:.2f} | {copy_ms:.3f} |")
+    text = "\n".join(lines)
+    print(text)
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text + "\n")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

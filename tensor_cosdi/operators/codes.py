@@ -38,9 +38,8 @@ class Code(TensorOperator):
     >>> import numpy as np
     >>> from tensor_cosdi.operators import Code
     >>> op = Code(np.array([[1.0, 0.0], [0.5, 1.0]]), (2, 2, 3))
-    >>> op.forward(np.ones((2, 2, 3)))[:, :, 0]
-    array([[1. , 0. ],
-           [0.5, 1. ]])
+    >>> op.forward(np.ones((2, 2, 3)))[:, :, 0].tolist()
+    [[1.0, 0.0], [0.5, 1.0]]
     """
 
     def __init__(self, code, input_shape, *, axes=None):

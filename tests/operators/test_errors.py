@@ -148,3 +148,22 @@ def test_bad_mu(mu):
     op = registry()["sd_cassi"](np.random.default_rng(0))
     with pytest.raises(ValueError, match="mu must be a finite positive number"):
         op.solve_normal(np.ones(op.input_shape), mu)
+
+
+def test_nan_in_discarded_entries_and_overflow():
+    """Compressive maps scan their (smaller) result: a NaN that cannot reach the
+    result is ignored, one that can is reported as the argument's; overflow of
+    finite input is named as such."""
+    shear = Shear((3, 4, 3), 1)
+    y = np.ones(shear.output_shape)
+    y[0, 0, 2] = np.nan  # band 2 starts at column 2: column 0 is cropped away
+    clean = y.copy()
+    clean[0, 0, 2] = 0.0
+    np.testing.assert_array_equal(shear.adjoint(y), shear.adjoint(clean))
+    y[0, 3, 2] = np.inf  # this one lands in the result
+    with pytest.raises(ValueError, match=r"argument of shape \(3, 6, 3\) contains NaN or inf"):
+        shear.adjoint(y)
+    op = sd((2, 2, 3))
+    big = np.full(op.input_shape, 3e38, dtype=np.float32)
+    with pytest.raises(ValueError, match="overflowed to inf for a finite argument"):
+        op.forward(big)

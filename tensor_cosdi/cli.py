@@ -85,6 +85,11 @@ def run_demo(args) -> int:
     cube = colorchecker(shape[:2], wl)
     rng = np.random.default_rng(args.seed)
     out = Path(args.out)
+    systems = _demo_systems(shape, rng)
+    targets = [out / f"measurement_{i + 1}.png" for i in range(len(systems))]
+    existing = [str(t) for t in targets if t.exists()]
+    if existing and not args.force:  # refuse before writing anything
+        raise FileExistsError(f"{', '.join(existing)} exist(s); pass --force to overwrite")
     out.mkdir(parents=True, exist_ok=True)
 
     print(
@@ -93,7 +98,6 @@ def run_demo(args) -> int:
         f"seed {args.seed}"
     )
     rows = []
-    systems = _demo_systems(shape, rng)
     for i, (name, op) in enumerate(tqdm(systems, desc="systems", disable=args.quiet)):
         clean = op.forward(cube)
         g = add_noise(clean, args.snr_db, rng=rng)
@@ -108,8 +112,7 @@ def run_demo(args) -> int:
         estimate = op.solve_normal(op.adjoint(g), mu)
         t_solve = time.perf_counter() - t0
         quality = psnr(cube, np.clip(estimate, 0, None), data_range=1.0)
-        png = out / f"measurement_{i + 1}.png"
-        _save_png(png, g, args.force)
+        _save_png(targets[i], g, args.force)
         rows.append(
             (name, "×".join(map(str, op.output_shape)), type(structure).__name__, err,
              t_fwd, t_adj, 1e3 * t_struct, 1e3 * t_solve, quality)

@@ -31,6 +31,10 @@ def test_demo_refuses_to_overwrite(tmp_path, capsys):
     assert "--force" in capsys.readouterr().err
     assert (out / "measurement_1.png").read_bytes() == before
     assert main(args + ["--force"]) == 0
+    # a partial earlier run: nothing is written unless every file may be
+    (out / "measurement_1.png").unlink()
+    assert main(args) == 2
+    assert not (out / "measurement_1.png").exists()
 
 
 def test_demo_rejects_bad_sizes(capsys):

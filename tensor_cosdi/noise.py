@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from . import _backend as B
 
 __all__ = ["add_noise", "snr_db"]

@@ -340,7 +340,7 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
     n = int(np.prod(tl.shape(b)))
     if maxiter is None:
         maxiter = int(min(max(10 * n, 100), 10_000))
-    x = tl.zeros(tl.shape(b), **_ctx(b)) if x0 is None else x0
+    x = B.zeros_like_shape(tl.shape(b), b) if x0 is None else x0
     r = b - apply(x) if x0 is not None else b
     p = r
     rs = float(tl.sum(r * r))
@@ -368,8 +368,3 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
             )
     return x
 
-
-def _ctx(x):
-    ctx = tl.context(x)
-    ctx.pop("requires_grad", None)
-    return ctx

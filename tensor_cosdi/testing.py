@@ -178,6 +178,30 @@ def _builtin():
         @ LightFieldLayout((2, 3, 3, 2, 2), "interleaved"),
     )
     r("scaled_difference", lambda g: 2.0 * _sd_cassi(g) - 0.5 * _sd_cassi(g))
+    _systems()
+
+
+def _systems():
+    """The operators of small seeded instances of every imager in :mod:`tensor_cosdi.systems`."""
+    from . import systems as S
+
+    r = register
+    r("system_sdcassi", lambda g: S.SDCASSI.example((5, 6, 4), rng=g).operator)
+    r("system_sdcassi_shots", lambda g: S.SDCASSI.example((4, 5, 3), rng=g, shots=3, shifts=2).operator)
+    r("system_ddcassi", lambda g: S.DDCASSI.example((5, 6, 4), rng=g, shifts=[0, 0.5, 1, 2.5]).operator)
+    r("system_dual_camera", lambda g: S.DualCameraCASSI.example((4, 5, 3), rng=g).operator)
+    r("system_cassi_vsi", lambda g: S.CASSIVSI.example((4, 6, 4), rng=g, beta=2).operator)
+    r("system_cassdi_dfa", lambda g: S.CASSDIDFA.example((4, 5, 3, 2), rng=g).operator)
+    r("system_cassdi_dfa_psf", lambda g: S.CASSDIDFA.example((5, 5, 2, 2), rng=g, psf_size=3).operator)
+    r("system_c3slfi_3d", lambda g: S.C3SLFI.example((4, 6, 5), rng=g, n_snapshots=3, views=(2, 3)).operator)
+    r("system_c3slfi_5d", lambda g: S.C3SLFI.example((2, 3, 4, 2, 2), rng=g).operator)
+    r(
+        "system_c3slfi_separable",
+        lambda g: S.C3SLFI.separable(g.random((3, 5)), (4, 4, 5), complementary=False).operator,
+    )
+    r("system_cs2li", lambda g: S.CS2LI.example((4, 5, 4, 3), rng=g, n_filters=2).operator)
+    r("system_mu_cosdi_sl", lambda g: S.MuCoSDI.example((4, 5, 3, 2), rng=g).operator)
+    r("system_mu_cosdi_lf", lambda g: S.MuCoSDI.example((4, 6, 3), rng=g, modality="lf").operator)
 
 
 _builtin()

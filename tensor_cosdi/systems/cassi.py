@@ -1,0 +1,249 @@
+"""The baselines the thesis compares against: SD-CASSI, DD-CASSI, dual-camera CASSI (SPEC §3.0)."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import tensorly as tl
+
+from .. import _backend as B
+from ..codes import random_binary
+from ..noise import add_noise
+from ..operators import Code, Pad, Shear, Stack, SumAxis
+from ._base import (
+    System,
+    as_code,
+    coded_shear_sum_matrix,
+    count,
+    dual_disperser,
+    dual_disperser_matrix,
+    dual_disperser_operator,
+    shifts_for,
+    wavelengths_for,
+)
+
+__all__ = ["SDCASSI", "DDCASSI", "DualCameraCASSI"]
+
+
+def _shots(code):
+    """Split a code of 2 or 3 axes into a list of per-shot 2-D codes."""
+    return [code] if code.ndim == 2 else [code[:, :, k] for k in range(code.shape[2])]
+
+
+def _stack(ops):
+    return ops[0] if len(ops) == 1 else Stack(ops, axis=2)
+
+
+class SDCASSI(System):
+    """Single-disperser CASSI, single- or multi-shot (SPEC §3.0, thesis Eq. 43).
+
+    ``G[:, :, k] = Σ_l shear_l(C_k ∘ F[:, :, l])``: the coded cube is sheared
+    by ``s_l`` columns per band and integrated on the detector.
+
+    Parameters
+    ----------
+    code : array_like of shape (Nx, Ny) or (Nx, Ny, K)
+        Coded aperture (transmittances ≥ 0: binary, or a measured mask); a
+        third axis gives one code per shot.
+    n_bands : int
+        ``Nλ``.
+    shifts : int, float or sequence
+        A step (``s_l = step · l``) or one non-decreasing shift per band
+        (fractional values from a calibrated prism use linear interpolation).
+    wavelengths : sequence of float, optional
+        Band centres in nm (default: ``Nλ`` evenly spaced over 450–650 nm).
+
+    Attributes
+    ----------
+    cube_shape : ``(Nx, Ny, Nλ)``, axes ``("x", "y", "λ")``
+    measurement_shape : ``(Nx, Ny + S)`` or ``(Nx, Ny + S, K)``, ``S = ⌈max s_l⌉``
+
+    Notes
+    -----
+    ``A Aᵀ`` is diagonal for integer shifts (one ``K × K`` block per pixel for
+    ``K`` shots), so ``solve_normal`` is closed form (SPEC §4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi.systems import SDCASSI
+    >>> sd = SDCASSI(np.ones((4, 5)), n_bands=3, shifts=2)
+    >>> sd.cube_shape, sd.measurement_shape
+    ((4, 5, 3), (4, 9))
+    """
+
+    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
+        self.code = as_code(code, "code", (2, 3))
+        nl = count(n_bands, "n_bands")
+        self.shifts, extra = shifts_for(shifts, nl)
+        nx, ny = self.code.shape[:2]
+        cube = (nx, ny, nl)
+        shear = Shear(cube, self.shifts)
+        ops = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in _shots(self.code)]
+        multi = self.code.ndim == 3
+        self._finish(
+            _stack(ops),
+            wavelengths=wavelengths_for(wavelengths, nl),
+            axes=("x", "y", "λ"),
+            measurement_axes=("x", "y", "k") if multi else ("x", "y"),
+        )
+
+    @property
+    def n_shots(self) -> int:
+        return 1 if self.code.ndim == 2 else self.code.shape[2]
+
+    @classmethod
+    def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):
+        """A seeded instance: random binary code(s) for ``cube_shape`` (default ``(16, 16, 8)``).
+
+        ``shots > 1`` gives a multi-shot system; ``overrides`` go to the constructor.
+        """
+        nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
+        shape = (nx, ny) if shots == 1 else (nx, ny, count(shots, "shots"))
+        code = random_binary(shape, transmittance=transmittance, rng=rng)
+        return cls(code, n_bands=nl, **overrides)
+
+    def matrix(self):
+        nx, ny, nl = self.cube_shape
+        width = self.measurement_shape[1]
+        blocks = [
+            coded_shear_sum_matrix(np.repeat(c[:, :, None], nl, axis=2), self.shifts, width)
+            for c in _shots(self.code)
+        ]
+        return sp.vstack(blocks, format="csr")  # shot k occupies rows Nx·W·k …
+
+
+class DDCASSI(System):
+    """Dual-disperser CASSI (SPEC §3.0): the code is seen sheared, the image is not.
+
+    ``G = Σ_l C[:, s_l : s_l + Ny] ∘ F[:, :, l]``: a spatially aligned
+    ``(Nx, Ny)`` measurement (a third code axis gives ``K`` shots).
+
+    Parameters
+    ----------
+    code : array_like of shape (Nx, Ny + S) or (Nx, Ny + S, K)
+        ``S = ⌈max s_l⌉`` extra columns, so that every band reads a full
+        ``Ny``-column window of the code.
+    n_bands, shifts, wavelengths
+        As for :class:`SDCASSI`.
+
+    Notes
+    -----
+    ``A Aᵀ = diag(Σ_l Ceff_l²)`` (one ``K × K`` block per pixel with shots).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi.systems import DDCASSI
+    >>> DDCASSI(np.ones((4, 7)), n_bands=3, shifts=1).cube_shape
+    (4, 5, 3)
+    """
+
+    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
+        self.code = as_code(code, "code", (2, 3))
+        nl = count(n_bands, "n_bands")
+        self.effective_codes = []
+        for c in _shots(self.code):
+            self.shifts, ceff = dual_disperser(c, nl, shifts)
+            self.effective_codes.append(ceff)
+        cube = self.effective_codes[0].shape
+        ops = [dual_disperser_operator(ce, cube) for ce in self.effective_codes]
+        multi = self.code.ndim == 3
+        self._finish(
+            _stack(ops),
+            wavelengths=wavelengths_for(wavelengths, nl),
+            axes=("x", "y", "λ"),
+            measurement_axes=("x", "y", "k") if multi else ("x", "y"),
+        )
+
+    @classmethod
+    def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):
+        """A seeded instance for ``cube_shape`` (default ``(16, 16, 8)``)."""
+        nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
+        _, extra = shifts_for(overrides.get("shifts", 1), nl)
+        shape = (nx, ny + extra) + (() if shots == 1 else (count(shots, "shots"),))
+        return cls(random_binary(shape, transmittance=transmittance, rng=rng), n_bands=nl, **overrides)
+
+    def matrix(self):
+        ny = self.cube_shape[1]
+        return sp.vstack(
+            [dual_disperser_matrix(c, self.shifts, ny, 1) for c in _shots(self.code)], format="csr"
+        )
+
+
+class DualCameraCASSI(System):
+    """SD-CASSI plus a separate panchromatic camera (side information, thesis Ch. 3).
+
+    Two frames in one tensor of shape ``(Nx, Ny + S, 2)`` (axes ``x, y,
+    camera``): ``G[:, :, 0]`` is the SD-CASSI frame, ``G[:, :Ny, 1] = Σ_l
+    F[:, :, l]`` the panchromatic image (columns ``Ny:`` of frame 1 are always
+    zero).  The thesis compares against a *noise-free* panchromatic image,
+    so :meth:`simulate` adds noise to frame 0 only unless ``pan_snr_db`` is
+    given.
+
+    Parameters
+    ----------
+    code : array_like of shape (Nx, Ny)
+    n_bands, shifts, wavelengths
+        As for :class:`SDCASSI`.
+
+    Notes
+    -----
+    ``A Aᵀ`` couples every panchromatic pixel with the ``Nλ`` CASSI pixels its
+    bands land on, which is not one of the cheap structures of SPEC §4:
+    ``solve_normal`` falls back to conjugate gradients.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi.systems import DualCameraCASSI
+    >>> DualCameraCASSI(np.ones((4, 5)), n_bands=3).measurement_shape
+    (4, 7, 2)
+    """
+
+    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
+        self.code = as_code(code, "code", (2,))
+        nl = count(n_bands, "n_bands")
+        self.shifts, extra = shifts_for(shifts, nl)
+        nx, ny = self.code.shape
+        cube = (nx, ny, nl)
+        shear = Shear(cube, self.shifts)
+        cassi = SumAxis(shear.output_shape, 2) @ shear @ Code(self.code, cube)
+        pan = Pad((nx, ny), axis=1, before=0, after=extra) @ SumAxis(cube, 2)
+        self._finish(
+            Stack([cassi, pan], axis=2),
+            wavelengths=wavelengths_for(wavelengths, nl),
+            axes=("x", "y", "λ"),
+            measurement_axes=("x", "y", "camera"),
+        )
+
+    @classmethod
+    def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, **overrides):
+        """A seeded instance for ``cube_shape`` (default ``(16, 16, 8)``)."""
+        nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
+        return cls(random_binary((nx, ny), transmittance=transmittance, rng=rng), n_bands=nl, **overrides)
+
+    def simulate(self, cube, snr_db: float | None = None, rng=None, *, pan_snr_db: float | None = None):
+        """Both frames; noise at ``snr_db`` on the CASSI frame, at ``pan_snr_db`` (default none) on the panchromatic one."""
+        g = self.forward(cube)
+        rng = B.default_rng(rng)
+        ny = self.cube_shape[1]
+        cassi = add_noise(g[:, :, 0], snr_db, rng=rng)
+        pan = add_noise(g[:, :ny, 1], pan_snr_db, rng=rng)
+        pad = g[:, ny:, 1]  # zeros
+        return tl.stack([cassi, tl.concatenate([pan, pad], axis=1)], axis=2)
+
+    def panchromatic(self, measurement, *, mu=None):
+        """The panchromatic camera's frame, ``G[:, :Ny, 1]`` (exact: no solve, ``mu`` unused)."""
+        g = self._check_measurement(measurement, "panchromatic")
+        return g[:, : self.cube_shape[1], 1]
+
+    def matrix(self):
+        nx, ny, nl = self.cube_shape
+        width = self.measurement_shape[1]
+        top = coded_shear_sum_matrix(np.repeat(self.code[:, :, None], nl, axis=2), self.shifts, width)
+        # panchromatic: row Nx·W + u for every band of pixel u (B = 1ᵀ ⊗ I)
+        u = np.tile(np.arange(nx * ny), nl)
+        cols = np.arange(nx * ny * nl)
+        bottom = sp.csr_matrix((np.ones(cols.size), (u, cols)), shape=(nx * width, nx * ny * nl))
+        return sp.vstack([top, bottom], format="csr")

@@ -1,0 +1,154 @@
+"""CS2LI: compressive spectral structured light, a dual disperser with a colour-coded mirror (SPEC §3.4)."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import tensorly as tl
+
+from .. import _backend as B
+from ..codes import colour_coded_aperture
+from ._base import (
+    System,
+    as_code,
+    count,
+    dual_disperser,
+    dual_disperser_matrix,
+    dual_disperser_operator,
+    shifts_for,
+    wavelengths_for,
+)
+
+__all__ = ["CS2LI", "fringe_cube"]
+
+
+class CS2LI(System):
+    """Spectral structured light through a double Amici prism passed twice (Eq. 113-115).
+
+    The prism, a colour-coded mirror and the prism again form a dual
+    disperser, so each pattern's measurement is aligned with the scene::
+
+        G[:, :, t] = Σ_l Ceff[:, :, l] ∘ P[:, :, l, t],   Ceff[:, :, l] = C[:, s_l : s_l + Ny, l]
+
+    (Eq. 113 with the code index ``i2 + s_l`` of SPEC §12).
+
+    Parameters
+    ----------
+    code : array_like of shape (Nx, Ny + S) or (Nx, Ny + S, Nλ)
+        Binary coded aperture (the same for every band) or colour-coded
+        aperture (:func:`tensor_cosdi.codes.colour_coded_aperture`), ``S =
+        ⌈max s_l⌉`` extra columns.
+    n_bands, n_patterns : int
+        ``Nλ`` and ``Nt`` (projected patterns; :func:`fringe_cube` builds
+        ``P`` from a reflectance cube and fringe phases).
+    shifts, wavelengths
+        As for :class:`~tensor_cosdi.systems.SDCASSI`.
+
+    Attributes
+    ----------
+    cube_shape : ``(Nx, Ny, Nλ, Nt)``, axes ``("x", "y", "λ", "t")``
+    measurement_shape : ``(Nx, Ny, Nt)``
+    panchromatic_axes : ``("λ",)`` — the grayscale fringe images ``Z (Nx, Ny, Nt)``.
+
+    Notes
+    -----
+    ``H = I_Nt ⊗ A`` and ``A Aᵀ = diag(Σ_l Ceff_l²)`` (Eq. 115, SPEC §4).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi.systems import CS2LI
+    >>> CS2LI(np.ones((4, 7)), n_bands=3, n_patterns=8).cube_shape
+    (4, 5, 3, 8)
+    """
+
+    def __init__(self, code, *, n_bands, n_patterns, shifts=1, wavelengths=None):
+        self.code = as_code(code, "code", (2, 3))
+        nl = count(n_bands, "n_bands")
+        nt = count(n_patterns, "n_patterns")
+        self.shifts, self.effective_code = dual_disperser(self.code, nl, shifts)
+        nx, ny = self.effective_code.shape[:2]
+        self._finish(
+            dual_disperser_operator(self.effective_code, (nx, ny, nl, nt)),
+            wavelengths=wavelengths_for(wavelengths, nl),
+            axes=("x", "y", "λ", "t"),
+            measurement_axes=("x", "y", "t"),
+        )
+
+    @classmethod
+    def example(
+        cls, cube_shape=None, *, rng=0, n_filters: int = 6, transmittance: float = 0.5, **overrides
+    ):
+        """A seeded instance with a colour-coded aperture (default cube ``(16, 16, 8, 4)``).
+
+        ``n_filters=1`` gives a binary code (2-D).
+        """
+        nx, ny, nl, nt = (16, 16, 8, 4) if cube_shape is None else cube_shape
+        _, extra = shifts_for(overrides.get("shifts", 1), nl)
+        nf = min(n_filters, nl)
+        code = colour_coded_aperture((nx, ny + extra), nl, n_filters=nf, transmittance=transmittance, rng=rng)
+        if nf == 1:
+            code = code[:, :, 0]
+        return cls(code, n_bands=nl, n_patterns=nt, **overrides)
+
+    def matrix(self):
+        nx, ny, nl, nt = self.cube_shape
+        return dual_disperser_matrix(self.code, self.shifts, ny, nt)
+
+
+def fringe_cube(reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, amplitude: float = 1.0):
+    """The cube ``P`` a CS2LI senses: reflectance under phase-shifted white fringes (Eq. 107).
+
+    ``P[x, y, l, f·K + k] = F[x, y, l] · (offset + amplitude · cos(φ_f(x, y) + 2πk/K))``
+    for frequency ``f`` and step ``k = 0 … K−1`` — so each frequency
+    contributes ``K`` consecutive patterns, and ``Σ_k`` over a full cycle
+    gives ``K · offset · F``.
+
+    Parameters
+    ----------
+    reflectance : tensor of shape (Nx, Ny, Nλ)
+    phases : array_like of shape (Nx, Ny) or (Nx, Ny, n_freq)
+        Fringe phase of each frequency at every pixel (radians), e.g. the
+        projector phase ``2πν·y/L`` deformed by the scene's height.
+    n_steps : int ≥ 3
+        ``K`` phase steps per frequency (thesis: 4).
+    offset, amplitude : float
+        ``b`` and the fringe contrast; ``0 ≤ amplitude ≤ offset`` so that the
+        projected light is never negative.
+
+    Returns
+    -------
+    tensor of shape ``(Nx, Ny, Nλ, n_freq · K)`` on the reflectance's backend.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> P = fringe_cube(np.ones((2, 3, 4)), np.zeros((2, 3)), n_steps=4)
+    >>> P.shape, P[0, 0, 0].tolist()
+    ((2, 3, 4, 4), [2.0, 1.0, 0.0, 1.0])
+    """
+    if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
+        raise ValueError(f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}")
+    if not (np.isfinite(offset) and np.isfinite(amplitude) and 0 <= amplitude <= offset):
+        raise ValueError(
+            f"need 0 ≤ amplitude ≤ offset so the projected light is ≥ 0, got offset={offset!r}, "
+            f"amplitude={amplitude!r}"
+        )
+    shape = tuple(tl.shape(reflectance)) if tl.is_tensor(reflectance) else np.shape(reflectance)
+    if len(shape) != 3:
+        raise ValueError(f"reflectance must have shape (Nx, Ny, Nλ), got {shape}")
+    ph = np.asarray(B.to_numpy(phases), dtype=np.float64)
+    if ph.ndim == 2:
+        ph = ph[:, :, None]
+    if ph.ndim != 3 or ph.shape[:2] != shape[:2]:
+        raise ValueError(f"phases must have shape {shape[:2]} or {shape[:2]} + (n_freq,), got {ph.shape}")
+    if not np.isfinite(ph).all():
+        raise ValueError("phases contain NaN or inf")
+    k = np.arange(n_steps)
+    mod = offset + amplitude * np.cos(ph[:, :, :, None] + 2 * np.pi * k / n_steps)  # (Nx, Ny, f, K)
+    mod = mod.reshape(shape[:2] + (-1,))  # t = f·K + k
+    if not tl.is_tensor(reflectance):
+        reflectance = np.asarray(reflectance, dtype=np.float64)
+    F = reflectance
+    return F[:, :, :, None] * B.tensor_like(mod[:, :, None, :], F)

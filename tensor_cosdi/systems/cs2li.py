@@ -125,7 +125,7 @@ def fringe_cube(reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, a
     --------
     >>> import numpy as np
     >>> P = fringe_cube(np.ones((2, 3, 4)), np.zeros((2, 3)), n_steps=4)
-    >>> P.shape, P[0, 0, 0].tolist()
+    >>> P.shape, P[0, 0, 0].round(12).tolist()
     ((2, 3, 4, 4), [2.0, 1.0, 0.0, 1.0])
     """
     if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:

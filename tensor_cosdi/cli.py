@@ -3,9 +3,9 @@
 Sub-commands so far:
 
 ``demo``
-    Forward simulation of three coded-aperture spectral imagers built from the
-    operator core on a measured ColorChecker scene: single-shot SD-CASSI,
-    4-shot SD-CASSI and a two-arm CASSI-VSI-type sensor.  Prints, per system,
+    Forward simulation of three coded-aperture spectral imagers from
+    :mod:`tensor_cosdi.systems` on a measured ColorChecker scene: single-shot
+    SD-CASSI, 4-shot SD-CASSI and CASSI-VSI.  Prints, per system,
     the measurement size, the structure found for ``A Aᵀ``, the dot-test
     error, forward/adjoint times and the PSNR of the closed-form regularised
     least-squares estimate ``(AᵀA + μI)⁻¹ Aᵀ g`` (tensor-Woodbury solve), and
@@ -35,27 +35,19 @@ def _median_ms(fn, repeats=5):
 
 
 def _demo_systems(shape, rng):
-    from .operators import Code, Pad, Shear, Stack, SumAxis, weighted_sum
+    from .codes import random_binary
+    from .systems import CASSIVSI, SDCASSI
 
     nx, ny, nb = shape
-
-    def sd_cassi(code, step=2):
-        shear = Shear(shape, step)
-        return SumAxis(shear.output_shape, 2) @ shear @ Code(code, shape)
-
-    codes = (rng.random((4, nx, ny)) < 0.5).astype(float)
-    single = sd_cassi(codes[0])
-    multi = Stack([sd_cassi(c) for c in codes], axis=2)
-    code = Code(codes[0], shape)
-    shear = Shear(shape, 1)
-    dispersed = SumAxis(shear.output_shape, 2) @ shear @ code
+    codes = random_binary((nx, ny, 4), rng=rng)
     beta = (nb - 1) // 2
-    direct = Pad((nx, ny), axis=1, before=beta, after=nb - 1 - beta) @ SumAxis(shape, 2) @ code
-    vsi = weighted_sum([dispersed, direct], [0.7, 0.3])
     return [
-        ("SD-CASSI, 1 shot, 2 px/band", single),
-        ("SD-CASSI, 4 shots, 2 px/band", multi),
-        ("CASSI-VSI type, αT=0.7, β=%d" % beta, vsi),
+        ("SD-CASSI, 1 shot, 2 px/band", SDCASSI(codes[:, :, 0], n_bands=nb, shifts=2).operator),
+        ("SD-CASSI, 4 shots, 2 px/band", SDCASSI(codes, n_bands=nb, shifts=2).operator),
+        (
+            "CASSI-VSI, αT=0.7, β=%d" % beta,
+            CASSIVSI(codes[:, :, 0], n_bands=nb, alpha_t=0.7, beta=beta, shifts=1).operator,
+        ),
     ]
 
 

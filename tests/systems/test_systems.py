@@ -1,5 +1,6 @@
 """Systems: Gram structures, structured solves, Lemma 1, layouts, real masks, simulate, panchromatic."""
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -25,9 +26,12 @@ from tensor_cosdi.systems import (
 )
 from tensor_cosdi.testing import dot_test
 
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data"
+# the project's real data: $TENSOR_COSDI_DATA, else ../shared/data next to the repository
+DATA = Path(os.environ.get("TENSOR_COSDI_DATA", Path(__file__).resolve().parents[2] / ".." / "shared" / "data"))
 MASKS = DATA / "masks"
-needs_masks = pytest.mark.skipif(not MASKS.is_dir(), reason="../shared/data/masks is not present")
+needs_masks = pytest.mark.skipif(
+    not MASKS.is_dir(), reason=f"{MASKS} is not present (set TENSOR_COSDI_DATA to the data folder)"
+)
 
 # (id, factory, structure of A Aᵀ by SPEC §4)
 SYSTEMS = [
@@ -203,6 +207,24 @@ def test_real_masks(name, shift, n_bands, expected):
     assert np.count_nonzero(G) == (mask[10, 20] != 0)
 
 
+@pytest.mark.parametrize(
+    "mask, shift, n_bands, expected",
+    [
+        (np.random.default_rng(0).uniform(0.0066, 1, (256, 256)).astype(np.float32), 2, 28, (256, 310)),
+        (codes.random_binary((256, 256), rng=1), 1, 31, (256, 286)),
+    ],
+    ids=["tsa_like", "pnp_like"],
+)
+def test_standard_protocol_geometry(mask, shift, n_bands, expected):
+    """The geometry of the two standard CASSI protocols, with masks like the real ones (always runs)."""
+    system = SDCASSI(mask, n_bands=n_bands, shifts=shift)
+    assert system.measurement_shape == expected
+    F = np.ones(system.cube_shape, dtype=np.float32)
+    G = system.forward(F)
+    assert G.dtype == np.float32 and G.shape == expected
+    np.testing.assert_allclose(G[:, 0], mask[:, 0], rtol=1e-6)  # only band 0 reaches column 0
+
+
 # ---- simulate, panchromatic ---------------------------------------------------------
 @pytest.mark.parametrize("factory", [s[1] for s in SYSTEMS], ids=IDS)
 def test_simulate_noise_level_and_seed(factory):
@@ -342,3 +364,16 @@ def test_backends_agree(factory, backend):
     np.testing.assert_allclose(vec(adj), H.T @ vec(G), atol=tol * np.abs(H.T @ vec(G)).max())
     assert tl.is_tensor(system.panchromatic(B.as_tensor(np.asarray(H @ vec(F)).reshape(system.measurement_shape, order="F"), dtype)))
 
+
+
+@pytest.mark.parametrize("factory", [s[1] for s in SYSTEMS], ids=IDS)
+def test_systems_pickle(factory):
+    """Systems travel to Dask workers: a pickled copy senses identically."""
+    import pickle
+
+    system = factory()
+    copy = pickle.loads(pickle.dumps(system))
+    F = np.random.default_rng(0).random(system.cube_shape)
+    np.testing.assert_array_equal(copy.forward(F), system.forward(F))
+    with pytest.raises(AttributeError):
+        copy.operator = None

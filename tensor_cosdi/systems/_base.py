@@ -146,12 +146,25 @@ class System:
         )
 
     # ---- sensing -----------------------------------------------------------------
+    def _check_shape(self, x, method, cube: bool):
+        shape = self.cube_shape if cube else self.measurement_shape
+        got = tuple(tl.shape(x)) if tl.is_tensor(x) else np.shape(x)
+        if got != shape:
+            names = self.axes if cube else self.measurement_axes
+            what = "cube" if cube else "measurement"
+            raise ValueError(
+                f"{type(self).__name__}.{method}: expected a {what} of shape {shape} "
+                f"(axes {', '.join(names)}), got shape {got}"
+            )
+
     def forward(self, cube):
         """Noise-free measurement ``A(cube)``; ``cube`` of shape :attr:`cube_shape`."""
+        self._check_shape(cube, "forward", True)
         return self.operator.forward(cube)
 
     def adjoint(self, measurement):
         """``Aᵀ(measurement)``, a tensor of shape :attr:`cube_shape`."""
+        self._check_shape(measurement, "adjoint", False)
         return self.operator.adjoint(measurement)
 
     def simulate(self, cube, snr_db: float | None = None, rng=None):
@@ -167,6 +180,7 @@ class System:
 
     def solve_normal(self, r, mu):
         """``(AᵀA + μI)⁻¹ r`` through the structured Woodbury identity (SPEC §4)."""
+        self._check_shape(r, "solve_normal", True)
         return self.operator.solve_normal(r, mu)
 
     # ---- panchromatic ------------------------------------------------------------
@@ -188,10 +202,9 @@ class System:
             names.pop(axis)
         return op
 
-    def _check_measurement(self, measurement, what="measurement"):
-        return self.operator._check(
-            measurement, self.measurement_shape, what, "output"
-        )
+    def _check_measurement(self, measurement, method):
+        self._check_shape(measurement, method, False)
+        return self.operator._check(measurement, self.measurement_shape, method, "output")
 
     def panchromatic(self, measurement, *, mu: float = 1e-2):
         """Panchromatic estimate ``Z ≈ D F`` (the cube summed over :attr:`panchromatic_axes`).

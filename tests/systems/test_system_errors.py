@@ -92,10 +92,14 @@ def test_constructor_errors(build, message):
 
 def test_shape_errors_name_both_shapes():
     sd = SDCASSI.example((4, 5, 3))
-    with pytest.raises(ValueError, match=r"\(4, 5, 3\).*\(4, 5, 4\)"):
+    with pytest.raises(ValueError, match=r"SDCASSI.forward: .*cube of shape \(4, 5, 3\) \(axes x, y, λ\).*\(4, 5, 4\)"):
         sd.forward(np.zeros((4, 5, 4)))
-    with pytest.raises(ValueError, match=r"\(4, 7\).*\(4, 5\)"):
+    with pytest.raises(ValueError, match=r"SDCASSI.adjoint: .*measurement of shape \(4, 7\).*\(4, 5\)"):
         sd.adjoint(np.zeros((4, 5)))
+    with pytest.raises(ValueError, match=r"CS2LI.panchromatic: .*\(axes x, y, t\)"):
+        CS2LI.example().panchromatic(np.zeros((16, 16)))
+    with pytest.raises(ValueError, match="SDCASSI.solve_normal"):
+        sd.solve_normal(np.zeros((4, 7)), 1.0)
 
 
 def test_monocular_depth_estimator():

@@ -6,7 +6,7 @@ docs for the systems and the operator protocol.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from . import codes, colour, metrics, noise, operators, scenes, systems, testing
+from . import bases, codes, colour, metrics, noise, operators, scenes, systems, testing
 from .operators import TensorOperator
 
 try:
@@ -14,4 +14,4 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0+unknown"
 
-__all__ = ["operators", "systems", "codes", "colour", "testing", "metrics", "noise", "scenes", "TensorOperator", "__version__"]
+__all__ = ["operators", "systems", "codes", "colour", "bases", "testing", "metrics", "noise", "scenes", "TensorOperator", "__version__"]

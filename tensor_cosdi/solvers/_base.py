@@ -1,0 +1,128 @@
+"""The common harness of every reconstruction method: ``reconstruct``, ``Result``, the registry."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+__all__ = ["Result", "reconstruct", "register_method", "methods"]
+
+
+@dataclass(frozen=True)
+class Result:
+    """What a reconstruction returns.
+
+    Attributes
+    ----------
+    cube : tensor of the system's ``cube_shape``
+        The estimate, on the measurement's backend.
+    depth : tensor or None
+        A depth map where the method estimates one.
+    history : dict of lists
+        One entry per iteration: ``"objective"``, ``"residual"`` (relative,
+        ``‖G − A F‖ / ‖G‖``), ``"change"`` (relative change of ``F``),
+        ``"seconds"`` (cumulative).
+    seconds : float
+        Wall time of the whole call.
+    options : dict
+        Every option the method ran with, defaults included.
+    method : str
+    converged : bool
+        Whether the stopping tolerance was met (closed-form methods: True).
+    """
+
+    cube: Any
+    history: dict
+    seconds: float
+    options: dict
+    method: str
+    converged: bool = True
+    depth: Any = None
+
+    @property
+    def iterations(self) -> int:
+        return len(self.history.get("residual", []))
+
+
+@dataclass(frozen=True)
+class _Method:
+    func: Callable
+    defaults: dict = field(default_factory=dict)
+    summary: str = ""
+
+
+_METHODS: dict[str, _Method] = {}
+
+
+def register_method(name: str, func: Callable, defaults: dict, summary: str = "") -> None:
+    """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
+
+    ``defaults`` lists every option the method accepts with its default;
+    anything else passed to :func:`reconstruct` is an error.
+    """
+    if name in _METHODS:
+        raise ValueError(f"a method named {name!r} is already registered")
+    _METHODS[name] = _Method(func, dict(defaults), summary)
+
+
+def methods() -> tuple[str, ...]:
+    """Names of the registered reconstruction methods."""
+    return tuple(sorted(_METHODS))
+
+
+def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
+    """Reconstruct a cube from ``measurement`` of ``system`` with a registered ``method``.
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+    measurement : tensor of ``system.measurement_shape``
+    method : str
+        One of :func:`methods` (``reconstruct.methods()``).
+    **options
+        The method's options; unknown ones are a ``ValueError`` that lists
+        the valid ones.
+
+    Returns
+    -------
+    Result
+    """
+    if method not in _METHODS:
+        raise ValueError(f"unknown method {method!r}; registered methods: {list(methods())}")
+    entry = _METHODS[method]
+    unknown = sorted(set(options) - set(entry.defaults))
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {unknown} for method {method!r}; valid options: {sorted(entry.defaults)}"
+        )
+    opts = {**entry.defaults, **options}
+    g = system._check_measurement(measurement, "reconstruct")
+    t0 = time.perf_counter()
+    out = entry.func(system, g, **opts)
+    seconds = time.perf_counter() - t0
+    cube, history, converged = out[:3]
+    depth = out[3] if len(out) > 3 else None
+    return Result(cube, history, seconds, opts, method, bool(converged), depth)
+
+
+reconstruct.methods = methods  # tc.reconstruct.methods(), as the API contract promises
+
+
+def relative_residual(system, cube, g) -> float:
+    import tensorly as tl
+
+    r = system.operator._forward(cube) - g
+    return float(tl.norm(r)) / max(float(tl.norm(g)), np.finfo(float).tiny)
+
+
+def check_positive(name: str, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a number > 0, got {value!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+    return v

@@ -30,8 +30,15 @@ def _shots(code):
     return [code] if code.ndim == 2 else [code[:, :, k] for k in range(code.shape[2])]
 
 
-def _stack(ops):
-    return ops[0] if len(ops) == 1 else Stack(ops, axis=2)
+def _finish_shots(system, ops, wavelengths):
+    """One operator per shot → the system's operator; a ``k`` measurement axis for several shots."""
+    multi = len(ops) > 1
+    system._finish(
+        Stack(ops, axis=2) if multi else ops[0],
+        wavelengths=wavelengths,
+        axes=("x", "y", "λ"),
+        measurement_axes=("x", "y", "k") if multi else ("x", "y"),
+    )
 
 
 class SDCASSI(System):
@@ -75,22 +82,12 @@ class SDCASSI(System):
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
         nl = count(n_bands, "n_bands")
-        self.shifts, extra = shifts_for(shifts, nl)
+        self.shifts, _ = shifts_for(shifts, nl)
         nx, ny = self.code.shape[:2]
         cube = (nx, ny, nl)
         shear = Shear(cube, self.shifts)
         ops = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in _shots(self.code)]
-        multi = self.code.ndim == 3
-        self._finish(
-            _stack(ops),
-            wavelengths=wavelengths_for(wavelengths, nl),
-            axes=("x", "y", "λ"),
-            measurement_axes=("x", "y", "k") if multi else ("x", "y"),
-        )
-
-    @property
-    def n_shots(self) -> int:
-        return 1 if self.code.ndim == 2 else self.code.shape[2]
+        _finish_shots(self, ops, wavelengths_for(wavelengths, nl))
 
     @classmethod
     def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):
@@ -148,13 +145,7 @@ class DDCASSI(System):
             self.effective_codes.append(ceff)
         cube = self.effective_codes[0].shape
         ops = [dual_disperser_operator(ce, cube) for ce in self.effective_codes]
-        multi = self.code.ndim == 3
-        self._finish(
-            _stack(ops),
-            wavelengths=wavelengths_for(wavelengths, nl),
-            axes=("x", "y", "λ"),
-            measurement_axes=("x", "y", "k") if multi else ("x", "y"),
-        )
+        _finish_shots(self, ops, wavelengths_for(wavelengths, nl))
 
     @classmethod
     def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):

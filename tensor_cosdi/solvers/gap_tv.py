@@ -10,7 +10,7 @@ from skimage.restoration import denoise_tv_chambolle
 
 from .. import _backend as B
 from ._base import check_positive, register_method, relative_residual
-from .lsq import operator_scale
+from ..systems._base import sensing_gain
 
 __all__ = ["gap_tv", "tv_denoise"]
 
@@ -57,7 +57,7 @@ def gap_tv(
         raise ValueError(f"max_iter must be an integer ≥ 1, got {max_iter!r}")
     op = system.operator
     g = measurement
-    lam = eps * operator_scale(system, g)
+    lam = eps * sensing_gain(system.operator, g)
     x = op._adjoint(op.solve_dual(g, lam))  # least-norm start
     weight = tv_weight * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
     g_hat = g

@@ -4,35 +4,25 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
 import tensorly as tl
 
-from .. import _backend as B
+from ..systems._base import sensing_gain
 from ._base import check_positive, register_method, relative_residual
 
-__all__ = ["regularised_lsq", "operator_scale"]
-
-
-def operator_scale(system, like) -> float:
-    """``‖A 1‖² / ‖1‖²``: the mean squared gain of the sensing, so that ``mu`` is scale-free."""
-    ones = B.tensor_like(np.ones(system.cube_shape), like)
-    s = float(tl.norm(system.operator._forward(ones))) ** 2 / float(np.prod(system.cube_shape))
-    if s == 0.0:
-        raise ValueError("the system measures nothing (A 1 = 0): every code element is closed")
-    return s
+__all__ = ["regularised_lsq"]
 
 
 def regularised_lsq(system, measurement, *, mu: float = 1e-2):
     """``F = argmin ‖G − A F‖² + μ s ‖F‖² = (AᵀA + μ s I)⁻¹ Aᵀ G`` (SPEC §4, §5 baseline).
 
-    ``s`` is :func:`operator_scale`, so ``mu`` is relative.  One closed-form
+    ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`), so ``mu`` is relative.  One closed-form
     solve where ``A Aᵀ`` has structure (diagonal, per-pixel blocks, banded
     rows), conjugate gradients otherwise.  Registered as method ``"lsq"``.
     """
     mu = check_positive("mu", mu)
     t0 = time.perf_counter()
     g = measurement
-    lam = mu * operator_scale(system, g)
+    lam = mu * sensing_gain(system.operator, g)
     cube = system.operator.solve_normal(system.operator._adjoint(g), lam)
     res = relative_residual(system, cube, g)
     objective = (res * float(tl.norm(g))) ** 2 + lam * float(tl.norm(cube)) ** 2

@@ -73,6 +73,18 @@ def fractional_weights(shifts: np.ndarray):
     return lo, s - lo
 
 
+def sensing_gain(operator: TensorOperator, like) -> float:
+    """``‖A 1‖² / ‖1‖²``: the mean squared gain of ``A``, which makes Tikhonov weights scale-free.
+
+    ``like`` fixes backend, dtype and device of the probe.
+    """
+    ones = B.tensor_like(np.ones(operator.input_shape), like)
+    s = float(tl.norm(operator._forward(ones))) ** 2 / float(np.prod(operator.input_shape))
+    if s == 0.0:
+        raise ValueError("the system measures nothing (A 1 = 0): every code element is closed")
+    return s
+
+
 # ---- the base class ---------------------------------------------------------------
 class System:
     """Base of every imager in :mod:`tensor_cosdi.systems`.
@@ -233,11 +245,7 @@ class System:
         D = self.decimation
         n = float(np.prod(self.cube_shape)) / float(np.prod(D.output_shape))
         Bop = (self.operator @ D.T) * (1.0 / n)
-        ones = B.tensor_like(np.ones(Bop.input_shape), g)
-        scale = float(tl.norm(Bop._forward(ones))) ** 2 / float(np.prod(Bop.input_shape))
-        if scale == 0.0:
-            raise ValueError("the code blocks every pixel; there is no panchromatic signal")
-        return Bop.solve_normal(Bop.adjoint(g), mu * scale)
+        return Bop.solve_normal(Bop.adjoint(g), mu * sensing_gain(Bop, g))
 
     # ---- explicit matrix (SPEC §11) --------------------------------------------------
     def matrix(self) -> sp.csr_matrix:

@@ -6,7 +6,6 @@ import numpy as np
 import scipy.sparse as sp
 import tensorly as tl
 
-from .. import _backend as B
 from ..codes import complementary_colour_codes
 from ..operators import LAYOUTS, Code, LightFieldLayout, ModeProduct, Stack, SumAxis
 from ._base import System, as_code, count, wavelengths_for

@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _backend as B
 
-__all__ = ["to_srgb"]
+__all__ = ["to_srgb", "rgb_to_cube", "reflectance"]
 
 
 def _colour():
@@ -75,3 +75,92 @@ def to_srgb(cube, wavelengths, *, band_axis: int = 2, illuminant: str = "D65", w
     else:
         rgb = colour.XYZ_to_sRGB(xyz)
     return np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
+
+
+def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
+    """Reflectance spectra for sRGB colours (spectral upsampling, Mallett & Yuksel 2019).
+
+    Every linear sRGB colour is the weighted sum of three smooth, non-negative
+    basis spectra (``colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019``)
+    that sum to one at every wavelength: ``R(λ) = r·b_r(λ) + g·b_g(λ) +
+    b·b_b(λ)``.  So a colour in ``[0, 1]³`` gives a reflectance in ``[0, 1]``,
+    white gives a flat 1, and the map is linear and fast (one matrix product).
+
+    Parameters
+    ----------
+    rgb : array_like of shape (..., 3)
+        sRGB colours in ``[0, 1]`` (uint8 images: divide by 255 first).
+    wavelengths : array_like of shape (Nλ,)
+        Band centres in nm within 380–780.
+    encoded : bool
+        ``True`` (default) when ``rgb`` carries the sRGB transfer curve (as
+        photographs do); it is decoded to linear light first.
+
+    Returns
+    -------
+    ndarray of shape (..., Nλ)
+
+    Examples
+    --------
+    >>> rgb_to_cube([1.0, 1.0, 1.0], [450, 550, 650]).round(4).tolist()
+    [1.0, 1.0, 1.0]
+    """
+    colour = _colour()
+    x = np.asarray(B.to_numpy(rgb), dtype=np.float64)
+    if x.ndim == 0 or x.shape[-1] != 3:
+        raise ValueError(f"rgb must have a last axis of 3 (R, G, B), got shape {x.shape}")
+    if not np.isfinite(x).all():
+        raise ValueError("rgb contains NaN or inf")
+    if x.min() < 0 or x.max() > 1:
+        raise ValueError(
+            f"rgb must lie in [0, 1] (divide uint8 images by 255), got values in [{x.min():g}, {x.max():g}]"
+        )
+    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    if wl.size == 0 or not np.isfinite(wl).all() or wl.min() < 380 or wl.max() > 780:
+        raise ValueError(f"wavelengths must be finite nm within 380–780, got {wl.tolist()}")
+    linear = colour.cctf_decoding(x, function="sRGB") if encoded else x
+    basis = colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
+    b = np.stack([np.interp(wl, basis.wavelengths, basis.values[:, i]) for i in range(3)])  # (3, Nλ)
+    return np.asarray(linear, dtype=np.float64) @ b
+
+
+def reflectance(cube, white, dark=0.0):
+    """Reflectance from a radiance cube and a white reference (thesis Eq. 171): ``(X − dark) / (W − dark)``.
+
+    Parameters
+    ----------
+    cube : tensor
+        Reconstruction (or capture) of the scene.
+    white : tensor broadcastable to ``cube``
+        Reconstruction of a white reference (a spectralon) under the same light.
+    dark : float or tensor broadcastable to ``cube``
+        Dark count (sensor offset).
+
+    Raises
+    ------
+    ValueError
+        Where ``white − dark`` is not positive (the ratio would be undefined
+        or flip sign); the message counts the offending entries.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> reflectance(np.array([3.0, 5.0]), np.array([5.0, 9.0]), dark=1.0).tolist()
+    [0.5, 0.5]
+    """
+    x = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    w = np.asarray(B.to_numpy(white), dtype=np.float64)
+    d = np.asarray(B.to_numpy(dark), dtype=np.float64)
+    try:
+        denom = np.broadcast_to(w - d, np.broadcast_shapes(x.shape, w.shape, d.shape))
+    except ValueError:
+        raise ValueError(
+            f"white {w.shape} and dark {d.shape} must broadcast to the cube's shape {x.shape}"
+        ) from None
+    bad = ~(denom > 0)
+    if bad.any():
+        raise ValueError(
+            f"white − dark must be > 0 everywhere; {int(bad.sum())} of {bad.size} entries are not "
+            "(is the dark frame brighter than the white reference?)"
+        )
+    return B.tensor_like((x - d) / denom, cube)

@@ -1,19 +1,46 @@
 """Seeded scenes built from real measured data that installs with the dependencies.
 
-For now: a ColorChecker scene from colour-science's measured reflectances
-(the reconstruction issue adds photographs, spectral-depth, light-field and
-structured-light scenes).
+* :func:`colorchecker` — the 24 measured reflectances of colour-science;
+* :func:`photo` — RGB photographs shipped with scikit-image turned into
+  spectra by colour-science's spectral upsampling (:func:`~tensor_cosdi.colour.rgb_to_cube`);
+* :func:`motorcycle` — the Middlebury motorcycle stereo pair with its
+  disparity (scikit-image): a spectral cube plus a depth map, and
+  :func:`depth_planes` / :func:`depth_layers` to turn them into the
+  ``(Nx, Ny, Nλ, Nz)`` cube of CASSDI-DFA;
+* :func:`light_field` — a spectral light field ``(Nx, Ny, Nλ, U, V)``
+  rendered from a cube and a disparity map (per-view shifts);
+* :func:`structured_light` — a seeded height map, its deformed fringe phase
+  and a reflectance, ready for :func:`tensor_cosdi.systems.fringe_cube`.
+
+All take any spatial size and any band list (default 28 bands, 450–650 nm).
 """
 
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
+from . import _backend as B
+
 from .operators import validate_shape
 
-__all__ = ["default_wavelengths", "colorchecker"]
+__all__ = [
+    "default_wavelengths",
+    "colorchecker",
+    "photo",
+    "PHOTOS",
+    "motorcycle",
+    "depth_planes",
+    "depth_layers",
+    "light_field",
+    "structured_light",
+    "StructuredLightScene",
+]
+
+PHOTOS = ("astronaut", "chelsea", "coffee", "rocket")
+"""RGB photographs of ``skimage.data`` that :func:`photo` accepts."""
 
 
 def default_wavelengths(n_bands: int = 28, start: float = 450.0, stop: float = 650.0) -> np.ndarray:
@@ -22,6 +49,17 @@ def default_wavelengths(n_bands: int = 28, start: float = 450.0, stop: float = 6
     if not (np.isfinite(start) and np.isfinite(stop) and 0 < start < stop):
         raise ValueError(f"need 0 < start < stop (nm), got start={start}, stop={stop}")
     return np.linspace(start, stop, n_bands)
+
+
+def _wavelengths(wavelengths) -> np.ndarray:
+    wl = default_wavelengths() if wavelengths is None else np.asarray(wavelengths, dtype=float)
+    if wl.ndim != 1 or wl.size == 0 or not np.isfinite(wl).all():
+        raise ValueError(f"wavelengths must be a non-empty 1-D array of finite nm, got {wl!r}")
+    if wl.min() < 380 or wl.max() > 780:
+        raise ValueError(
+            f"wavelengths must lie within the measured 380–780 nm, got {wl.min():g}–{wl.max():g} nm"
+        )
+    return wl
 
 
 def _import_colour():
@@ -56,13 +94,7 @@ def colorchecker(shape=(64, 96), wavelengths=None, *, chart: str = "ColorChecker
     (8, 12, 3)
     """
     nx, ny = validate_shape(shape, "shape")
-    wl = default_wavelengths() if wavelengths is None else np.asarray(wavelengths, dtype=float)
-    if wl.ndim != 1 or wl.size == 0 or not np.isfinite(wl).all():
-        raise ValueError(f"wavelengths must be a non-empty 1-D array of finite nm, got {wl!r}")
-    if wl.min() < 380 or wl.max() > 780:
-        raise ValueError(
-            f"wavelengths must lie within the measured 380–780 nm, got {wl.min():g}–{wl.max():g} nm"
-        )
+    wl = _wavelengths(wavelengths)
     colour = _import_colour()
     charts = colour.SDS_COLOURCHECKERS
     if chart not in charts:
@@ -73,3 +105,266 @@ def colorchecker(shape=(64, 96), wavelengths=None, *, chart: str = "ColorChecker
     cols = np.minimum((np.arange(ny) * 6) // ny, 5)
     patch = rows[:, None] * 6 + cols[None, :]
     return spectra[patch].astype(dtype)
+
+
+def _fit(image: np.ndarray, shape) -> np.ndarray:
+    """Centre-crop ``image`` to the aspect ratio of ``shape``, then resize (anti-aliased)."""
+    from skimage.transform import resize
+
+    nx, ny = shape
+    h, w = image.shape[:2]
+    if h * ny > w * nx:  # too tall: crop rows
+        hh = max(1, round(w * nx / ny))
+        top = (h - hh) // 2
+        image = image[top : top + hh]
+    else:
+        ww = max(1, round(h * ny / nx))
+        left = (w - ww) // 2
+        image = image[:, left : left + ww]
+    return resize(image, (nx, ny) + image.shape[2:], order=1, anti_aliasing=True, preserve_range=True)
+
+
+def photo(name: str = "chelsea", shape=(64, 64), wavelengths=None, *, dtype="float64"):
+    """An RGB photograph of scikit-image as a spectral reflectance cube.
+
+    The image is centre-cropped to the aspect ratio of ``shape``, resized
+    with anti-aliasing and upsampled to spectra with
+    :func:`tensor_cosdi.colour.rgb_to_cube` (Mallett–Yuksel basis of
+    colour-science: smooth, non-negative, white → flat 1).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`PHOTOS` (``skimage.data`` images that ship with it).
+    shape : (Nx, Ny)
+    wavelengths : array_like, optional
+        Band centres in nm within 380–780 (default :func:`default_wavelengths`).
+
+    Returns
+    -------
+    cube : ndarray of shape (Nx, Ny, Nλ), values in [0, 1]
+
+    Examples
+    --------
+    >>> photo("astronaut", (16, 16), [450, 550, 650]).shape
+    (16, 16, 3)
+    """
+    from skimage import data
+
+    from .colour import rgb_to_cube
+
+    if name not in PHOTOS:
+        raise ValueError(f"unknown photo {name!r}; choose one of {PHOTOS}")
+    nx, ny = validate_shape(shape, "shape")
+    wl = _wavelengths(wavelengths)
+    rgb = _fit(getattr(data, name)().astype(np.float64) / 255.0, (nx, ny))
+    return np.clip(rgb_to_cube(np.clip(rgb, 0.0, 1.0), wl), 0.0, 1.0).astype(dtype)
+
+
+def motorcycle(shape=(64, 96), wavelengths=None, *, dtype="float64"):
+    """The Middlebury motorcycle (scikit-image) as a spectral cube with its disparity.
+
+    The left view of ``skimage.data.stereo_motorcycle`` becomes spectra as in
+    :func:`photo`; its ground-truth disparity map (pixels of the original
+    741-pixel-wide pair) is resized the same way and rescaled to the new
+    width.  Invalid disparities (occlusions, marked ``inf`` in the data) are
+    filled from their nearest valid neighbour.  Larger disparity = nearer.
+
+    Returns
+    -------
+    cube : ndarray of shape (Nx, Ny, Nλ)
+    disparity : ndarray of shape (Nx, Ny)
+        In pixels at the new size (for a stereo baseline like the original).
+
+    Examples
+    --------
+    >>> cube, disparity = motorcycle((24, 36), [500, 600])
+    >>> cube.shape, disparity.shape, bool(disparity.min() > 0)
+    ((24, 36, 2), (24, 36), True)
+    """
+    from scipy import ndimage
+    from skimage import data
+
+    from .colour import rgb_to_cube
+
+    nx, ny = validate_shape(shape, "shape")
+    wl = _wavelengths(wavelengths)
+    left, _, disp = data.stereo_motorcycle()
+    disp = np.asarray(disp, dtype=np.float64)
+    invalid = ~np.isfinite(disp) | (disp <= 0)
+    if invalid.any():
+        idx = ndimage.distance_transform_edt(invalid, return_distances=False, return_indices=True)
+        disp = disp[tuple(idx)]
+    width = left.shape[1]
+    rgb = _fit(left.astype(np.float64) / 255.0, (nx, ny))
+    cube = np.clip(rgb_to_cube(np.clip(rgb, 0.0, 1.0), wl), 0.0, 1.0).astype(dtype)
+    cropped_width = min(width, round(left.shape[0] * ny / nx))
+    disparity = _fit(disp, (nx, ny)) * (ny / cropped_width)
+    return cube, disparity.astype(dtype)
+
+
+def depth_planes(depth, n_planes: int, *, near_is_large: bool = True) -> np.ndarray:
+    """Quantise a depth (or disparity) map into ``n_planes`` equal-width planes: index per pixel.
+
+    Plane 0 is the nearest: with ``near_is_large`` (disparity) the largest
+    values go to plane 0; with ``False`` (metric depth) the smallest do.
+
+    Examples
+    --------
+    >>> depth_planes([[10.0, 7.0], [1.0, 2.0]], 2).tolist()
+    [[0, 0], [1, 1]]
+    """
+    d = np.asarray(B.to_numpy(depth), dtype=np.float64)
+    (n_planes,) = validate_shape((n_planes,), "n_planes")
+    if d.ndim != 2 or not np.isfinite(d).all():
+        raise ValueError(f"depth must be a finite 2-D map, got shape {d.shape}")
+    lo, hi = d.min(), d.max()
+    t = (d - lo) / (hi - lo) if hi > lo else np.zeros_like(d)
+    if near_is_large:
+        t = 1.0 - t
+    return np.minimum((t * n_planes).astype(int), n_planes - 1)
+
+
+def depth_layers(cube, planes, n_planes: int):
+    """A spectral-depth cube ``(Nx, Ny, Nλ, Nz)``: each pixel's spectrum sits in its depth plane only.
+
+    This is the cube ``F`` that :class:`~tensor_cosdi.systems.CASSDIDFA` senses
+    (SPEC §3.2); summing it over ``z`` gives ``cube`` back.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> F = depth_layers(np.ones((2, 2, 3)), np.array([[0, 1], [1, 1]]), 2)
+    >>> F.shape, F.sum(axis=3).tolist() == np.ones((2, 2, 3)).tolist()
+    ((2, 2, 3, 2), True)
+    """
+    c = np.asarray(B.to_numpy(cube))
+    p = np.asarray(planes)
+    (n_planes,) = validate_shape((n_planes,), "n_planes")
+    if c.ndim != 3 or p.shape != c.shape[:2]:
+        raise ValueError(f"need cube (Nx, Ny, Nλ) and planes (Nx, Ny); got {c.shape} and {p.shape}")
+    if not np.issubdtype(p.dtype, np.integer) or p.min() < 0 or p.max() >= n_planes:
+        raise ValueError(f"planes must be integers in [0, {n_planes - 1}], got {p.dtype} in [{p.min()}, {p.max()}]")
+    onehot = (p[..., None] == np.arange(n_planes)).astype(c.dtype)  # (Nx, Ny, Nz)
+    return c[..., None] * onehot[:, :, None, :]
+
+
+def light_field(cube, disparity, views=(5, 5)):
+    """A spectral light field ``(Nx, Ny, Nλ, U, V)`` rendered from a cube and a disparity map.
+
+    View ``(u, v)`` sees the centre view ``(uc, vc) = (U // 2, V // 2)``
+    displaced by the disparity ``d`` per view step, the convention of
+    :func:`tensor_cosdi.depth.disparity_from_views`::
+
+        L[u, v](x − (u − uc)·d, y − (v − vc)·d) = cube(x, y)
+
+    rendered by backward warping (bilinear, edges repeated) with ``d``
+    taken at the target pixel — exact for piecewise-constant disparity away
+    from its edges.
+
+    Parameters
+    ----------
+    cube : array of shape (Nx, Ny, Nλ)
+        The centre view.
+    disparity : array of shape (Nx, Ny) or float
+        Pixels of shift per view step.
+    views : (U, V)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> L = light_field(np.random.default_rng(0).random((8, 8, 2)), 1.0, views=(3, 3))
+    >>> L.shape, bool(np.allclose(L[2:6, 2:6, :, 2, 1], L[3:7, 2:6, :, 1, 1]))
+    ((8, 8, 2, 3, 3), True)
+    """
+    from scipy import ndimage
+
+    c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    if c.ndim != 3:
+        raise ValueError(f"cube must have shape (Nx, Ny, Nλ), got {c.shape}")
+    U, V = validate_shape(views, "views")
+    d = np.broadcast_to(np.asarray(disparity, dtype=np.float64), c.shape[:2])
+    if not np.isfinite(d).all():
+        raise ValueError("disparity contains NaN or inf")
+    xx, yy = np.meshgrid(np.arange(c.shape[0]), np.arange(c.shape[1]), indexing="ij")
+    out = np.empty(c.shape + (U, V))
+    for u in range(U):
+        for v in range(V):
+            coords = [xx + (u - U // 2) * d, yy + (v - V // 2) * d]
+            for band in range(c.shape[2]):
+                out[:, :, band, u, v] = ndimage.map_coordinates(c[:, :, band], coords, order=1, mode="nearest")
+    return out
+
+
+@dataclass(frozen=True)
+class StructuredLightScene:
+    """A structured-light scene: what :func:`structured_light` returns.
+
+    Attributes
+    ----------
+    reflectance : ndarray (Nx, Ny, Nλ)
+    height : ndarray (Nx, Ny)
+        Surface height above the reference plane (arbitrary units, ≥ 0).
+    phase : ndarray (Nx, Ny, n_freq)
+        Unwrapped fringe phase per frequency: reference-plane phase
+        ``2π ν_f y / Ny`` plus ``phase_per_height · ν_f / ν_0 · height``.
+    frequencies : tuple of float
+        Fringe periods across the width, ``ν_f``.
+    phase_per_height : float
+        The calibration: phase change (rad) per unit height at ``ν_0``.
+    """
+
+    reflectance: np.ndarray
+    height: np.ndarray
+    phase: np.ndarray
+    frequencies: tuple
+    phase_per_height: float
+
+
+def structured_light(
+    shape=(64, 64),
+    wavelengths=None,
+    *,
+    frequencies=(4.0,),
+    phase_per_height: float = 2.0,
+    n_bumps: int = 3,
+    photo_name: str = "coffee",
+    rng=0,
+) -> StructuredLightScene:
+    """A seeded structured-light scene: smooth height map, deformed fringe phase, reflectance.
+
+    The height is a sum of ``n_bumps`` Gaussian bumps (seeded positions,
+    widths and heights in ``[0.5, 1]``) on a flat reference plane; the
+    fringe phase of frequency ``ν`` is the reference-plane phase
+    ``2πν·y/Ny`` shifted by ``phase_per_height · (ν/ν_0) · height``
+    (a linear phase-to-height calibration, SPEC §7).  The reflectance is
+    :func:`photo` ``photo_name``.  Feed ``reflectance`` and ``phase`` to
+    :func:`tensor_cosdi.systems.fringe_cube` for the CS2LI cube.
+
+    Examples
+    --------
+    >>> scene = structured_light((16, 16), [500, 600], frequencies=(2.0, 3.0))
+    >>> scene.reflectance.shape, scene.phase.shape
+    ((16, 16, 2), (16, 16, 2))
+    """
+    from ._backend import default_rng
+
+    nx, ny = validate_shape(shape, "shape")
+    freqs = tuple(float(f) for f in np.atleast_1d(frequencies))
+    if not freqs or not all(np.isfinite(f) and f > 0 for f in freqs):
+        raise ValueError(f"frequencies must be positive numbers, got {frequencies!r}")
+    if not (np.isfinite(phase_per_height) and phase_per_height > 0):
+        raise ValueError(f"phase_per_height must be > 0, got {phase_per_height!r}")
+    (n_bumps,) = validate_shape((n_bumps,), "n_bumps")
+    gen = default_rng(rng)
+    xx, yy = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, ny), indexing="ij")
+    height = np.zeros((nx, ny))
+    for _ in range(n_bumps):
+        cx, cy = gen.uniform(0.2, 0.8, 2)
+        width = gen.uniform(0.1, 0.25)
+        height += gen.uniform(0.5, 1.0) * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * width**2))
+    ref = 2 * np.pi * np.arange(ny)[None, :] / ny
+    phase = np.stack([f * ref + phase_per_height * (f / freqs[0]) * height for f in freqs], axis=-1)
+    phase = np.broadcast_to(phase, (nx, ny, len(freqs))).copy()
+    reflectance = photo(photo_name, (nx, ny), wavelengths)
+    return StructuredLightScene(reflectance, height, phase, freqs, float(phase_per_height))

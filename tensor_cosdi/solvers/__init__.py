@@ -1,12 +1,14 @@
 """Reconstruction methods behind :func:`tensor_cosdi.reconstruct` (SPEC §5, §6).
 
-So far: the harness (:class:`Result`, the registry), regularised least
-squares (``"lsq"``) and GAP-TV (``"gap_tv"``).  The online Tucker dictionary
-ADMM (``"otd"``) and WDCT-ADMM are issue 4's remaining work.
+The harness (:class:`Result`, the registry) and four methods that work on
+every system: the online Tucker dictionary ADMM (``"otd"``), ADMM in the
+fixed WDCT basis (``"wdct"``), GAP-TV (``"gap_tv"``) and regularised least
+squares (``"lsq"``).
 """
 
 from ._base import Result, methods, reconstruct, register_method
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
+from .otd import online_tucker_admm, tucker_admm, wdct_admm
 
-__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise"]
+__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm"]

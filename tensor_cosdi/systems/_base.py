@@ -218,6 +218,11 @@ class System:
         self._check_shape(measurement, method, False)
         return self.operator._check(measurement, self.measurement_shape, method, "output")
 
+    @property
+    def panchromatic_exact(self) -> bool:
+        """Whether :meth:`panchromatic` returns ``D F`` exactly (up to noise) rather than an estimate."""
+        return False
+
     def panchromatic(self, measurement, *, mu: float = 1e-2):
         """Panchromatic estimate ``Z ≈ D F`` (the cube summed over :attr:`panchromatic_axes`).
 

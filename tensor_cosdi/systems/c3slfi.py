@@ -202,6 +202,11 @@ class C3SLFI(System):
         return cls(codes, layout=layout, views=views, **overrides)
 
     # ---- Lemma 1 ---------------------------------------------------------------------
+    @property
+    def panchromatic_exact(self) -> bool:
+        """True with complementary codes (Lemma 1)."""
+        return bool(self.complementary)
+
     def panchromatic(self, measurement, *, mu: float = 1e-2):
         """Panchromatic light field ``Z = Σ_l F``.
 

@@ -224,6 +224,10 @@ class DualCameraCASSI(System):
         pad = g[:, ny:, 1]  # zeros
         return tl.stack([cassi, tl.concatenate([pan, pad], axis=1)], axis=2)
 
+    @property
+    def panchromatic_exact(self) -> bool:
+        return True
+
     def panchromatic(self, measurement, *, mu=None):
         """The panchromatic camera's frame, ``G[:, :Ny, 1]`` (exact: no solve, ``mu`` unused)."""
         g = self._check_measurement(measurement, "panchromatic")

@@ -37,7 +37,16 @@ from ..bases import dct, svd_basis, tucker_bases, wavelet
 from ..systems._base import sensing_gain
 from ._base import check_positive, register_method, relative_residual
 
-__all__ = ["online_tucker_admm", "wdct_admm", "initial_bases", "tucker_admm", "subspace_gap_tv"]
+__all__ = [
+    "online_tucker_admm",
+    "wdct_admm",
+    "initial_bases",
+    "panchromatic_estimate",
+    "tucker_admm",
+    "theta_step",
+    "omega_step",
+    "subspace_gap_tv",
+]
 
 SPATIAL_BASES = ("panchromatic", "wavelet", "dct")
 
@@ -181,6 +190,29 @@ class _Basis:
         return [tenalg.mode_dot(t, rot, mode) for t in tensors]
 
 
+def theta_step(operator, basis, atg, w, mu):
+    """Θ-step (Eq. 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg = AᵀG``.
+
+    ``Θ = Ψᵀ (AᵀA + μI)⁻¹ (AᵀG + μ Ψ w)``: orthonormal ``Ψ`` leaves the
+    structured ``solve_normal`` of ``A`` (SPEC §4).  Returns ``(F, Θ)`` with
+    ``F = Ψ Θ``.
+    """
+    f = operator.solve_normal(atg + mu * basis.synthesis(w), mu)
+    return f, basis.analysis(f)
+
+
+def omega_step(theta, nu, prev, thresh, mu, beta):
+    """Ω-step, exact (SPEC §12): ``argmin_Ω β‖Ω − Ω_prev‖² + λ‖Ω‖₁ + μ‖Θ − Ω − ν‖²``.
+
+    ``= soft((βΩ_prev + μ(Θ − ν)) / (β + μ), λ / (2(β + μ)))``; here
+    ``thresh`` is that threshold, ``λ / (2(β + μ))``, already.
+    """
+    v = theta - nu
+    if beta > 0:
+        v = (beta * prev + mu * v) / (beta + mu)
+    return _soft(v, thresh)
+
+
 def tucker_admm(
     system,
     measurement,
@@ -241,8 +273,8 @@ def tucker_admm(
     mu_a, beta_a = mu * s, float(beta) * s
     atg = op._adjoint(g)
     f = op.solve_normal(atg, mu_a) if start is None else start  # default: regularised least squares
-    scale = float(tl.norm(f)) / np.sqrt(float(np.prod(system.cube_shape)))
-    thresh = lam * max(scale, np.finfo(float).tiny) / (mu + float(beta))
+    scale = float(tl.norm(f)) / float(np.sqrt(np.prod(system.cube_shape)))
+    thresh = float(lam * max(scale, np.finfo(float).tiny) / (mu + float(beta)))
     if weights is not None:
         w = np.asarray(B.to_numpy(weights), dtype=np.float64)
         if w.shape != tuple(system.cube_shape) or not (np.isfinite(w).all() and (w >= 0).all()):
@@ -258,14 +290,10 @@ def tucker_admm(
     converged = False
     tiny = np.finfo(float).tiny
     for it in tqdm(range(max_iter), desc=desc, disable=not progress):
-        f_new = op.solve_normal(atg + mu_a * basis.synthesis(omega + nu), mu_a)
+        f_new, theta = theta_step(op, basis, atg, omega + nu, mu_a)
         change = float(tl.norm(f_new - f)) / max(float(tl.norm(f_new)), tiny)
         f = f_new
-        theta = basis.analysis(f)
-        v = theta - nu
-        if beta_a > 0:
-            v = (beta_a * prev + mu_a * v) / (beta_a + mu_a)
-        omega = _soft(v, thresh)
+        omega = omega_step(theta, nu, prev, thresh, mu_a, beta_a)
         nu = nu - (theta - omega)
         res = relative_residual(system, f, g)
         hist["residual"].append(res)
@@ -285,7 +313,7 @@ def tucker_admm(
     return basis.synthesis(omega), hist, converged
 
 
-_COMMON = {"max_iter": 60, "lam": 0.05, "beta": 0.0, "tol": 1e-4, "progress": False}
+_COMMON = {"max_iter": 60, "lam": 0.05, "beta": 0.0, "tol": 1e-4, "weights": None, "progress": False}
 
 
 def online_tucker_admm(system, measurement, *, update_every: int = 10, spatial: str = "panchromatic",

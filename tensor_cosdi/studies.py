@@ -18,7 +18,7 @@ from . import metrics, scenes
 from . import systems as S
 from .operators import validate_shape
 
-__all__ = ["SYSTEMS", "SCENES", "Problem", "make_problem", "compare", "score"]
+__all__ = ["SYSTEMS", "SCENES", "Problem", "make_problem", "compare", "score", "spectral_view"]
 
 SYSTEMS = ("sd_cassi", "dd_cassi", "dual_camera", "cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi")
 """System names :func:`make_problem` accepts."""
@@ -229,3 +229,25 @@ def _defaults(method):
     from .solvers._base import _METHODS
 
     return _METHODS[method].defaults
+
+
+def spectral_view(problem: Problem, cube) -> np.ndarray:
+    """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube of ``problem.system`` (for sRGB previews).
+
+    C3SLFI: the centre view of the light field; CASSDI-DFA: the sum over
+    depth planes (all-in-focus); CS2LI / Mu-CoSDI: the mean over the phase
+    steps divided by the fringe offset (the reflectance, Eq. 107); other
+    systems: the cube itself.
+    """
+    from . import _backend as B
+
+    c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    name = problem.name.split("/")[0]
+    if name == "c3slfi":
+        five = np.asarray(problem.system.to_5d(c))
+        return five[:, :, :, five.shape[3] // 2, five.shape[4] // 2]
+    if name == "cassdi_dfa":
+        return c.sum(axis=3)
+    if name in ("cs2li", "mu_cosdi"):
+        return c.mean(axis=3)  # offset 1: Σ_k (1 + a cos(φ + 2πk/K)) / K = 1
+    return c

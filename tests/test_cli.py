@@ -1,43 +1,50 @@
-"""The demo command: runs, prints its table, writes PNGs, never overwrites silently."""
+"""The demo command: runs all imagers, prints its table, writes PNGs, never overwrites silently."""
 
 import re
 
 import pytest
 
-from tensor_cosdi.cli import main
+from tensor_cosdi.cli import DEMO_CASES, main
+
+ARGS = ["demo", "--size", "16", "--bands", "6", "--quiet"]
+
+
+def _rows(text):
+    return re.findall(r"^(\w+)\s+(\w+)\s+([\d×]+)\s+(otd|gap_tv)\s+(-?\d+\.\d+)\s+(\d\.\d+)\s+(\d+\.\d+)\s+(\d+\.\d+)$",
+                      text, flags=re.M)
 
 
 def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
     out = tmp_path / "demo"
-    assert main(["demo", "--size", "16", "--bands", "8", "--out", str(out), "--quiet"]) == 0
+    assert main(ARGS + ["--out", str(out)]) == 0
     text = capsys.readouterr().out
-    for structure in ("Diagonal", "PixelBlocks", "RowBanded"):
-        assert structure in text
-    psnrs = [float(v) for v in re.findall(r"(-?\d+\.\d+)dB", text)]
-    assert len(psnrs) == 3 and all(p > 5 for p in psnrs)
-    # 4 shots measure more than one: the closed-form estimate must be better
-    assert psnrs[1] > psnrs[0]
-    errs = [float(v) for v in re.findall(r"\s(\d\.\de[-+]\d\d)\s", text)]
-    assert errs and max(errs) < 1e-10
-    assert sorted(p.name for p in out.iterdir()) == [f"measurement_{i}.png" for i in (1, 2, 3)]
+    rows = _rows(text)
+    assert [(r[0], r[3]) for r in rows] == [(c[0], m) for c in DEMO_CASES for m in ("otd", "gap_tv")]
+    assert {r[0] for r in rows} >= {"cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
+    assert all(float(r[4]) > 10 and 0 < float(r[5]) <= 1 for r in rows), rows
+    names = sorted(p.name for p in out.iterdir())
+    assert len(names) == 5 * len(DEMO_CASES)
+    assert "c3slfi_truth.png" in names and "cs2li_error_otd.png" in names
+    assert str(out.resolve()) in text
 
 
 def test_demo_refuses_to_overwrite(tmp_path, capsys):
     out = tmp_path / "demo"
-    args = ["demo", "--size", "8", "--bands", "4", "--out", str(out), "--quiet"]
+    args = ARGS + ["--out", str(out)]
     assert main(args) == 0
-    before = (out / "measurement_1.png").read_bytes()
+    before = (out / "sd_cassi_otd.png").read_bytes()
+    (out / "sd_cassi_truth.png").unlink()  # a partial earlier run: still nothing is touched
     assert main(args) == 2
     assert "--force" in capsys.readouterr().err
-    assert (out / "measurement_1.png").read_bytes() == before
+    assert (out / "sd_cassi_otd.png").read_bytes() == before
+    assert not (out / "sd_cassi_truth.png").exists()
     assert main(args + ["--force"]) == 0
-    # a partial earlier run: nothing is written unless every file may be
-    (out / "measurement_1.png").unlink()
-    assert main(args) == 2
-    assert not (out / "measurement_1.png").exists()
+    assert (out / "sd_cassi_truth.png").exists()
 
 
 def test_demo_rejects_bad_sizes(capsys):
     with pytest.raises(SystemExit):
         main(["demo", "--size", "-3"])
     assert "positive integer" in capsys.readouterr().err
+    assert main(["demo", "--size", "18", "--quiet"]) == 2
+    assert "multiple of 4" in capsys.readouterr().err

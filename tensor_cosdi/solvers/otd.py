@@ -223,7 +223,7 @@ def tucker_admm(
     max_iter: int = 60,
     update_every: int = 10,
     mu: float = 0.2,
-    lam: float = 0.05,
+    lam: float = 0.1,
     beta: float = 0.0,
     tol: float = 1e-4,
     weights=None,
@@ -313,7 +313,7 @@ def tucker_admm(
     return basis.synthesis(omega), hist, converged
 
 
-_COMMON = {"max_iter": 60, "lam": 0.05, "beta": 0.0, "tol": 1e-4, "weights": None, "progress": False}
+_COMMON = {"max_iter": 60, "lam": 0.1, "beta": 0.0, "tol": 1e-4, "weights": None, "progress": False}
 
 
 def online_tucker_admm(system, measurement, *, update_every: int = 10, spatial: str = "panchromatic",

@@ -36,8 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_MASK = ROOT / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
 METHODS = ("otd", "wdct", "gap_tv")
 # Options per SNR, the same for every system (documented in the README): noisier data, a larger ℓ1 weight.
-# GAP-TV gets the analogous (untuned) doubling of its TV weight.
-OPTIONS = {20.0: {"otd": {"lam": 0.3}, "wdct": {"lam": 0.3}, "gap_tv": {"tv_weight": 0.1}}, 30.0: {}}
+# GAP-TV keeps its defaults (doubling its TV weight at 20 dB made it collapse to 9.8 dB on the ColorChecker).
+OPTIONS = {20.0: {"otd": {"lam": 0.3}, "wdct": {"lam": 0.3}}, 30.0: {}}
 MASK_SYSTEMS = ("sd_cassi", "cassi_vsi")
 
 

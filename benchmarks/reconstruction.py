@@ -84,7 +84,6 @@ def main(argv=None):
     ap.add_argument("--bands", type=int, default=28)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--mask", default=str(DEFAULT_MASK))
-    ap.add_argument("--float32", action="store_true", default=True, help="run on float32 measurements (default)")
     ap.add_argument("--no-memory", action="store_true")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--name", default="reconstruction", help="file stem of the outputs")

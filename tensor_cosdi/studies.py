@@ -47,6 +47,9 @@ class Problem:
     depth : ndarray (Nx, Ny) or None
         The depth-plane index (CASSDI-DFA), disparity (C3SLFI) or height
         (CS2LI, Mu-CoSDI) the scene was built with.
+    extras : dict
+        Anything else the scene was built with (CS2LI / Mu-CoSDI: the fringe
+        ``"phase"`` and ``"phase_per_height"``).
     """
 
     name: str

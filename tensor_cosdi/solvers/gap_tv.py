@@ -58,11 +58,13 @@ def gap_tv(
 
 
 def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=True, tol=1e-4, eps=1e-6,
-                    progress=False, desc="GAP-TV"):
+                    progress=False, desc="GAP-TV", denoiser=None):
     """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1 spatial).
 
-    Used for the panchromatic estimate on the decimated model (2-D TV).
+    ``denoiser(x, weight)`` replaces the TV step (default :func:`tv_denoise`);
+    OTD's subspace panchromatic start uses it.
     """
+    denoise = tv_denoise if denoiser is None else denoiser
     from tqdm import tqdm
 
     g = measurement
@@ -78,7 +80,7 @@ def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=
         ax = op._forward(x)
         if accelerate:
             g_hat = g_hat + (g - ax)
-        x_new = tv_denoise(x + op._adjoint(op.solve_dual(g_hat - ax, lam)), weight)
+        x_new = denoise(x + op._adjoint(op.solve_dual(g_hat - ax, lam)), weight)
         change = float(tl.norm(x_new - x)) / max(float(tl.norm(x_new)), np.finfo(float).tiny)
         x = x_new
         res = float(tl.norm(op._forward(x) - g)) / gnorm

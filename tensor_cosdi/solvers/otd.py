@@ -33,7 +33,7 @@ import tensorly as tl
 from tensorly import tenalg
 
 from .. import _backend as B
-from ..bases import dct, svd_basis, tucker_bases, wavelet
+from ..bases import dct, tucker_bases, wavelet
 from ..systems._base import sensing_gain
 from ._base import check_positive, register_method, relative_residual
 
@@ -137,26 +137,21 @@ def subspace_gap_tv(system, measurement, *, n_atoms: int = 3, max_iter: int = 60
     cube : tensor of ``system.cube_shape``
         The subspace estimate; ``system.decimation.forward(cube)`` is ``Z``.
     """
-    from .gap_tv import tv_denoise
+    from .gap_tv import gap_tv_operator, tv_denoise
 
     n_atoms = _check_int("n_atoms", n_atoms, 1)
     max_iter = _check_int("max_iter", max_iter, 1)
-    op = system.operator
     g = measurement
     names = list(system.axes)
     modes = [names.index(a) for a in system.panchromatic_axes]
-    proj = {m: dct(system.cube_shape[m])[:, : min(n_atoms, system.cube_shape[m])] for m in modes}
-    mats = [B.tensor_like(proj[m], g) for m in modes]
-    lam = eps * sensing_gain(op, g)
-    x = op._adjoint(op.solve_dual(g, lam))
-    weight = tv_weight * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
-    g_hat = g
-    for _ in range(max_iter):
-        ax = op._forward(x)
-        g_hat = g_hat + (g - ax)
-        v = x + op._adjoint(op.solve_dual(g_hat - ax, lam))
+    mats = [B.tensor_like(dct(system.cube_shape[m])[:, : min(n_atoms, system.cube_shape[m])], g) for m in modes]
+
+    def subspace_tv(v, weight):
         coef = tenalg.multi_mode_dot(v, mats, modes=modes, transpose=True)
-        x = tenalg.multi_mode_dot(tv_denoise(coef, weight), mats, modes=modes)
+        return tenalg.multi_mode_dot(tv_denoise(coef, weight), mats, modes=modes)
+
+    x, _, _ = gap_tv_operator(system.operator, g, max_iter=max_iter, tv_weight=tv_weight, eps=eps,
+                              denoiser=subspace_tv, desc="panchromatic")
     return x
 
 

@@ -94,6 +94,9 @@ def main(argv=None):
     snrs = [float(s) for s in args.snr.split(",")]
     methods = args.methods.split(",")
     runs = []
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    partial = out / f"{args.name}.partial.json"
     mem = None if args.no_memory else memory_probe(args, mask)
     if mem:
         print(f"memory: OTD peak {mem['peak_traced_bytes'] / 2**20:.0f} MiB traced = {mem['peak_cubes']:.1f} cubes; "
@@ -114,9 +117,9 @@ def main(argv=None):
                     runs.append(row)
                     print(f"{system:10s} {scene:12s} {snr:4.0f} dB {m:7s} PSNR {row['psnr']:6.2f} SSIM {row['ssim']:.3f} "
                           f"SAM {row['sam']:5.2f} {sec:7.2f} s", flush=True)
+                    # Every run is saved as it finishes, so a long benchmark that is interrupted keeps what it measured.
+                    partial.write_text(json.dumps({"memory": mem, "runs": runs}, indent=1))
     table = summarise(runs, systems, snrs, methods)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     header = (f"Machine: {platform.processor() or platform.machine()}, {platform.python_version()}, "
               f"NumPy {np.__version__}; tensor_cosdi {tc.__version__}; float32; seed {args.seed}; "
               f"scenes: {', '.join(scenes)}; mask: {'tsa_mask256.mat, 2 px/band' if mask is not None else 'seeded'}.\n")
@@ -126,6 +129,7 @@ def main(argv=None):
                    f"(process RSS grew {mem['rss_growth_kib'] / 1024:.0f} MiB).\n")
     (out / f"{args.name}.md").write_text(header + "\n" + table + "\n")
     (out / f"{args.name}.json").write_text(json.dumps({"memory": mem, "runs": runs}, indent=1))
+    partial.unlink(missing_ok=True)
     print(header)
     print(table)
 

@@ -1,0 +1,31 @@
+"""Depth from structured light, light-field views and focal stacks (SPEC §7).
+
+* Structured light: :func:`wrapped_phase` (N-step least squares, Eq. 19), :func:`fringe_modulation`,
+  :func:`heterodyne_unwrap` / :func:`temporal_unwrap` (Eq. 22-24), :func:`decode_gray_code` +
+  :func:`unwrap_gray_code`, :func:`spatial_unwrap` (scikit-image), :func:`phase_to_height`,
+  :func:`calibrate_phase_to_height`.
+* Light field: :func:`disparity_from_views` (cost volume, sub-pixel), :func:`depth_from_disparity`.
+* Focus: :func:`depth_from_focus`, :func:`focus_measure`.
+"""
+
+from .focus import depth_from_focus, focus_measure
+from .light_field import depth_from_disparity, disparity_cost_volume, disparity_from_views, textured_mask
+from .structured_light import (
+    calibrate_phase_to_height,
+    decode_gray_code,
+    fringe_modulation,
+    heterodyne_unwrap,
+    phase_to_height,
+    spatial_unwrap,
+    temporal_unwrap,
+    unwrap_gray_code,
+    wrap,
+    wrapped_phase,
+)
+
+__all__ = [
+    "wrapped_phase", "fringe_modulation", "heterodyne_unwrap", "temporal_unwrap", "decode_gray_code",
+    "unwrap_gray_code", "spatial_unwrap", "phase_to_height", "calibrate_phase_to_height", "wrap",
+    "disparity_from_views", "disparity_cost_volume", "depth_from_disparity", "textured_mask",
+    "depth_from_focus", "focus_measure",
+]

@@ -1,0 +1,104 @@
+"""Optical glasses by their Sellmeier equations (SPEC §8, thesis Eq. 188-189)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Glass", "GLASSES", "register_glass", "refractive_index"]
+
+
+@dataclass(frozen=True)
+class Glass:
+    """A glass described by a three-term Sellmeier equation.
+
+    ``n(λ)² = 1 + Σ_i B_i λ² / (λ² − C_i)`` with ``λ`` in micrometres.
+
+    Attributes
+    ----------
+    name : str
+    B : tuple of 3 floats
+    C : tuple of 3 floats, µm²
+    """
+
+    name: str
+    B: tuple
+    C: tuple
+
+    def __post_init__(self):
+        if len(self.B) != len(self.C) or not self.B:
+            raise ValueError(f"glass {self.name!r}: B and C must have the same non-zero length, got {self.B}, {self.C}")
+        if not all(np.isfinite(v) for v in (*self.B, *self.C)):
+            raise ValueError(f"glass {self.name!r}: Sellmeier coefficients must be finite")
+
+    def index(self, wavelength_nm):
+        """Refractive index at ``wavelength_nm`` (scalar or array, nanometres)."""
+        lam = np.asarray(wavelength_nm, dtype=np.float64)
+        if not np.all(np.isfinite(lam)) or np.any(lam <= 0):
+            raise ValueError(f"wavelengths must be finite and > 0 nm, got {wavelength_nm!r}")
+        l2 = (lam / 1000.0) ** 2
+        n2 = 1.0 + sum(b * l2 / (l2 - c) for b, c in zip(self.B, self.C))
+        if np.any(n2 <= 0):
+            raise ValueError(f"glass {self.name!r}: the Sellmeier model is invalid at {wavelength_nm!r} nm (n² ≤ 0)")
+        out = np.sqrt(n2)
+        return float(out) if out.ndim == 0 else out
+
+
+GLASSES: dict[str, Glass] = {}
+
+
+def register_glass(name: str, B, C) -> Glass:
+    """Add a glass (Sellmeier ``B``, ``C`` with ``λ`` in µm) under ``name`` and return it.
+
+    Examples
+    --------
+    >>> g = register_glass("N-BK7", (1.03961212, 0.231792344, 1.01046945),
+    ...                    (0.00600069867, 0.0200179144, 103.560653))
+    >>> round(g.index(587.6), 4)
+    1.5168
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"a glass needs a non-empty name, got {name!r}")
+    glass = Glass(name, tuple(float(b) for b in B), tuple(float(c) for c in C))
+    GLASSES[name.upper()] = glass
+    return glass
+
+
+# Thesis Eq. 188 (first and third prisms) and Eq. 189 (middle prism); the Schott catalogue values.
+register_glass("N-SK2", (1.28189012, 0.257738258, 0.96818604), (0.0072719164, 0.0242823527, 110.377773))
+register_glass("SF4", (1.61957826, 0.339493189, 1.02566931), (0.0125502104, 0.0544559822, 117.652222))
+register_glass("N-BK7", (1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653))
+
+
+def _glass(glass) -> Glass:
+    if isinstance(glass, Glass):
+        return glass
+    try:
+        return GLASSES[str(glass).upper()]
+    except KeyError:
+        raise ValueError(f"unknown glass {glass!r}; known glasses: {sorted(g.name for g in GLASSES.values())} "
+                         "(add one with register_glass)") from None
+
+
+def refractive_index(glass, wavelength_nm):
+    """Refractive index of ``glass`` (a name such as ``"N-SK2"``, ``"SF4"``, or a :class:`Glass`).
+
+    Parameters
+    ----------
+    glass : str or Glass
+    wavelength_nm : float or array_like
+        Wavelengths in nanometres.
+
+    Returns
+    -------
+    float or ndarray
+
+    Examples
+    --------
+    >>> round(refractive_index("SF4", 587.56), 4)
+    1.7552
+    >>> refractive_index("N-SK2", [450, 650]).round(4).tolist()
+    [1.6189, 1.6044]
+    """
+    return _glass(glass).index(wavelength_nm)

@@ -10,5 +10,8 @@ from ._base import Result, methods, reconstruct, register_method
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
+from .avsi import avsi
+from .pnp import pnp_admm, pnp_admm_operator
+from . import denoisers
 
-__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm"]
+__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers"]

@@ -45,6 +45,9 @@ class CASSIVSI(System):
     ----------
     cube_shape : ``(Nx, Ny, Nλ)``
     measurement_shape : ``(Nx, Ny + S)``
+    arms : (TensorOperator, TensorOperator)
+        ``(HT, HR)`` without their weights: the coded-dispersed arm and the
+        coded grayscale arm, ``operator = αT·HT + αR·HR`` (Eq. 45).
 
     Notes
     -----
@@ -88,6 +91,8 @@ class CASSIVSI(System):
         shear = Shear(cube, self.shifts)
         dispersed = SumAxis(shear.output_shape, 2) @ shear @ code
         direct = Pad((nx, ny), axis=1, before=self.beta, after=extra - self.beta) @ SumAxis(cube, 2) @ code
+        #: the two arms without their weights: ``H = αT·HT + αR·HR`` (Eq. 45), used by A-VSI (Alg. 1)
+        self.arms = (dispersed, direct)
         terms = [(op, w) for op, w in ((dispersed, self.alpha_t), (direct, self.alpha_r)) if w != 0]
         self._finish(
             weighted_sum([t[0] for t in terms], [t[1] for t in terms]),

@@ -1,0 +1,74 @@
+"""Plug-in denoisers for PnP-ADMM (SPEC §6): scikit-image's TV and wavelet denoisers, and a registry.
+
+A denoiser is a callable ``denoise(x, sigma) -> x`` on a tensor whose axes 0
+and 1 are spatial (any further axes are channels: bands, patterns…);
+``sigma`` is the noise level in the tensor's units.  Register your own (e.g.
+a trained network) with :func:`register_denoiser`.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from .. import _backend as B
+
+__all__ = ["denoise", "register_denoiser", "denoisers", "tv", "wavelet"]
+
+_DENOISERS: dict[str, Callable] = {}
+
+
+def _host(x):
+    a = np.asarray(B.to_numpy(x), dtype=np.float64)
+    return a.reshape(a.shape[:2] + (-1,)), a.shape
+
+
+def tv(x, sigma: float, *, n_iter: int = 50):
+    """Isotropic TV (Chambolle, ``skimage.restoration.denoise_tv_chambolle``) per channel, weight ``sigma``."""
+    from skimage.restoration import denoise_tv_chambolle
+
+    flat, shape = _host(x)
+    out = denoise_tv_chambolle(flat, weight=float(sigma), max_num_iter=n_iter, channel_axis=2)
+    return B.tensor_like(out.reshape(shape), x)
+
+
+def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
+    """BayesShrink wavelet denoising (``skimage.restoration.denoise_wavelet``) per channel, noise ``sigma``."""
+    from skimage.restoration import denoise_wavelet
+
+    flat, shape = _host(x)
+    out = denoise_wavelet(flat, sigma=float(sigma), wavelet=wavelet_name, mode=mode, channel_axis=2,
+                          method="BayesShrink", rescale_sigma=False)
+    return B.tensor_like(out.reshape(shape), x)
+
+
+def register_denoiser(name: str, func: Callable) -> None:
+    """Make ``func(x, sigma)`` available to PnP methods as ``denoiser=name``."""
+    if not callable(func):
+        raise ValueError(f"a denoiser must be callable (x, sigma) -> x, got {func!r}")
+    _DENOISERS[name] = func
+
+
+def denoisers() -> tuple[str, ...]:
+    """Names of the registered denoisers."""
+    return tuple(sorted(_DENOISERS))
+
+
+def denoise(name_or_callable, x, sigma):
+    """Apply a registered denoiser by name, or a callable ``(x, sigma) -> x``."""
+    return resolve(name_or_callable)(x, sigma)
+
+
+def resolve(name_or_callable) -> Callable:
+    if callable(name_or_callable):
+        return name_or_callable
+    try:
+        return _DENOISERS[name_or_callable]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown denoiser {name_or_callable!r}; registered: {list(denoisers())} "
+                         "(or pass a callable (x, sigma) -> x)") from None
+
+
+register_denoiser("tv", tv)
+register_denoiser("wavelet", wavelet)

@@ -12,6 +12,7 @@ from .lsq import regularised_lsq
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .avsi import avsi
 from .pnp import pnp_admm, pnp_admm_operator
+from .dfa import multiresolution_dfa
 from . import denoisers
 
-__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers"]
+__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers", "multiresolution_dfa"]

@@ -19,8 +19,12 @@ class Result:
     ----------
     cube : tensor of the system's ``cube_shape``
         The estimate, on the measurement's backend.
-    depth : tensor or None
-        A depth map where the method estimates one.
+    depth : ndarray or None
+        The depth channel where the system has a depth modality: the
+        method's own estimate where it makes one (``"dfa"``, ``"pnp_admm"``),
+        else :func:`tensor_cosdi.depth.depth_from_cube` of the cube, computed
+        on first access (disparity estimates take seconds).  ``None`` for
+        spectral-only systems.
     history : dict of lists
         One entry per iteration: ``"objective"``, ``"residual"`` (relative,
         ``‖G − A F‖ / ‖G‖``), ``"change"`` (relative change of ``F``),
@@ -40,7 +44,17 @@ class Result:
     options: dict
     method: str
     converged: bool = True
-    depth: Any = None
+    method_depth: Any = field(default=None, repr=False)
+    system: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def depth(self):
+        if self.method_depth is None and self.system is not None:
+            from ..depth import depth_from_cube
+
+            object.__setattr__(self, "method_depth", depth_from_cube(self.system, self.cube))
+            object.__setattr__(self, "system", None)  # computed once
+        return self.method_depth
 
     @property
     def iterations(self) -> int:
@@ -105,7 +119,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     seconds = time.perf_counter() - t0
     cube, history, converged = out[:3]
     depth = out[3] if len(out) > 3 else None
-    return Result(cube, history, seconds, opts, method, bool(converged), depth)
+    return Result(cube, history, seconds, opts, method, bool(converged), depth, system if depth is None else None)
 
 
 reconstruct.methods = methods  # tc.reconstruct.methods(), as the API contract promises

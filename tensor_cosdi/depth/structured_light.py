@@ -156,7 +156,10 @@ def heterodyne_unwrap(wrapped, frequencies):
 def _absolute(phases, freqs):
     """Absolute phase of freqs[0] (descending list)."""
     if freqs[-1] <= 1.0:
-        phi = np.mod(phases[-1], 2 * np.pi)  # one period or less: already absolute
+        # one period or less: already absolute.  Its values fill [0, 2πν) of the circle; the unused
+        # 2π(1 − ν) is split on both sides so noise at the field's edges (Φ ≈ 0) does not wrap to 2π.
+        lo = -np.pi * (1.0 - freqs[-1])
+        phi = np.mod(phases[-1] - lo, 2 * np.pi) + lo
         for i in range(len(freqs) - 2, -1, -1):
             phi = temporal_unwrap(phases[i], phi, freqs[i] / freqs[i + 1])
         return phi

@@ -29,8 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import tensor_cosdi as tc
-from tensor_cosdi import depth, metrics, optics, scenes, studies, systems
-from tensor_cosdi.noise import add_noise
+from tensor_cosdi import depth, metrics, optics, scenes, systems
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("chelsea", "coffee", "astronaut")

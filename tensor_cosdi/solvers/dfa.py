@@ -115,7 +115,6 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
     nx, ny, nl, nz = system.cube_shape
     kw = dict(max_iter=max_iter, tv_weight=tv_weight, tol=tol, progress=progress)
     hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-    t0 = time.perf_counter()
 
     def add(h):
         base = hist["seconds"][-1] if hist["seconds"] else 0.0

@@ -45,7 +45,7 @@ from .otd import _Basis, _check_int, _soft
 __all__ = ["avsi"]
 
 
-def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2: float = 0.2, sigma3: float = 0.2,
+def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2: float = 0.2, sigma3: float = 0.02,
          tau_f: float = 0.1, tau_z: float = 0.05, inner_iter: int = 8, tol: float = 1e-4, wavelet_name: str = "sym8",
          progress: bool = False):
     """A-VSI (thesis Alg. 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as ``"avsi"``.
@@ -154,7 +154,7 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
 register_method(
     "avsi",
     avsi,
-    {"max_iter": 60, "sigma1": 0.2, "sigma2": 0.2, "sigma3": 0.2, "tau_f": 0.1, "tau_z": 0.05, "inner_iter": 8,
+    {"max_iter": 60, "sigma1": 0.2, "sigma2": 0.2, "sigma3": 0.02, "tau_f": 0.1, "tau_z": 0.05, "inner_iter": 8,
      "tol": 1e-4, "wavelet_name": "sym8", "progress": False},
     "A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",
 )

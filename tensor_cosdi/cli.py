@@ -12,6 +12,21 @@ Sub-commands so far:
     each reconstruction (CIE 1931 2° + D65 via colour-science) and the OTD
     error map — into an output folder it reports.  Never overwrites files
     unless ``--force``.
+
+``plan``
+    Write an acquisition plan (``snapshots``, ``patterns`` or ``focal-sweep``)
+    as JSON for ``acquire``.
+
+``acquire``
+    Run a plan against a serial trigger device (:mod:`tensor_cosdi.io.triggers`):
+    per frame, send the DMD / mirror / projector commands, trigger the camera,
+    wait for the camera software to write the frame into ``--frames-dir``, and
+    log it (resumable: run again after an interruption).
+
+``reconstruct``
+    Capture files + a calibration bundle (the system) → a reconstruction
+    bundle: dark/flat correction, region of interest, binning, the system's
+    frame layout, any registered method, provenance hashes.
 """
 
 from __future__ import annotations
@@ -123,6 +138,115 @@ def run_demo(args) -> int:
     return 0
 
 
+def _option_value(text: str):
+    import json
+
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    key, value = text.split("=", 1)
+    try:
+        return key, json.loads(value)
+    except ValueError:
+        return key, value
+
+
+def run_plan(args) -> int:
+    from .io import AcquisitionPlan
+
+    if args.kind == "snapshots":
+        plan = AcquisitionPlan.snapshots(args.count, suffix=args.suffix)
+    elif args.kind == "patterns":
+        plan = AcquisitionPlan.patterns(args.count, suffix=args.suffix)
+    else:
+        if not args.zernike:
+            raise ValueError("focal-sweep needs --zernike J:A[,J:A…] per step, e.g. --zernike 4:-1,6:0.9 --zernike 4:0,6:0.9")
+        steps = []
+        for spec in args.zernike:
+            try:
+                steps.append({int(j): float(a) for j, a in (item.split(":") for item in spec.split(","))})
+            except ValueError:
+                raise ValueError(f"--zernike {spec!r}: expected J:A pairs separated by commas, e.g. 4:0.5,6:0.9") from None
+        if args.count != len(steps):
+            raise ValueError(f"count {args.count} does not match the {len(steps)} --zernike steps")
+        plan = AcquisitionPlan.focal_sweep(steps, suffix=args.suffix)
+    path = plan.save(args.out, overwrite=args.force)
+    print(f"plan with {len(plan.steps)} frames written to {path}")
+    return 0
+
+
+def run_acquire(args) -> int:
+    from .io import Acquisition, AcquisitionPlan, DeviceError, FolderCamera, SerialDevice
+
+    plan = AcquisitionPlan.load(args.plan)
+    camera = FolderCamera(args.frames_dir, timeout=args.frame_timeout)
+    with SerialDevice(args.port, baudrate=args.baudrate, timeout=args.timeout, retries=args.retries) as dev:
+        acq = Acquisition(plan, dev, args.log, camera)
+        before = len(plan.steps) - len(acq.remaining())
+        try:
+            written = acq.run(progress=not args.quiet)
+        except DeviceError as e:
+            print(f"tensor-cosdi acquire: device error: {e}", file=sys.stderr)
+            return 3
+    print(f"{len(written)} frame(s) acquired ({before} already in {args.log}); {len(plan.steps)} of {len(plan.steps)} done")
+    return 0
+
+
+def run_reconstruct(args) -> int:
+    from . import reconstruct
+    from .colour import reflectance
+    from .io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
+
+    out = Path(args.out)
+    if out.suffix != ".npz":
+        out = out.with_name(out.name + ".npz")
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    cal = load_bundle(args.calibration)
+    if cal.system is None:
+        raise ValueError(f"{args.calibration}: the calibration bundle holds no system; save one with save_bundle(system=…)")
+    sources = [p for src in args.frames for p in frame_paths(src)]
+    frames = load_frames(sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning)
+    g = frames_to_measurement(cal.system, frames)
+    options = dict(args.option or [])
+    t0 = time.perf_counter()
+    res = reconstruct(cal.system, g, args.method, progress=not args.quiet, **options) if "progress" in \
+        _method_defaults(args.method) else reconstruct(cal.system, g, args.method, **options)
+    seconds = time.perf_counter() - t0
+    extra = {}
+    if "white" in cal.calibration and cal.calibration["white"].shape == tuple(cal.system.cube_shape):
+        extra["reflectance"] = reflectance(res.cube, cal.calibration["white"], cal.calibration.get("dark", 0.0))
+    depth = res.depth
+    files = [*sources, Path(args.calibration)] + [Path(p) for p in (args.dark, args.flat) if p]
+    save_bundle(out, system=cal.system, measurement=g, cube=res.cube,
+                depth=None if depth is None else np.asarray(depth), calibration=cal.calibration, arrays=extra,
+                sources=files, overwrite=args.force,
+                metadata={"method": args.method, "options": {k: v for k, v in res.options.items() if _jsonable(v)},
+                          "seconds": seconds, "iterations": res.iterations, "roi": args.roi, "binning": args.binning})
+    print(f"{type(cal.system).__name__} {tuple(cal.system.cube_shape)} reconstructed with {args.method} in "
+          f"{seconds:.1f} s ({res.iterations} iterations, residual {res.history['residual'][-1]:.3g}); written to {out}")
+    return 0
+
+
+def _method_defaults(name):
+    from .solvers._base import _METHODS
+
+    if name not in _METHODS:
+        from .solvers import methods
+
+        raise ValueError(f"unknown method {name!r}; registered methods: {list(methods())}")
+    return _METHODS[name].defaults
+
+
+def _jsonable(v) -> bool:
+    import json
+
+    try:
+        json.dumps(v)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tensor-cosdi", description="Compressive spectral and spectral-depth imaging"
@@ -139,6 +263,41 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--force", action="store_true", help="overwrite existing PNG files")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     demo.set_defaults(func=run_demo)
+
+    plan = sub.add_parser("plan", help="write an acquisition plan (JSON) for `acquire`")
+    plan.add_argument("kind", choices=("snapshots", "patterns", "focal-sweep"))
+    plan.add_argument("count", type=_positive_int, help="number of frames")
+    plan.add_argument("out", help="plan file to write")
+    plan.add_argument("--zernike", action="append", help="focal-sweep: J:A[,J:A…] Zernike waves per step (repeat)")
+    plan.add_argument("--suffix", default=".tif", help="frame file suffix (default .tif)")
+    plan.add_argument("--force", action="store_true", help="overwrite an existing plan file")
+    plan.set_defaults(func=run_plan)
+
+    acq = sub.add_parser("acquire", help="run an acquisition plan against a serial trigger device")
+    acq.add_argument("plan", help="plan file (tensor-cosdi plan …)")
+    acq.add_argument("--port", required=True, help="serial port or pyserial URL (/dev/ttyACM0, socket://…, loop://)")
+    acq.add_argument("--frames-dir", required=True, help="folder the camera software writes frames into")
+    acq.add_argument("--log", required=True, help="frame log (JSON lines); an existing log for this plan is resumed")
+    acq.add_argument("--baudrate", type=_positive_int, default=115200)
+    acq.add_argument("--timeout", type=float, default=1.0, help="seconds to wait for each acknowledgement")
+    acq.add_argument("--retries", type=int, default=2, help="re-sends after a timeout or garbage reply")
+    acq.add_argument("--frame-timeout", type=float, default=10.0, help="seconds to wait for each frame file")
+    acq.add_argument("--quiet", action="store_true", help="no progress bar")
+    acq.set_defaults(func=run_acquire)
+
+    rec = sub.add_parser("reconstruct", help="capture files + calibration bundle → reconstruction bundle")
+    rec.add_argument("calibration", help="bundle holding the system (tensor_cosdi.io.save_bundle)")
+    rec.add_argument("frames", nargs="+", help="frame files or a folder, in the system's frame order")
+    rec.add_argument("--out", required=True, help="reconstruction bundle to write (.npz)")
+    rec.add_argument("--method", default="otd", help="reconstruction method (default otd)")
+    rec.add_argument("--option", action="append", type=_option_value, help="method option key=value (repeat)")
+    rec.add_argument("--dark", help="dark frame file")
+    rec.add_argument("--flat", help="flat/white frame file")
+    rec.add_argument("--roi", type=int, nargs=4, metavar=("ROW0", "ROW1", "COL0", "COL1"), help="region of interest")
+    rec.add_argument("--binning", type=_positive_int, default=1, help="sum BINNING×BINNING pixel blocks")
+    rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
+    rec.add_argument("--quiet", action="store_true", help="no progress bar")
+    rec.set_defaults(func=run_reconstruct)
     return parser
 
 
@@ -157,7 +316,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileExistsError) as exc:
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
         print(f"tensor-cosdi {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -1,0 +1,284 @@
+"""Bundles: one file holding a measurement or reconstruction with everything needed to use it later.
+
+Format (documented, stable): a NumPy ``.npz`` archive (``numpy.savez``, no
+pickles) whose arrays keep their exact dtype and bits, plus one JSON document
+stored as the string array ``__bundle__``:
+
+.. code-block:: json
+
+    {"format": "tensor_cosdi-bundle", "format_version": 1,
+     "software": {"tensor_cosdi": "…", "numpy": "…", "python": "…"},
+     "created": "2026-11-22T10:00:00+00:00", "kind": "measurement",
+     "system": {"class": "SDCASSI", "params": {"n_bands": 28, …}, "arrays": {"code": "system.code", …}},
+     "arrays": ["measurement", "calibration.white", …],
+     "provenance": [{"path": "…", "sha256": "…", "bytes": 123}],
+     "metadata": {…}}
+
+Arrays are stored under ``system.*`` (the system's codes, shifts,
+wavelengths, PSFs), ``measurement``, ``cube``, ``depth``,
+``calibration.*`` and ``extra.*``.  Files are written to a temporary name and
+linked into place, so an existing bundle is never overwritten unless
+``overwrite=True`` and a crash never leaves half a file.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import os
+import platform
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import _backend as B
+
+__all__ = ["save_bundle", "load_bundle", "Bundle", "system_state", "system_from_state", "file_digest"]
+
+FORMAT = "tensor_cosdi-bundle"
+FORMAT_VERSION = 1
+
+
+def file_digest(path) -> dict:
+    """``{"path", "sha256", "bytes"}`` of a source file (provenance)."""
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"provenance: source file not found: {p}")
+    h = hashlib.sha256()
+    with open(p, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return {"path": str(p.resolve()), "sha256": h.hexdigest(), "bytes": p.stat().st_size}
+
+
+def _np(x):
+    return np.asarray(B.to_numpy(x))
+
+
+def system_state(system) -> tuple[dict, dict]:
+    """``(description, arrays)`` that rebuild ``system`` with :func:`system_from_state`."""
+    from .. import systems as S
+
+    cls = type(system).__name__
+    params: dict = {}
+    arrays: dict = {"wavelengths": np.asarray(system.wavelengths)}
+    if isinstance(system, (S.SDCASSI, S.DDCASSI, S.DualCameraCASSI, S.CASSIVSI, S.CS2LI, S.MuCoSDI)):
+        arrays["code"] = np.asarray(system.code)
+        arrays["shifts"] = np.asarray(system.shifts)
+        params["n_bands"] = int(system.n_bands)
+    if isinstance(system, S.CASSIVSI):
+        params.update(alpha_t=float(system.alpha_t), beta=int(system.beta))
+    elif isinstance(system, S.CS2LI):
+        params["n_patterns"] = int(system.cube_shape[3])
+    elif isinstance(system, S.MuCoSDI):
+        params["modality"] = system.modality
+        if system.modality == "sl":
+            params["n_patterns"] = int(system.n_patterns)
+        elif system.modality == "lf":
+            params.update(views=list(system.views), raw_layout=system.raw_layout)
+        elif system.depth_estimator is not None:
+            raise ValueError("a Mu-CoSDI with a depth_estimator callable cannot be saved (code is not data); "
+                             "save it without one and pass the estimator again after loading")
+    elif isinstance(system, S.CASSDIDFA):
+        arrays.update(codes=np.asarray(system.codes), shifts=np.asarray(system.shifts))
+        params["n_bands"] = int(system.n_bands)
+        if system.psfs is not None:
+            arrays["psfs"] = np.asarray(system.psfs)
+    elif isinstance(system, S.C3SLFI):
+        if system.phi is not None:
+            raise ValueError("a separable C3SLFI (C3SLFI.separable) is saved by its Φ3 matrix, which bundles do not "
+                             "support yet; build it with explicit codes to save it")
+        arrays["codes"] = np.asarray(system.codes)
+        params.update(layout=system.layout, raw_layout=system.raw_layout, complementary=bool(system.complementary),
+                      views=None if system.views is None else [int(v) for v in system.views])
+    elif not isinstance(system, (S.SDCASSI, S.DDCASSI, S.DualCameraCASSI, S.CASSIVSI, S.CS2LI)):
+        raise ValueError(f"cannot save a {cls}: bundles know the systems of tensor_cosdi.systems")
+    return {"class": cls, "params": params, "arrays": sorted(arrays)}, arrays
+
+
+def system_from_state(desc: dict, arrays: dict):
+    """Rebuild a system saved by :func:`system_state`."""
+    from .. import systems as S
+
+    cls = getattr(S, desc["class"], None)
+    if cls is None or not isinstance(cls, type):
+        raise ValueError(f"unknown system class {desc['class']!r} in the bundle")
+    p = dict(desc["params"])
+    wl = arrays["wavelengths"]
+    if desc["class"] == "C3SLFI":
+        views = p.pop("views")
+        return cls(arrays["codes"], views=None if views is None else tuple(views), wavelengths=wl, **p)
+    if desc["class"] == "CASSDIDFA":
+        return cls(arrays["codes"], shifts=arrays["shifts"], psfs=arrays.get("psfs"), wavelengths=wl, **p)
+    if desc["class"] == "MuCoSDI" and "views" in p:
+        p["views"] = tuple(p["views"])
+    return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=wl, **p)
+
+
+@dataclass(frozen=True)
+class Bundle:
+    """What :func:`load_bundle` returns.
+
+    Attributes
+    ----------
+    system : System or None
+        Rebuilt from the stored parameters (bit-identical codes, shifts, …).
+    measurement, cube, depth : ndarray or None
+    calibration : dict of ndarray
+        E.g. ``white``, ``dark`` and anything else saved under it.
+    arrays : dict of ndarray
+        The ``extra`` arrays.
+    metadata : dict
+        The user's metadata.
+    provenance : list of dict
+        Source files with their SHA-256 and size.
+    info : dict
+        The whole JSON document (software versions, creation time, kind).
+    """
+
+    system: object
+    measurement: object
+    cube: object
+    depth: object
+    calibration: dict = field(default_factory=dict)
+    arrays: dict = field(default_factory=dict)
+    metadata: dict = field(default_factory=dict)
+    provenance: list = field(default_factory=list)
+    info: dict = field(default_factory=dict, repr=False)
+
+
+def _check_name(name: str, what: str):
+    if not isinstance(name, str) or not name or "/" in name or name.startswith("__"):
+        raise ValueError(f"{what} names must be non-empty strings without '/' or a leading '__', got {name!r}")
+
+
+def save_bundle(path, *, system=None, measurement=None, cube=None, depth=None, calibration=None, arrays=None,
+                metadata=None, sources=(), kind: str | None = None, overwrite: bool = False) -> Path:
+    """Save a measurement / reconstruction / calibration with its system and provenance as one ``.npz`` file.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target file (``.npz`` is appended if missing).
+    system : System, optional
+        Saved by parameters and arrays (rebuilt on load).
+    measurement, cube, depth : array or tensor, optional
+    calibration : dict of arrays, optional
+        E.g. ``{"white": W, "dark": D}`` (reflectance, Eq. 171).
+    arrays : dict of arrays, optional
+        Anything else to keep.
+    metadata : dict, optional
+        JSON-serialisable notes (exposure, operator, sample …).
+    sources : sequence of paths
+        Capture files this bundle was made from; their SHA-256 is recorded.
+    kind : str, optional
+        Default: ``"reconstruction"`` with a cube, ``"measurement"`` with a
+        measurement, else ``"calibration"``.
+    overwrite : bool
+        Replace an existing file (default: refuse with ``FileExistsError``).
+
+    Returns
+    -------
+    Path of the written file.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from tensor_cosdi.systems import SDCASSI
+    >>> sd = SDCASSI(np.eye(4), n_bands=3)
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "capture.npz"
+    >>> _ = save_bundle(f, system=sd, measurement=np.ones((4, 6)), metadata={"exposure_ms": 20})
+    >>> b = load_bundle(f)
+    >>> b.system.measurement_shape, b.metadata, b.info["kind"]
+    ((4, 6), {'exposure_ms': 20}, 'measurement')
+    """
+    from .. import __version__
+
+    p = Path(path)
+    if p.suffix != ".npz":
+        p = p.with_name(p.name + ".npz")
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+    if not p.parent.is_dir():
+        raise FileNotFoundError(f"folder {p.parent} does not exist")
+    store: dict[str, np.ndarray] = {}
+    doc = {"format": FORMAT, "format_version": FORMAT_VERSION,
+           "software": {"tensor_cosdi": __version__, "numpy": np.__version__, "python": platform.python_version()},
+           "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")}
+    if system is not None:
+        desc, sys_arrays = system_state(system)
+        doc["system"] = desc
+        store.update({f"system.{k}": v for k, v in sys_arrays.items()})
+    for name, value in (("measurement", measurement), ("cube", cube), ("depth", depth)):
+        if value is not None:
+            store[name] = _np(value)
+    for group, mapping in (("calibration", calibration), ("extra", arrays)):
+        for k, v in (mapping or {}).items():
+            _check_name(k, group)
+            store[f"{group}.{k}"] = _np(v)
+    if system is not None and measurement is not None and store["measurement"].shape != tuple(system.measurement_shape):
+        raise ValueError(f"measurement shape {store['measurement'].shape} does not match the system's "
+                         f"{tuple(system.measurement_shape)}")
+    if system is not None and cube is not None and store["cube"].shape != tuple(system.cube_shape):
+        raise ValueError(f"cube shape {store['cube'].shape} does not match the system's {tuple(system.cube_shape)}")
+    for k, v in store.items():
+        if v.dtype == object:
+            raise ValueError(f"array {k!r} has dtype object; bundles store numeric arrays only")
+    try:
+        doc["metadata"] = json.loads(json.dumps(metadata or {}, allow_nan=False))
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"metadata must be JSON-serialisable (numbers, strings, lists, dicts): {e}") from None
+    doc["provenance"] = [file_digest(s) for s in sources]
+    doc["kind"] = kind or ("reconstruction" if cube is not None else "measurement" if measurement is not None
+                           else "calibration")
+    doc["arrays"] = sorted(store)
+    store["__bundle__"] = np.array(json.dumps(doc))
+    fd, tmp = tempfile.mkstemp(suffix=".npz", dir=p.parent, prefix=f".{p.name}.")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **store)
+            f.flush()
+            os.fsync(f.fileno())
+        if overwrite:
+            os.replace(tmp, p)
+        else:
+            os.link(tmp, p)  # atomic: fails if someone created p meanwhile
+            os.unlink(tmp)
+    except FileExistsError:
+        os.unlink(tmp)
+        raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it") from None
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p
+
+
+def load_bundle(path) -> Bundle:
+    """Read a bundle written by :func:`save_bundle` (arrays bit-identical, system rebuilt)."""
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"bundle not found: {p}")
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except Exception as e:
+        raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
+    if "__bundle__" not in data:
+        raise ValueError(f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle")
+    doc = json.loads(str(data.pop("__bundle__")))
+    if doc.get("format") != FORMAT:
+        raise ValueError(f"{p}: unknown format {doc.get('format')!r}")
+    if doc.get("format_version", 0) > FORMAT_VERSION:
+        raise ValueError(f"{p}: bundle format {doc['format_version']} is newer than this tensor_cosdi reads "
+                         f"({FORMAT_VERSION}); upgrade tensor_cosdi")
+    system = None
+    if "system" in doc:
+        sys_arrays = {k[len("system."):]: v for k, v in data.items() if k.startswith("system.")}
+        system = system_from_state(doc["system"], sys_arrays)
+    group = lambda g: {k[len(g) + 1:]: v for k, v in data.items() if k.startswith(g + ".")}  # noqa: E731
+    return Bundle(system, data.get("measurement"), data.get("cube"), data.get("depth"), group("calibration"),
+                  group("extra"), doc.get("metadata", {}), doc.get("provenance", []), doc)

@@ -1,0 +1,233 @@
+"""Capture files → float frames: read, dark/flat correction, region of interest, binning (issue: lab adapter).
+
+Readers by extension: ``.tif``/``.tiff`` (tifffile), ``.png``/``.jpg``/``.jpeg``/``.bmp``
+(imageio), ``.npy``/``.npz`` (NumPy) and ``.mat`` (SciPy).  A frame is one 2-D
+image; a colour PNG/JPEG is refused (a spectral imager's sensor is
+monochrome) unless ``channel=`` picks one.  Every error names the file.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["read_frame", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES"]
+
+FRAME_SUFFIXES = (".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".npy", ".npz", ".mat")
+
+
+def _single_array(mapping: dict, path, key):
+    if key is not None:
+        if key not in mapping:
+            raise ValueError(f"{path}: no array named {key!r}; it holds {sorted(mapping)}")
+        return mapping[key]
+    names = [k for k in mapping if not k.startswith("__")]
+    if len(names) != 1:
+        raise ValueError(f"{path}: holds {len(names)} arrays {sorted(names)}; pass key= to pick one")
+    return mapping[names[0]]
+
+
+def read_frame(path, *, key: str | None = None, channel: int | None = None) -> np.ndarray:
+    """Read one 2-D frame from ``path`` in its stored dtype.
+
+    Parameters
+    ----------
+    path : str or Path
+    key : str, optional
+        Array name inside ``.npz`` / ``.mat`` files holding several arrays.
+    channel : int, optional
+        Channel of an RGB(A) image to use.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    ValueError
+        Unknown format, unreadable or truncated file, not a 2-D numeric
+        image — the message names the file.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"frame file not found: {p}")
+    suffix = p.suffix.lower()
+    try:
+        if suffix in (".tif", ".tiff"):
+            import tifffile
+
+            a = tifffile.imread(p)
+        elif suffix in (".png", ".jpg", ".jpeg", ".bmp"):
+            import imageio.v3 as iio
+
+            a = iio.imread(p)
+        elif suffix == ".npy":
+            a = np.load(p, allow_pickle=False)
+        elif suffix == ".npz":
+            with np.load(p, allow_pickle=False) as z:
+                a = _single_array({k: z[k] for k in z.files}, p, key)
+        elif suffix == ".mat":
+            import scipy.io
+
+            a = _single_array(scipy.io.loadmat(p), p, key)
+        else:
+            raise ValueError(f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}")
+    except (ValueError, FileNotFoundError):
+        raise
+    except Exception as e:  # truncated or corrupt files raise many different errors in the readers
+        raise ValueError(f"{p}: cannot read the file ({type(e).__name__}: {e})") from e
+    a = np.asarray(a)
+    if a.ndim == 3 and a.shape[-1] in (3, 4) and suffix in (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"):
+        if channel is None:
+            raise ValueError(f"{p}: colour image {a.shape}; a frame must be monochrome — pass channel= to pick one")
+        a = a[..., channel]
+    if a.ndim != 2:
+        raise ValueError(f"{p}: expected a 2-D frame, got an array of shape {a.shape}")
+    if not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
+        raise ValueError(f"{p}: expected integer or float pixels, got dtype {a.dtype}")
+    if np.issubdtype(a.dtype, np.floating) and not np.all(np.isfinite(a)):
+        raise ValueError(f"{p}: the frame contains NaN or inf")
+    return a
+
+
+def crop(frame, roi):
+    """``frame[r0:r1, c0:c1]`` for ``roi = (r0, r1, c0, c1)``; out-of-frame ROIs are errors, not clipped."""
+    a = np.asarray(frame)
+    try:
+        r0, r1, c0, c1 = (int(v) for v in roi)
+    except (TypeError, ValueError):
+        raise ValueError(f"roi must be (row0, row1, col0, col1), got {roi!r}") from None
+    h, w = a.shape[:2]
+    if not (0 <= r0 < r1 <= h and 0 <= c0 < c1 <= w):
+        raise ValueError(f"roi {(r0, r1, c0, c1)} does not lie inside the {h}×{w} frame")
+    return a[r0:r1, c0:c1]
+
+
+def bin_frame(frame, binning: int):
+    """Sum ``binning × binning`` blocks (sensor binning, e.g. 6×6 for a 2×2-binned DMD, Sec. 3.4).
+
+    The frame's size must be a multiple of ``binning`` (crop with ``roi``
+    first): nothing is silently dropped.
+    """
+    a = np.asarray(frame, dtype=np.float64)
+    if isinstance(binning, bool) or not isinstance(binning, (int, np.integer)) or binning < 1:
+        raise ValueError(f"binning must be a positive integer, got {binning!r}")
+    if binning == 1:
+        return a
+    h, w = a.shape[:2]
+    if h % binning or w % binning:
+        raise ValueError(f"a {h}×{w} frame cannot be binned {binning}×{binning}: crop it to a multiple first (roi=)")
+    return a.reshape(h // binning, binning, w // binning, binning, *a.shape[2:]).sum(axis=(1, 3))
+
+
+def _natural_key(p: Path):
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
+
+
+def frame_paths(source, *, pattern: str = "*") -> list[Path]:
+    """Frame files from a folder (natural sort order: ``f2`` before ``f10``) or a list of paths.
+
+    In a folder, files whose names carry a running number must have no gaps:
+    ``frame_000, frame_001, frame_003`` is an error naming ``frame_002``.
+    """
+    if isinstance(source, (str, Path)) and Path(source).is_dir():
+        folder = Path(source)
+        paths = sorted((p for p in folder.glob(pattern) if p.is_file() and p.suffix.lower() in FRAME_SUFFIXES),
+                       key=_natural_key)
+        if not paths:
+            raise ValueError(f"{folder}: no frame files ({', '.join(FRAME_SUFFIXES)}) matching {pattern!r}")
+        numbered = [re.fullmatch(r"(.*?)(\d+)", p.stem) for p in paths]
+        if all(numbered) and len({m.group(1) for m in numbered}) == 1:
+            idx = [int(m.group(2)) for m in numbered]
+            missing = sorted(set(range(min(idx), max(idx) + 1)) - set(idx))
+            if missing:
+                width = len(numbered[0].group(2))
+                names = [f"{numbered[0].group(1)}{i:0{width}d}" for i in missing[:10]]
+                raise ValueError(f"{folder}: frame sequence has gaps — missing {names}"
+                                 + (f" and {len(missing) - 10} more" if len(missing) > 10 else ""))
+        return paths
+    if isinstance(source, (str, Path)):
+        return [Path(source)]
+    paths = [Path(p) for p in source]
+    if not paths:
+        raise ValueError("no frame files given")
+    return paths
+
+
+def load_frames(paths_or_folder, *, dark=None, flat=None, roi=None, binning: int = 1, expected: int | None = None,
+                key: str | None = None, pattern: str = "*") -> np.ndarray:
+    """Load, correct and stack frames: ``(H, W, N)`` float64, in file order.
+
+    ``F = (raw − dark) / gain`` with ``gain = (flat − dark) / mean(flat − dark)``
+    (a flat of mean gain 1, so counts keep their scale), then the region of
+    interest, then binning.
+
+    Parameters
+    ----------
+    paths_or_folder : folder, file, or sequence of files
+        A folder is read in natural order and checked for gaps in numbered
+        names (:func:`frame_paths`).
+    dark, flat : path or array, optional
+        Dark frame (no light) and flat/white frame (uniform illumination).
+    roi : (row0, row1, col0, col1), optional
+    binning : int
+    expected : int, optional
+        Number of frames the acquisition should have produced.
+    key, pattern
+        Array name in ``.npz``/``.mat`` files; glob pattern inside a folder.
+
+    Raises
+    ------
+    ValueError
+        Frames of different shapes, a dark frame as bright as the signal,
+        a flat with non-positive pixels after dark subtraction, missing
+        frames — naming the file.
+    """
+    paths = frame_paths(paths_or_folder, pattern=pattern)
+    if expected is not None and len(paths) != expected:
+        raise ValueError(f"expected {expected} frames, found {len(paths)} ({paths[0].parent})")
+
+    def load(x, what):
+        if x is None:
+            return None, None
+        if isinstance(x, (str, Path)):
+            return read_frame(x, key=key).astype(np.float64), str(x)
+        a = np.asarray(x, dtype=np.float64)
+        if a.ndim != 2 or not np.all(np.isfinite(a)):
+            raise ValueError(f"{what} must be a finite 2-D frame, got shape {a.shape}")
+        return a, what
+
+    dark_a, dark_name = load(dark, "dark frame")
+    flat_a, flat_name = load(flat, "flat frame")
+    frames = []
+    shape = None
+    for p in paths:
+        a = read_frame(p, key=key).astype(np.float64)
+        if shape is None:
+            shape = a.shape
+        elif a.shape != shape:
+            raise ValueError(f"{p}: frame shape {a.shape} differs from {shape} of {paths[0].name}")
+        if dark_a is not None:
+            if dark_a.shape != a.shape:
+                raise ValueError(f"dark frame {dark_name}: shape {dark_a.shape} does not match {p} {a.shape}")
+            if dark_a.mean() >= a.mean():
+                raise ValueError(f"{p}: its mean {a.mean():.4g} is not above the dark frame's {dark_a.mean():.4g} "
+                                 f"({dark_name}) — swapped files, or a frame without light?")
+            a = a - dark_a
+        frames.append(a)
+    if flat_a is not None:
+        if flat_a.shape != shape:
+            raise ValueError(f"flat frame {flat_name}: shape {flat_a.shape} does not match the frames' {shape}")
+        gain = flat_a - (dark_a if dark_a is not None else 0.0)
+        if np.any(gain <= 0):
+            bad = np.argwhere(gain <= 0)[0]
+            raise ValueError(f"flat frame {flat_name}: {int((gain <= 0).sum())} pixel(s) ≤ the dark level "
+                             f"(first at row {bad[0]}, column {bad[1]}); cannot divide by it")
+        gain = gain / gain.mean()
+        frames = [f / gain for f in frames]
+    out = []
+    for f in frames:
+        if roi is not None:
+            f = crop(f, roi)
+        out.append(bin_frame(f, binning))
+    return np.stack(out, axis=-1)

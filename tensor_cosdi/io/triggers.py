@@ -1,0 +1,484 @@
+"""Device triggers over a serial port: acquisition plans, a line protocol, resumable frame logs.
+
+The line protocol (ASCII, one command per line, ``\\n``-terminated)
+-------------------------------------------------------------------
+host → device::
+
+    PING                      liveness check
+    DMD <k>                   show code / pattern k on the DMD
+    DM <j>:<a> [<j>:<a> …]    deformable mirror: Zernike j (Noll) to a waves
+    PROJ <t>                  projector shows pattern t
+    TRIG <n>                  fire the camera for frame n
+
+device → host: ``OK <VERB>`` (``OK TRIG <n>`` for triggers) once the command
+is applied, or ``ERR <VERB> <reason>``.  Lines echoing the command are
+ignored (many microcontroller firmwares echo).  Anything else is garbage.
+
+Every command sets state, so re-sending it is safe; the device must treat a
+repeated ``TRIG n`` for the frame it just fired as already done (answer
+``OK`` without firing again).  The host waits ``timeout`` seconds for the
+acknowledgement and re-sends up to ``retries`` times on a timeout or garbage;
+``ERR`` is final.  A port that disappears raises :class:`DeviceError`.
+
+The frame log
+-------------
+:class:`Acquisition` writes one JSON line per finished frame — step number,
+tensor indices (snapshot ``k``, pattern ``t``, depth plane ``z``), frame file,
+its SHA-256, time — flushed and fsynced before the next step starts, after a
+header line that fingerprints the plan.  Running the same plan against the
+same log resumes after the last logged frame: nothing is lost or repeated.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import os
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = [
+    "Step", "AcquisitionPlan", "SerialDevice", "DeviceError", "Acquisition", "FolderCamera", "FakeTriggerDevice",
+    "read_log",
+]
+
+
+def _port_errors():
+    """Exceptions a lost port raises: pyserial's, the OS's, and termios' (POSIX)."""
+    import serial
+
+    errs = [serial.SerialException, OSError]
+    try:
+        import termios
+
+        errs.append(termios.error)
+    except ImportError:  # pragma: no cover - Windows
+        pass
+    return tuple(errs)
+
+
+class DeviceError(RuntimeError):
+    """The trigger device did not do what was asked (timeout after retries, ERR reply, lost port)."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One frame of an acquisition: the commands to send before triggering, and where the frame lands.
+
+    ``index`` names the frame's place in the measurement tensor, e.g.
+    ``{"k": 2}`` (C3SLFI snapshot), ``{"t": 5}`` (structured-light pattern),
+    ``{"z": 1}`` (DFA focal step).
+    """
+
+    index: dict
+    commands: tuple = ()
+    frame: str = ""
+
+    def to_dict(self):
+        return {"index": dict(self.index), "commands": list(self.commands), "frame": self.frame}
+
+
+def _check_command(c):
+    if not isinstance(c, str) or not c.strip() or "\n" in c or "\r" in c:
+        raise ValueError(f"a command is one non-empty line of text, got {c!r}")
+    verb = c.split()[0]
+    if verb not in ("PING", "DMD", "DM", "PROJ", "TRIG"):
+        raise ValueError(f"unknown command verb {verb!r} in {c!r}; the protocol knows PING, DMD, DM, PROJ, TRIG")
+    return c.strip()
+
+
+@dataclass(frozen=True)
+class AcquisitionPlan:
+    """The ordered frames of an acquisition.
+
+    Examples
+    --------
+    >>> plan = AcquisitionPlan.patterns(8)
+    >>> plan.steps[3].commands, plan.steps[3].index, plan.steps[3].frame
+    (('PROJ 3',), {'t': 3}, 'frame_003.tif')
+    """
+
+    steps: tuple = field(default_factory=tuple)
+    name: str = "plan"
+
+    def __post_init__(self):
+        steps = tuple(s if isinstance(s, Step) else Step(**s) for s in self.steps)
+        if not steps:
+            raise ValueError("an acquisition plan needs at least one step")
+        frames = [s.frame for s in steps]
+        if any(not f for f in frames) or len(set(frames)) != len(frames):
+            raise ValueError("every step needs its own, non-empty frame file name")
+        for s in steps:
+            for c in s.commands:
+                _check_command(c)
+        object.__setattr__(self, "steps", steps)
+
+    @staticmethod
+    def _frames(n, suffix):
+        width = max(3, len(str(n - 1)))
+        return [f"frame_{i:0{width}d}{suffix}" for i in range(n)]
+
+    @classmethod
+    def snapshots(cls, n_snapshots: int, *, suffix: str = ".tif") -> "AcquisitionPlan":
+        """``K`` snapshots, DMD code ``k`` for snapshot ``k`` (multi-shot CASSI, C3SLFI)."""
+        names = cls._frames(n_snapshots, suffix)
+        return cls(tuple(Step({"k": k}, (f"DMD {k}",), names[k]) for k in range(n_snapshots)), "snapshots")
+
+    @classmethod
+    def patterns(cls, n_patterns: int, *, suffix: str = ".tif") -> "AcquisitionPlan":
+        """``Nt`` projector patterns, frequency-major (CS2LI, Mu-CoSDI ``"sl"``)."""
+        names = cls._frames(n_patterns, suffix)
+        return cls(tuple(Step({"t": t}, (f"PROJ {t}",), names[t]) for t in range(n_patterns)), "patterns")
+
+    @classmethod
+    def focal_sweep(cls, zernike_steps, *, suffix: str = ".tif") -> "AcquisitionPlan":
+        """One frame per focal step ``z``: DMD code ``z`` and the mirror's Zernike coefficients (CASSDI-DFA calibration)."""
+        steps = []
+        names = cls._frames(len(zernike_steps), suffix)
+        for z, coeffs in enumerate(zernike_steps):
+            dm = " ".join(f"{int(j)}:{float(a):.6g}" for j, a in sorted(dict(coeffs).items()))
+            steps.append(Step({"z": z}, (f"DMD {z}", f"DM {dm}"), names[z]))
+        return cls(tuple(steps), "focal_sweep")
+
+    def fingerprint(self) -> str:
+        return hashlib.sha256(json.dumps([s.to_dict() for s in self.steps], sort_keys=True).encode()).hexdigest()
+
+    def save(self, path, *, overwrite: bool = False) -> Path:
+        p = Path(path)
+        if p.exists() and not overwrite:
+            raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+        p.write_text(json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1))
+        return p
+
+    @classmethod
+    def load(cls, path) -> "AcquisitionPlan":
+        p = Path(path)
+        try:
+            doc = json.loads(p.read_text())
+            return cls(tuple(Step(s["index"], tuple(s["commands"]), s["frame"]) for s in doc["steps"]),
+                       doc.get("name", p.stem))
+        except (OSError, ValueError, KeyError, TypeError) as e:
+            raise ValueError(f"{p}: not an acquisition plan ({type(e).__name__}: {e})") from e
+
+
+class SerialDevice:
+    """The host side of the line protocol on a pyserial port.
+
+    Parameters
+    ----------
+    port : str or serial.Serial
+        A device path (``/dev/ttyACM0``), a pyserial URL (``loop://``,
+        ``socket://host:port``) or an open port object.
+    baudrate : int
+    timeout : float
+        Seconds to wait for each acknowledgement.
+    retries : int
+        Re-sends after a timeout or a garbage reply.
+    """
+
+    def __init__(self, port, *, baudrate: int = 115200, timeout: float = 1.0, retries: int = 2):
+        import serial
+
+        if not (timeout > 0):
+            raise ValueError(f"timeout must be > 0 s, got {timeout!r}")
+        if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+            raise ValueError(f"retries must be an integer ≥ 0, got {retries!r}")
+        self.timeout, self.retries = float(timeout), retries
+        try:
+            self.port = serial.serial_for_url(port, baudrate=baudrate, timeout=0.05) if isinstance(port, str) else port
+        except serial.SerialException as e:
+            raise DeviceError(f"cannot open serial port {port!r}: {e}") from e
+        self.log: list[str] = []  # every line sent and received, for diagnostics
+
+    def close(self):
+        try:
+            self.port.close()
+        except Exception:
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _readline(self, deadline):
+        buf = b""
+        while time.monotonic() < deadline:
+            try:
+                chunk = self.port.readline()
+            except _port_errors() as e:
+                raise DeviceError(f"serial port lost while waiting for a reply: {e}") from e
+            if chunk:
+                buf += chunk
+                if buf.endswith(b"\n"):
+                    return buf.decode("ascii", errors="replace").strip()
+        return None
+
+    def command(self, line: str) -> str:
+        """Send one command and return the device's ``OK`` line; raise :class:`DeviceError` otherwise."""
+        line = _check_command(line)
+        verb = line.split()[0]
+        expected = f"OK {line}" if verb == "TRIG" else f"OK {verb}"
+        problems = []
+        for attempt in range(self.retries + 1):
+            try:
+                self.port.reset_input_buffer()
+                self.port.write((line + "\n").encode("ascii"))
+                self.port.flush()
+            except _port_errors() as e:
+                raise DeviceError(f"serial port lost while sending {line!r}: {e}") from e
+            self.log.append(f"> {line}")
+            deadline = time.monotonic() + self.timeout
+            while True:
+                reply = self._readline(deadline)
+                if reply is None:
+                    problems.append(f"attempt {attempt + 1}: no acknowledgement within {self.timeout:g} s")
+                    break
+                self.log.append(f"< {reply}")
+                if reply == line or not reply:
+                    continue  # echo or empty line
+                if reply == expected:
+                    return reply
+                if reply.startswith(f"ERR {verb}"):
+                    raise DeviceError(f"device refused {line!r}: {reply}")
+                problems.append(f"attempt {attempt + 1}: garbage reply {reply!r}")
+                break
+        raise DeviceError(f"no valid acknowledgement for {line!r} after {self.retries + 1} attempt(s): "
+                          + "; ".join(problems))
+
+
+class FolderCamera:
+    """The camera side for rigs whose camera software saves each triggered frame into a folder.
+
+    ``capture(step)`` waits up to ``timeout`` seconds for ``folder / step.frame``
+    to appear with a size that has stopped changing, and returns its path.
+    """
+
+    def __init__(self, folder, *, timeout: float = 10.0, poll: float = 0.05):
+        self.folder = Path(folder)
+        if not self.folder.is_dir():
+            raise FileNotFoundError(f"frame folder {self.folder} does not exist")
+        self.timeout, self.poll = float(timeout), float(poll)
+
+    def __call__(self, step: Step) -> Path:
+        p = self.folder / step.frame
+        deadline = time.monotonic() + self.timeout
+        last = -1
+        while time.monotonic() < deadline:
+            if p.is_file():
+                size = p.stat().st_size
+                if size > 0 and size == last:
+                    return p
+                last = size
+            time.sleep(self.poll)
+        raise DeviceError(f"frame {p} did not appear within {self.timeout:g} s after the trigger")
+
+
+def read_log(path) -> tuple[dict | None, list[dict]]:
+    """``(header, entries)`` of a frame log; a truncated last line (crash mid-write) is ignored."""
+    p = Path(path)
+    if not p.exists():
+        return None, []
+    header, entries = None, []
+    text = p.read_text()
+    lines = text.split("\n")
+    complete = lines[:-1]  # the part after the last newline is an unfinished write
+    for n, line in enumerate(complete):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+        except ValueError:
+            raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
+        if "plan" in obj and header is None:
+            header = obj
+        else:
+            entries.append(obj)
+    return header, entries
+
+
+class Acquisition:
+    """Run an :class:`AcquisitionPlan` against a trigger device, logging each frame as it lands.
+
+    Parameters
+    ----------
+    plan : AcquisitionPlan
+    device : SerialDevice
+    log_path : path
+        JSON-lines frame log (created, or resumed if it exists for this plan).
+    capture : callable ``step -> path``
+        Returns the frame file once the camera wrote it (e.g.
+        :class:`FolderCamera`); called after the trigger's acknowledgement.
+    """
+
+    def __init__(self, plan: AcquisitionPlan, device: SerialDevice, log_path, capture):
+        self.plan, self.device, self.log_path, self.capture = plan, device, Path(log_path), capture
+
+    def _open_log(self):
+        header, entries = read_log(self.log_path)
+        fp = self.plan.fingerprint()
+        if header is not None and header["plan"] != fp:
+            raise ValueError(f"{self.log_path} belongs to another acquisition plan (fingerprint "
+                             f"{header['plan'][:12]}… ≠ {fp[:12]}…); use a new log file")
+        if self.log_path.exists():  # drop an unfinished last line before appending
+            text = self.log_path.read_text()
+            keep = text[: text.rfind("\n") + 1] if "\n" in text else ""
+            if keep != text:
+                self.log_path.write_text(keep)
+        f = open(self.log_path, "a")
+        if header is None:
+            self._write(f, {"plan": fp, "name": self.plan.name, "steps": len(self.plan.steps),
+                            "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")})
+        return f, {e["step"] for e in entries}
+
+    @staticmethod
+    def _write(f, obj):
+        f.write(json.dumps(obj) + "\n")
+        f.flush()
+        os.fsync(f.fileno())
+
+    def remaining(self) -> list[int]:
+        """Steps not yet in the log."""
+        _, entries = read_log(self.log_path)
+        done = {e["step"] for e in entries}
+        return [i for i in range(len(self.plan.steps)) if i not in done]
+
+    def run(self, *, progress: bool = False) -> list[dict]:
+        """Acquire every step not yet logged; returns the log entries written in this run."""
+        from tqdm import tqdm
+
+        from .bundle import file_digest
+
+        f, done = self._open_log()
+        written = []
+        try:
+            todo = [i for i in range(len(self.plan.steps)) if i not in done]
+            for i in tqdm(todo, desc="acquire", disable=not progress):
+                step = self.plan.steps[i]
+                try:
+                    for c in step.commands:
+                        self.device.command(c)
+                    self.device.command(f"TRIG {i}")
+                    path = Path(self.capture(step))
+                except DeviceError as e:
+                    raise DeviceError(f"step {i} ({step.index}, {step.frame}): {e}. The log {self.log_path} holds "
+                                      f"{len(done) + len(written)} finished frame(s); run again to resume") from e
+                entry = {"step": i, "index": dict(step.index), "frame": str(path), "sha256": file_digest(path)["sha256"],
+                         "time": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds")}
+                self._write(f, entry)
+                written.append(entry)
+        finally:
+            f.close()
+        return written
+
+
+class FakeTriggerDevice:
+    """A simulated trigger microcontroller on a pseudo-terminal, for tests and dry runs (POSIX only).
+
+    ``port`` is the device path to open with :class:`SerialDevice`.  The
+    behaviour is scripted per command line (exact text, e.g. ``"TRIG 2"``,
+    or a verb such as ``"PROJ"``):
+
+    * ``delays`` — seconds to wait before answering;
+    * ``late_once`` — answer only after this many seconds the *first* time
+      (a retry then succeeds);
+    * ``silent`` — never answer;
+    * ``garbage_once`` — answer garbage the first time;
+    * ``echo`` — echo every line first.
+
+    ``fired`` lists the frames actually triggered (a repeated ``TRIG n`` is
+    acknowledged without firing again); ``disconnect()`` pulls the plug.
+    """
+
+    def __init__(self, *, delays=None, late_once=None, silent=(), garbage_once=(), echo: bool = False):
+        if os.name != "posix":
+            raise OSError("FakeTriggerDevice needs POSIX pseudo-terminals (Linux, macOS)")
+        import tty
+
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        self.port = os.ttyname(self.slave)
+        self.delays = dict(delays or {})
+        self.late_once = dict(late_once or {})
+        self.silent = set(silent)
+        self.garbage_once = set(garbage_once)
+        self.echo = echo
+        self.fired: list[int] = []
+        self.received: list[str] = []
+        self._seen: set[str] = set()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._serve, daemon=True)
+        self._thread.start()
+
+    def _match(self, mapping, line):
+        verb = line.split()[0]
+        if isinstance(mapping, dict):
+            return mapping.get(line, mapping.get(verb))
+        return line in mapping or verb in mapping
+
+    def _serve(self):
+        buf = b""
+        while not self._stop.is_set():
+            try:
+                chunk = os.read(self.master, 1024)
+            except OSError:
+                return
+            if not chunk:
+                return
+            buf += chunk
+            while b"\n" in buf:
+                raw, buf = buf.split(b"\n", 1)
+                line = raw.decode("ascii", errors="replace").strip()
+                if line:
+                    self._answer(line)
+
+    def _send(self, text):
+        try:
+            os.write(self.master, (text + "\n").encode("ascii"))
+        except OSError:
+            pass
+
+    def _answer(self, line):
+        self.received.append(line)
+        first = line not in self._seen
+        self._seen.add(line)
+        if self.echo:
+            self._send(line)
+        if self._match(self.silent, line):
+            return
+        delay = self._match(self.delays, line) or 0.0
+        if first and self._match(self.late_once, line) is not None:
+            delay = max(delay, self._match(self.late_once, line))
+        if delay:
+            time.sleep(delay)
+        if first and self._match(self.garbage_once, line):
+            self._send("#$%?!")
+            return
+        verb, *args = line.split()
+        if verb == "TRIG":
+            n = int(args[0]) if args and args[0].isdigit() else None
+            if n is None:
+                self._send("ERR TRIG needs a frame number")
+                return
+            if not self.fired or self.fired[-1] != n:
+                self.fired.append(n)
+            self._send(f"OK TRIG {n}")
+        elif verb in ("PING", "DMD", "DM", "PROJ"):
+            self._send(f"OK {verb}")
+        else:
+            self._send(f"ERR {verb} unknown command")
+
+    def disconnect(self):
+        """Close the device end: the host's next read or write fails."""
+        self._stop.set()
+        for fd in (self.master, self.slave):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+    close = disconnect

@@ -52,6 +52,8 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
     if not p.is_file():
         raise FileNotFoundError(f"frame file not found: {p}")
     suffix = p.suffix.lower()
+    if suffix not in FRAME_SUFFIXES:
+        raise ValueError(f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}")
     try:
         if suffix in (".tif", ".tiff"):
             import tifffile
@@ -65,17 +67,15 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
             a = np.load(p, allow_pickle=False)
         elif suffix == ".npz":
             with np.load(p, allow_pickle=False) as z:
-                a = _single_array({k: z[k] for k in z.files}, p, key)
-        elif suffix == ".mat":
+                a = {k: z[k] for k in z.files}
+        else:
             import scipy.io
 
-            a = _single_array(scipy.io.loadmat(p), p, key)
-        else:
-            raise ValueError(f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}")
-    except (ValueError, FileNotFoundError):
-        raise
+            a = scipy.io.loadmat(p)
     except Exception as e:  # truncated or corrupt files raise many different errors in the readers
         raise ValueError(f"{p}: cannot read the file ({type(e).__name__}: {e})") from e
+    if isinstance(a, dict):
+        a = _single_array(a, p, key)
     a = np.asarray(a)
     if a.ndim == 3 and a.shape[-1] in (3, 4) and suffix in (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"):
         if channel is None:

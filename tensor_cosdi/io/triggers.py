@@ -391,10 +391,13 @@ class FakeTriggerDevice:
     * ``echo`` — echo every line first.
 
     ``fired`` lists the frames actually triggered (a repeated ``TRIG n`` is
-    acknowledged without firing again); ``disconnect()`` pulls the plug.
+    acknowledged without firing again); ``on_trigger(n)``, if given, is
+    called when frame ``n`` fires (e.g. to write a simulated camera frame);
+    ``disconnect()`` pulls the plug.
     """
 
-    def __init__(self, *, delays=None, late_once=None, silent=(), garbage_once=(), echo: bool = False):
+    def __init__(self, *, delays=None, late_once=None, silent=(), garbage_once=(), echo: bool = False,
+                 on_trigger=None):
         if os.name != "posix":
             raise OSError("FakeTriggerDevice needs POSIX pseudo-terminals (Linux, macOS)")
         import tty
@@ -407,6 +410,7 @@ class FakeTriggerDevice:
         self.silent = set(silent)
         self.garbage_once = set(garbage_once)
         self.echo = echo
+        self.on_trigger = on_trigger
         self.fired: list[int] = []
         self.received: list[str] = []
         self._seen: set[str] = set()
@@ -466,6 +470,8 @@ class FakeTriggerDevice:
                 return
             if not self.fired or self.fired[-1] != n:
                 self.fired.append(n)
+                if self.on_trigger is not None:
+                    self.on_trigger(n)
             self._send(f"OK TRIG {n}")
         elif verb in ("PING", "DMD", "DM", "PROJ"):
             self._send(f"OK {verb}")

@@ -1,0 +1,154 @@
+"""Serial device triggers: the line protocol, retries, and a frame log that survives every failure."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+from tensor_cosdi import io
+from tensor_cosdi.io import Acquisition, AcquisitionPlan, DeviceError, FakeTriggerDevice, SerialDevice
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminal fake device needs POSIX")
+
+
+class Camera:
+    """Writes a frame file per trigger, as a camera's software would (counts every capture)."""
+
+    def __init__(self, folder):
+        self.folder, self.shots = folder, []
+
+    def __call__(self, step):
+        p = self.folder / step.frame.replace(".tif", ".npy")
+        np.save(p, np.full((4, 4), len(self.shots), np.uint16))
+        self.shots.append(step.frame)
+        return p
+
+
+@pytest.fixture
+def device():
+    made = []
+
+    def make(**kw):
+        d = FakeTriggerDevice(**kw)
+        made.append(d)
+        return d
+
+    yield make
+    for d in made:
+        d.disconnect()
+
+
+def test_normal_plan_logs_every_frame(tmp_path, device):
+    dev = device(echo=True)
+    plan = AcquisitionPlan.patterns(5)
+    cam = Camera(tmp_path)
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        written = Acquisition(plan, host, tmp_path / "log.jsonl", cam).run()
+    assert [e["step"] for e in written] == [0, 1, 2, 3, 4]
+    assert dev.fired == [0, 1, 2, 3, 4]
+    assert [line for line in dev.received if line.startswith("PROJ")] == [f"PROJ {t}" for t in range(5)]
+    header, entries = io.read_log(tmp_path / "log.jsonl")
+    assert header["plan"] == plan.fingerprint() and [e["index"] for e in entries] == [{"t": t} for t in range(5)]
+    assert all(len(e["sha256"]) == 64 for e in entries)
+
+
+def test_late_answer_then_retry_succeeds(tmp_path, device):
+    dev = device(late_once={"DMD 1": 0.4})
+    with SerialDevice(dev.port, timeout=0.2, retries=2) as host:
+        Acquisition(AcquisitionPlan.snapshots(3), host, tmp_path / "log.jsonl", Camera(tmp_path)).run()
+    assert dev.received.count("DMD 1") == 2 and dev.fired == [0, 1, 2]  # timed out once, the re-send succeeded
+
+
+def test_garbage_reply_is_retried(tmp_path, device):
+    dev = device(garbage_once={"TRIG 1"})
+    with SerialDevice(dev.port, timeout=0.3, retries=1) as host:
+        Acquisition(AcquisitionPlan.snapshots(2), host, tmp_path / "log.jsonl", Camera(tmp_path)).run()
+    assert dev.fired == [0, 1]  # the retried trigger fired once
+
+
+def test_device_that_never_answers_then_resume(tmp_path, device):
+    dev = device(silent={"PROJ 2"})
+    plan = AcquisitionPlan.patterns(4)
+    cam = Camera(tmp_path)
+    log = tmp_path / "log.jsonl"
+    with SerialDevice(dev.port, timeout=0.15, retries=1) as host:
+        with pytest.raises(DeviceError, match="step 2 .*PROJ 2.*2 finished frame\\(s\\); run again to resume"):
+            Acquisition(plan, host, log, cam).run()
+    _, entries = io.read_log(log)
+    assert [e["step"] for e in entries] == [0, 1]  # log intact
+    # the device is fixed; the same plan resumes at frame 2 without repeating 0 and 1
+    dev2 = device()
+    with SerialDevice(dev2.port, timeout=0.5) as host:
+        acq = Acquisition(plan, host, log, cam)
+        assert acq.remaining() == [2, 3]
+        written = acq.run()
+    assert [e["step"] for e in written] == [2, 3] and dev2.fired == [2, 3]
+    assert cam.shots == ["frame_000.tif", "frame_001.tif", "frame_002.tif", "frame_003.tif"]
+    assert [e["step"] for e in io.read_log(log)[1]] == [0, 1, 2, 3]
+
+
+def test_loop_port_never_acknowledges(tmp_path):
+    # pyserial's loop:// echoes every line back and never says OK: the echo is ignored, the wait times out
+    with SerialDevice("loop://", timeout=0.1, retries=2) as host:
+        with pytest.raises(DeviceError, match="after 3 attempt\\(s\\)"):
+            host.command("DMD 0")
+        assert host.log.count("> DMD 0") == 3 and host.log.count("< DMD 0") == 3
+
+
+def test_disconnected_port_keeps_the_log(tmp_path, device):
+    dev = device()
+    plan = AcquisitionPlan.snapshots(4)
+    log = tmp_path / "log.jsonl"
+
+    class Unplug(Camera):
+        def __call__(self, step):
+            p = super().__call__(step)
+            if step.index["k"] == 1:
+                dev.disconnect()
+            return p
+
+    with SerialDevice(dev.port, timeout=0.2, retries=1) as host:
+        with pytest.raises(DeviceError, match="step 2 .*serial port lost"):
+            Acquisition(plan, host, log, Unplug(tmp_path)).run()
+    assert [e["step"] for e in io.read_log(log)[1]] == [0, 1]
+
+
+def test_truncated_log_line_and_foreign_plan(tmp_path, device):
+    dev = device()
+    plan = AcquisitionPlan.snapshots(3)
+    log = tmp_path / "log.jsonl"
+    cam = Camera(tmp_path)
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        Acquisition(AcquisitionPlan.snapshots(3), host, log, cam).run()
+    lines = log.read_text().splitlines(keepends=True)
+    log.write_text("".join(lines[:-1]) + lines[-1][:20])  # crash while writing the last entry
+    assert [e["step"] for e in io.read_log(log)[1]] == [0, 1]
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        written = Acquisition(plan, host, log, cam).run()
+    assert [e["step"] for e in written] == [2]
+    assert all(json.loads(line) for line in log.read_text().splitlines())
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        with pytest.raises(ValueError, match="belongs to another acquisition plan"):
+            Acquisition(AcquisitionPlan.patterns(3), host, log, cam).run()
+
+
+def test_err_reply_is_final(device):
+    dev = device()
+    with SerialDevice(dev.port, timeout=0.3, retries=3) as host:
+        with pytest.raises(DeviceError, match="device refused 'TRIG x'"):
+            host.command("TRIG x")
+    assert dev.received.count("TRIG x") == 1
+
+
+def test_plans(tmp_path):
+    plan = AcquisitionPlan.focal_sweep([{4: -0.5, 6: 0.9}, {4: 0.0, 6: 0.9}])
+    assert plan.steps[0].commands == ("DMD 0", "DM 4:-0.5 6:0.9") and plan.steps[1].index == {"z": 1}
+    p = plan.save(tmp_path / "plan.json")
+    assert AcquisitionPlan.load(p) == plan
+    with pytest.raises(FileExistsError):
+        plan.save(p)
+    with pytest.raises(ValueError, match="unknown command verb 'FIRE'"):
+        AcquisitionPlan(({"index": {"k": 0}, "commands": ("FIRE 1",), "frame": "a.tif"},))
+    with pytest.raises(ValueError, match="own, non-empty frame"):
+        AcquisitionPlan(({"index": {"k": 0}, "frame": "a.tif"}, {"index": {"k": 1}, "frame": "a.tif"}))

@@ -13,13 +13,13 @@
 
 from .bundle import Bundle, file_digest, load_bundle, save_bundle, system_from_state, system_state
 from .calibration import code_from_monochromator, shifts_from_line_frames
-from .frames import FRAME_SUFFIXES, bin_frame, crop, frame_paths, load_frames, read_frame
+from .frames import FRAME_SUFFIXES, bin_frame, crop, frame_paths, load_frames, read_frame, write_frames
 from .layouts import dual_camera_frames, frame_count, frames_to_measurement, measurement_to_frames
 from .lenslet import LensletGrid, calibrate_lenslet_grid
 from .triggers import Acquisition, AcquisitionPlan, DeviceError, FakeTriggerDevice, FolderCamera, SerialDevice, Step, read_log
 
 __all__ = [
-    "read_frame", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES", "frames_to_measurement",
+    "read_frame", "write_frames", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES", "frames_to_measurement",
     "measurement_to_frames", "frame_count", "dual_camera_frames", "calibrate_lenslet_grid", "LensletGrid",
     "save_bundle", "load_bundle", "Bundle", "file_digest", "system_state", "system_from_state",
     "code_from_monochromator", "shifts_from_line_frames", "Acquisition", "AcquisitionPlan", "DeviceError",

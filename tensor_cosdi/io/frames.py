@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["read_frame", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES"]
+__all__ = ["read_frame", "write_frames", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES"]
 
 FRAME_SUFFIXES = (".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".npy", ".npz", ".mat")
 
@@ -231,3 +231,42 @@ def load_frames(paths_or_folder, *, dark=None, flat=None, roi=None, binning: int
             f = crop(f, roi)
         out.append(bin_frame(f, binning))
     return np.stack(out, axis=-1)
+
+
+def write_frames(frames, folder, *, prefix: str = "frame_", suffix: str = ".tif", overwrite: bool = False) -> list[Path]:
+    """Write a ``(H, W, N)`` stack as numbered files ``prefix000suffix …`` (the reverse of :func:`load_frames`).
+
+    ``.tif`` keeps the array's dtype (float32/64, uint16 …) exactly; ``.npy``
+    likewise; ``.png`` needs integer pixels.  Existing files are an error
+    unless ``overwrite=True`` — checked for every file before any is written.
+    """
+    a = np.asarray(frames)
+    if a.ndim == 2:
+        a = a[..., None]
+    if a.ndim != 3:
+        raise ValueError(f"frames must be a (H, W, N) stack, got shape {a.shape}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    width = max(3, len(str(a.shape[2] - 1)))
+    paths = [folder / f"{prefix}{i:0{width}d}{suffix}" for i in range(a.shape[2])]
+    clash = [p.name for p in paths if p.exists()]
+    if clash and not overwrite:
+        raise FileExistsError(f"{folder}: {clash[:5]} exist; pass overwrite=True (CLI: --force) to replace them")
+    if suffix.lower() in (".tif", ".tiff"):
+        import tifffile
+
+        for i, p in enumerate(paths):
+            tifffile.imwrite(p, a[..., i])
+    elif suffix.lower() == ".npy":
+        for i, p in enumerate(paths):
+            np.save(p, a[..., i])
+    elif suffix.lower() == ".png":
+        if not np.issubdtype(a.dtype, np.integer):
+            raise ValueError(f"PNG frames need integer pixels (uint8/uint16), got {a.dtype}; use .tif for floats")
+        import imageio.v3 as iio
+
+        for i, p in enumerate(paths):
+            iio.imwrite(p, a[..., i])
+    else:
+        raise ValueError(f"write_frames writes .tif, .npy or .png, not {suffix!r}")
+    return paths

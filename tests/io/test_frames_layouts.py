@@ -147,6 +147,21 @@ def test_c3slfi_5d_frames_are_the_raw_lenslet_images():
     assert np.allclose(frames5, frames3)  # the same sensor frames whichever parameterisation
 
 
+@pytest.mark.parametrize("suffix", [".tif", ".npy", ".png"])
+def test_write_then_load_frames_is_exact(tmp_path, suffix):
+    sys_ = tc.systems.CS2LI.example((8, 8, 4, 6))
+    frames = io.measurement_to_frames(sys_, sys_.forward(np.random.default_rng(0).random(sys_.cube_shape)))
+    if suffix == ".png":
+        frames = (frames * 1000).astype(np.uint16)
+    paths = io.write_frames(frames, tmp_path / "cap", suffix=suffix)
+    assert [p.name for p in paths][:2] == [f"frame_000{suffix}", f"frame_001{suffix}"]
+    back = io.load_frames(tmp_path / "cap")
+    assert np.array_equal(back, frames.astype(np.float64))
+    assert np.array_equal(io.frames_to_measurement(sys_, back), frames.astype(np.float64))
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        io.write_frames(frames, tmp_path / "cap", suffix=suffix)
+
+
 def test_layout_errors():
     sd = tc.systems.SDCASSI.example((8, 8, 4))
     with pytest.raises(ValueError, match="SDCASSI: expected 1 frame\\(s\\) of \\(8, 11\\)"):

@@ -18,7 +18,7 @@ from . import metrics, scenes
 from . import systems as S
 from .operators import validate_shape
 
-__all__ = ["SYSTEMS", "SCENES", "Problem", "make_problem", "compare", "score", "spectral_view"]
+__all__ = ["SYSTEMS", "SCENES", "Problem", "make_problem", "compare", "score", "score_depth", "spectral_view"]
 
 SYSTEMS = ("sd_cassi", "dd_cassi", "dual_camera", "cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi")
 """System names :func:`make_problem` accepts."""
@@ -205,6 +205,28 @@ def score(problem: Problem, cube) -> dict:
         "sam": metrics.sam(truth, est),  # spectra along axis 2; all-zero truth spectra are skipped
         "rmse": metrics.rmse(t3, e3),
     }
+
+
+def score_depth(problem: Problem, depth) -> dict:
+    """How well a result's depth channel (``Result.depth``) matches the problem's truth; ``{}`` if neither has one.
+
+    * CASSDI-DFA: ``"planes_right"``, the fraction of pixels on the right depth plane;
+    * C3SLFI: ``"disparity_mae"``, mean absolute disparity error (px per view step);
+    * CS2LI / Mu-CoSDI: ``"phase_mae"``, mean absolute wrapped-phase error (rad) of the first frequency.
+    """
+    from . import _backend as B
+    from .depth import wrap
+
+    if depth is None or problem.depth is None:
+        return {}
+    d = np.asarray(B.to_numpy(depth), dtype=np.float64)
+    if isinstance(problem.system, S.CASSDIDFA):
+        return {"planes_right": float(np.mean(np.round(d) == problem.depth))}
+    if isinstance(problem.system, S.C3SLFI):
+        return {"disparity_mae": float(np.mean(np.abs(d - problem.depth)))}
+    if "phase" in problem.extras:
+        return {"phase_mae": float(np.mean(np.abs(wrap(d[..., 0] - problem.extras["phase"][..., 0]))))}
+    return {}
 
 
 def compare(problem: Problem, methods=("otd", "gap_tv"), options=None, *, progress: bool = False) -> list[dict]:

@@ -239,6 +239,7 @@ def run_reconstruct(args) -> int:
         out = out.with_name(out.name + ".npz")
     if out.exists() and not args.force:
         raise FileExistsError(f"{out} exists; pass --force to replace it")
+    defaults = _method_defaults(args.method)  # an unknown method fails before any file is read
     cal = load_bundle(args.calibration)
     if cal.system is None:
         raise ValueError(f"{args.calibration}: the calibration bundle holds no system; save one with save_bundle(system=…)")
@@ -246,9 +247,10 @@ def run_reconstruct(args) -> int:
     frames = load_frames(sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning)
     g = frames_to_measurement(cal.system, frames)
     options = dict(args.option or [])
+    if "progress" in defaults:
+        options.setdefault("progress", not args.quiet)
     t0 = time.perf_counter()
-    res = reconstruct(cal.system, g, args.method, progress=not args.quiet, **options) if "progress" in \
-        _method_defaults(args.method) else reconstruct(cal.system, g, args.method, **options)
+    res = reconstruct(cal.system, g, args.method, **options)
     seconds = time.perf_counter() - t0
     extra = {}
     if "white" in cal.calibration and cal.calibration["white"].shape == tuple(cal.system.cube_shape):

@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import _backend as B
 
-__all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count"]
+__all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count", "dual_camera_frames"]
 
 
 def _stack(frames) -> np.ndarray:
@@ -120,5 +120,3 @@ def dual_camera_frames(cassi_frame, pan_frame) -> np.ndarray:
     out[:, : p.shape[1], 1] = p
     return out
 
-
-__all__.append("dual_camera_frames")

@@ -39,7 +39,7 @@ __all__ = ["pnp_admm", "pnp_admm_operator", "hierarchical_pnp"]
 
 
 def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 0.05, max_iter: int = 40,
-                      tol: float = 1e-4, start=None, tie=None):
+                      tol: float = 1e-4, start=None, tie=None, progress: bool = False, desc: str = "PnP-ADMM"):
     """PnP-ADMM on a bare operator: ``min ½‖g − A x‖² + R(x)`` with ``R`` implied by ``denoiser``.
 
     ``rho`` is relative to the sensing gain of ``op``; ``sigma`` (the
@@ -78,7 +78,9 @@ def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
     t0 = time.perf_counter()
     converged = False
-    for it in range(max_iter):
+    from tqdm import tqdm
+
+    for it in tqdm(range(max_iter), desc=desc, disable=not progress):
         x_new = solve(atg + r * (v - u), x)
         v = den(x_new + u, weight)
         u = u + x_new - v
@@ -111,7 +113,8 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
     op = system.operator
     # 1. fringe images Z (Nx, Ny, Nt): flat spectrum per pattern
     pz = (1.0 / nl) * Replicate((nx, ny, nt), 2, nl)
-    z, h1, c1 = pnp_admm_operator(op @ pz, g, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter, tol=tol)
+    z, h1, c1 = pnp_admm_operator(op @ pz, g, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter, tol=tol,
+                                  progress=progress, desc="PnP-ADMM Z")
     z = tl.clip(z, 0, None)
     # 2. modulation (mean 1 over the patterns) and the reflectance F (Nx, Ny, Nλ)
     zsum = tl.sum(z, axis=2)
@@ -122,7 +125,7 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
 
     tie = (SumAxis((nx, ny, nl), 2), zsum / nt, tie_weight)
     f, h2, c2 = pnp_admm_operator(op @ mod, g, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter, tol=tol,
-                                  tie=tie)
+                                  tie=tie, progress=progress, desc="PnP-ADMM F")
     f = tl.clip(f, 0, None)
     cube = mod._forward(f)
     res = relative_residual(system, cube, g)
@@ -182,7 +185,7 @@ def pnp_admm(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: flo
         return hierarchical_pnp(system, measurement, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter,
                                 tie_weight=tie_weight, tol=tol, n_steps=n_steps, progress=progress)
     cube, hist, conv = pnp_admm_operator(system.operator, measurement, denoiser=denoiser, rho=rho, sigma=sigma,
-                                         max_iter=max_iter, tol=tol)
+                                         max_iter=max_iter, tol=tol, progress=progress)
     return cube, hist, conv
 
 

@@ -77,13 +77,27 @@ class LensletGrid:
         I, J = np.meshgrid(ii, jj, indexing="ij")
         c = self.centre(I, J)
         inside = (c[..., 0] >= m) & (c[..., 0] <= h - 1 - m) & (c[..., 1] >= m) & (c[..., 1] <= w - 1 - m)
-        rows = ii[inside.any(axis=1)]
-        cols = jj[inside.any(axis=0)]
-        # the largest rectangle of index pairs that are all inside
-        ok = inside[np.ix_(np.isin(ii, rows), np.isin(jj, cols))]
-        r = np.nonzero(ok.all(axis=1))[0]
-        c_ = np.nonzero(ok.all(axis=0))[0]
-        return (int(rows[r[0]]), int(rows[r[-1]]) + 1), (int(cols[c_[0]]), int(cols[c_[-1]]) + 1)
+        rows = np.nonzero(inside.any(axis=1))[0]
+        cols = np.nonzero(inside.any(axis=0))[0]
+        if rows.size == 0 or cols.size == 0:
+            raise ValueError("no lenslet lies fully inside the frame with this margin")
+        r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
+        # shrink the index box, dropping the border row/column with most lenslets outside, until all are inside
+        while r1 > r0 and c1 > c0 and not inside[r0:r1, c0:c1].all():
+            box = inside[r0:r1, c0:c1]
+            losses = [(~box[0]).sum(), (~box[-1]).sum(), (~box[:, 0]).sum(), (~box[:, -1]).sum()]
+            k = int(np.argmax(losses))
+            if k == 0:
+                r0 += 1
+            elif k == 1:
+                r1 -= 1
+            elif k == 2:
+                c0 += 1
+            else:
+                c1 -= 1
+        if r1 <= r0 or c1 <= c0:
+            raise ValueError("no rectangle of lenslets lies fully inside the frame")
+        return (int(ii[r0]), int(ii[r1 - 1]) + 1), (int(jj[c0]), int(jj[c1 - 1]) + 1)
 
     def views(self, raw, n_views: int | None = None, *, order: int = 1) -> np.ndarray:
         """Cut a raw lenslet frame into sub-aperture views ``(U, V, Ni, Nj)``.
@@ -138,8 +152,8 @@ def _coarse_lattice(img, pitch_range):
     f_y = fy[r] + dy / h
     f_x = fx[c] + dx / w
     pitch = 1.0 / np.hypot(f_y, f_x)
-    # the peak's wave vector is along the column axis rotated by θ: (f_y, f_x) ∝ (sin θ, cos θ)
-    rotation = np.arctan2(f_y, f_x)
+    # the column-direction lattice vector b = p(−sin θ, cos θ) gives the wave vector (f_y, f_x) ∝ (−sin θ, cos θ)
+    rotation = np.arctan2(-f_y, f_x)
     return pitch, rotation
 
 

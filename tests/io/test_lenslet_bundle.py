@@ -19,7 +19,7 @@ def _synthetic_flat(pitch, rotation, offset, shape=(160, 150)):
     return 100 + 1000 * np.cos(np.pi * u / pitch) ** 2 * np.cos(np.pi * v / pitch) ** 2
 
 
-@pytest.mark.parametrize("pitch, rotation", [(9.7, 0.0), (12.31, 0.02), (15.38, -0.01)])
+@pytest.mark.parametrize("pitch, rotation", [(9.7, 0.0), (12.31, 0.02), (15.38, -0.01), (11.3, 0.15), (10.2, -0.3)])
 def test_lenslet_grid_on_synthetic_flats(pitch, rotation):
     flat = _synthetic_flat(pitch, rotation, (70.3, 66.8))
     grid = io.calibrate_lenslet_grid(flat)

@@ -85,6 +85,7 @@ def depth_from_focus(stack, *, axis: int = -1, window: int = 5, sigma: float = 0
             off = np.where(den < 0, 0.5 * (c0 - c2) / den, 0.0)
         est = est + np.where(k == kk, np.clip(off, -0.5, 0.5), 0.0)
     if return_confidence:
-        conf = fm.max(axis=0) / np.maximum(fm.mean(axis=0), np.finfo(float).tiny)
+        eps = 1e-9 * max(float(fm.max()), np.finfo(float).tiny)  # textureless pixels: ratio → 1, not 0/0
+        conf = (fm.max(axis=0) + eps) / (fm.mean(axis=0) + eps)
         return est, conf
     return est

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from scipy import signal
+from scipy import ndimage, signal
 
 from tensor_cosdi import depth, optics, scenes
 from tensor_cosdi.noise import add_noise
@@ -165,3 +165,22 @@ def test_depth_from_focus_on_a_rendered_stack():
     tex = depth.textured_mask(img)
     assert est.min() >= 0 and est.max() <= 3
     assert np.mean(np.round(est)[tex] == planes[tex]) >= 0.9
+
+
+def test_spatial_unwrap_with_a_mask(sl_scene):
+    phi = sl_scene.phase[..., 0]
+    mask = np.zeros(phi.shape, bool)
+    mask[10:14, 10:14] = True  # e.g. a shadow: no fringe there
+    out = depth.spatial_unwrap(depth.wrap(phi), mask=mask, reference=((0, 0), phi[0, 0]))
+    assert np.isnan(out[mask]).all()
+    assert np.abs(out[~mask] - phi[~mask]).max() < 1e-9
+
+
+def test_depth_from_focus_confidence():
+    rng = np.random.default_rng(0)
+    sharp = rng.random((32, 32))
+    sharp[:, 16:] = 0.5  # textureless half
+    stack = np.stack([ndimage.gaussian_filter(sharp, s) for s in (2.0, 0.0, 2.0)], -1)
+    est, conf = depth.depth_from_focus(stack, return_confidence=True)
+    assert conf[:, 4:12].min() > 1.5 and np.allclose(conf[:, 24:], 1.0)
+    assert np.all(np.round(est[:, 4:12]) == 1)

@@ -79,3 +79,19 @@ def test_result_depth_of_a_light_field_reconstruction():
     d = res.depth  # computed on first access from the reconstructed views
     assert d.shape == (16, 16) and res.depth is d
     assert np.abs(d - p.depth).mean() < 0.3  # measured 0.19 px on 16×16 views of 4×4
+
+
+def test_result_depth_of_mu_cosdi_modalities():
+    lf = tc.systems.MuCoSDI.example((16, 16, 4), modality="lf", views=(2, 2))
+    g = lf.forward(np.random.default_rng(0).random(lf.cube_shape))
+    assert tc.reconstruct(lf, g, "lsq").depth.shape == (8, 8)  # disparity of the 2×2 views
+    calls = []
+
+    def estimator(cube):
+        calls.append(cube.shape)
+        return np.zeros(cube.shape[:2])
+
+    mono = tc.systems.MuCoSDI.example((16, 16, 4), modality="monocular", depth_estimator=estimator)
+    res = tc.reconstruct(mono, mono.forward(np.ones(mono.cube_shape)), "lsq")
+    assert calls == [] and res.depth.shape == (16, 16) and calls == [(16, 16, 4)]  # lazy, then once
+    assert res.depth.shape == (16, 16) and len(calls) == 1

@@ -126,6 +126,23 @@ class LensletGrid:
                 out[u, v] = ndimage.map_coordinates(x, [p[..., 0], p[..., 1]], order=order, mode="nearest")
         return out
 
+    def rectified(self, raw, n_views: int | None = None, *, layout: str = "interleaved", order: int = 1) -> np.ndarray:
+        """A raw lenslet frame resampled onto an integer grid: ``(Ni·U, Nj·V)`` for C3SLFI / Mu-CoSDI ``"lf"``.
+
+        ``"interleaved"`` (Eq. 85): pixel ``(i·U + u, j·V + v)`` is view
+        ``(u, v)`` of lenslet ``(i, j)``; ``"tiled"`` (Eq. 78): pixel
+        ``(u·Ni + i, v·Nj + j)``.  Feed the result (one per snapshot) to
+        :func:`~tensor_cosdi.io.frames_to_measurement` of a system with that
+        ``raw_layout``.
+        """
+        v = self.views(raw, n_views, order=order)  # (U, V, Ni, Nj)
+        U, V, Ni, Nj = v.shape
+        if layout == "interleaved":
+            return v.transpose(2, 0, 3, 1).reshape(Ni * U, Nj * V)
+        if layout == "tiled":
+            return v.transpose(0, 2, 1, 3).reshape(U * Ni, V * Nj)
+        raise ValueError(f"layout must be 'interleaved' or 'tiled', got {layout!r}")
+
 
 def _coarse_lattice(img, pitch_range):
     """Pitch and rotation from the strongest FFT peak inside the expected frequency band."""

@@ -134,3 +134,21 @@ def test_bundle_errors(tmp_path):
     with pytest.raises(FileNotFoundError, match="source file not found"):
         io.save_bundle(tmp_path / "a", sources=[tmp_path / "missing.tif"])
     assert not (tmp_path / "a.npz").exists()
+
+
+@pytest.mark.parametrize("layout", ["interleaved", "tiled"])
+def test_rectified_lenslet_image_matches_the_system_layouts(layout):
+    from tensor_cosdi.operators import LightFieldLayout
+
+    flat = _synthetic_flat(9.6, 0.01, (40.2, 38.7), shape=(100, 100))
+    grid = io.calibrate_lenslet_grid(flat)
+    raw = flat * np.random.default_rng(0).random(flat.shape)
+    views = grid.views(raw, 5)  # (U, V, Ni, Nj)
+    img = grid.rectified(raw, 5, layout=layout)
+    U, V, Ni, Nj = views.shape
+    lf = views.transpose(2, 3, 0, 1)[:, :, None]  # (Ni, Nj, 1, U, V): the 5-D light field, one band
+    expect = np.asarray(LightFieldLayout((Ni, Nj, 1, U, V), layout).forward(lf))[..., 0]
+    assert img.shape == (Ni * U, Nj * V) and np.array_equal(img, expect)
+    # one rectified frame per band is exactly a Mu-CoSDI "lf" measurement of that shape
+    mu = tc.systems.MuCoSDI(np.ones((Ni * U, Nj * V + 1)), n_bands=2, modality="lf", views=(U, V), raw_layout=layout)
+    assert io.frames_to_measurement(mu, img).shape == mu.measurement_shape

@@ -243,7 +243,8 @@ def run_reconstruct(args) -> int:
     cal = load_bundle(args.calibration)
     if cal.system is None:
         raise ValueError(f"{args.calibration}: the calibration bundle holds no system; save one with save_bundle(system=…)")
-    sources = [p for src in args.frames for p in frame_paths(src)]
+    refs = {Path(x).resolve() for x in (args.dark, args.flat) if x}  # a dark/flat kept beside the frames is not a frame
+    sources = [p for src in args.frames for p in frame_paths(src, pattern=args.pattern) if p.resolve() not in refs]
     frames = load_frames(sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning)
     g = frames_to_measurement(cal.system, frames)
     options = dict(args.option or [])
@@ -331,6 +332,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--out", required=True, help="reconstruction bundle to write (.npz)")
     rec.add_argument("--method", default="otd", help="reconstruction method (default otd)")
     rec.add_argument("--option", action="append", type=_option_value, help="method option key=value (repeat)")
+    rec.add_argument("--pattern", default="*", help="glob for frame files inside a folder (default: all frame files)")
     rec.add_argument("--dark", help="dark frame file")
     rec.add_argument("--flat", help="flat/white frame file")
     rec.add_argument("--roi", type=int, nargs=4, metavar=("ROW0", "ROW1", "COL0", "COL1"), help="region of interest")

@@ -69,6 +69,13 @@ def test_reconstruct_command(tmp_path, capsys):
     assert main(["reconstruct", str(cal), str(tmp_path / "capture.tif"), "--out", str(tmp_path / "x"),
                  "--method", "nope"]) == 2
     assert "unknown method 'nope'" in capsys.readouterr().err
+    # a folder holding the frame and its dark frame: the dark is not taken for a frame
+    folder = tmp_path / "session"
+    folder.mkdir()
+    tifffile.imwrite(folder / "capture.tif", raw)
+    tifffile.imwrite(folder / "dark.tif", dark.astype(np.float32))
+    assert main(["reconstruct", str(cal), str(folder), "--dark", str(folder / "dark.tif"), "--out",
+                 str(tmp_path / "z"), "--quiet"]) == 0
     assert main(["reconstruct", str(cal), str(tmp_path / "dark.tif"), "--dark", str(tmp_path / "capture.tif"),
                  "--out", str(tmp_path / "y")]) == 2
     assert "not above the dark frame" in capsys.readouterr().err

@@ -8,7 +8,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["Result", "reconstruct", "register_method", "methods"]
+__all__ = ["Result", "reconstruct", "register_method", "methods", "History", "relative_change"]
 
 
 @dataclass(frozen=True)
@@ -123,6 +123,41 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
 
 
 reconstruct.methods = methods  # tc.reconstruct.methods(), as the API contract promises
+
+
+class History(dict):
+    """The per-iteration record every iterative method returns (``Result.history``).
+
+    A dict of four lists — ``"objective"``, ``"residual"``, ``"change"``,
+    ``"seconds"`` (cumulative since the history was created) — filled by
+    :meth:`record`; :meth:`extend` appends another stage's history with its
+    seconds offset (multi-stage methods).
+    """
+
+    KEYS = ("objective", "residual", "change", "seconds")
+
+    def __init__(self):
+        super().__init__({k: [] for k in self.KEYS})
+        self._t0 = time.perf_counter()
+
+    def record(self, *, residual: float, objective: float, change: float) -> None:
+        self["residual"].append(float(residual))
+        self["objective"].append(float(objective))
+        self["change"].append(float(change))
+        self["seconds"].append(time.perf_counter() - self._t0)
+
+    def extend(self, other: dict) -> None:
+        base = self["seconds"][-1] if self["seconds"] else 0.0
+        for k in ("objective", "residual", "change"):
+            self[k].extend(other[k])
+        self["seconds"].extend(base + s for s in other["seconds"])
+
+
+def relative_change(new, old) -> float:
+    """``‖new − old‖ / ‖new‖`` (the stopping quantity of every iterative method)."""
+    import tensorly as tl
+
+    return float(tl.norm(new - old)) / max(float(tl.norm(new)), np.finfo(float).tiny)
 
 
 def relative_residual(system, cube, g) -> float:

@@ -29,7 +29,6 @@ describes (Eq. 45, "g = gT + gR").
 
 from __future__ import annotations
 
-import time
 import warnings
 
 import numpy as np
@@ -39,7 +38,7 @@ from .. import bases as _bases
 from ..operators import Replicate
 from ..operators.woodbury import conjugate_gradient
 from ..systems._base import sensing_gain
-from ._base import check_positive, register_method, relative_residual
+from ._base import History, check_positive, register_method, relative_change, relative_residual
 from .otd import _Basis, _check_int, _soft
 
 __all__ = ["avsi"]
@@ -107,7 +106,7 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
     psi_f = _Basis({0: _bases.wavelet(nx, wavelet_name), 1: _bases.wavelet(ny, wavelet_name), 2: _bases.dct(nl)}, g)
     psi_z = _Basis({0: _bases.wavelet(nx, wavelet_name), 1: _bases.wavelet(ny, wavelet_name)}, g)
     tiny = np.finfo(float).tiny
-    rms_f = max(float(tl.norm(f)) / np.sqrt(f.size if hasattr(f, "size") else np.prod(tl.shape(f))), tiny)
+    rms_f = max(float(tl.norm(f)) / np.sqrt(np.prod(system.cube_shape)), tiny)
     rms_z = max(float(tl.norm(z)) / np.sqrt(nx * ny), tiny)
     thr_f = float(tau_f * rms_f / (s1 / s))
     thr_z = float(tau_z * rms_z / (s2 / s))
@@ -115,8 +114,7 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
     theta_z = _soft(psi_z.analysis(z), thr_z)
     chi1, chi2, chi3 = tl.zeros_like(theta_f), tl.zeros_like(theta_z), tl.zeros_like(z)
     htg, hpg = H._adjoint(g), HP._adjoint(g)
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-    t0 = time.perf_counter()
+    hist = History()
     converged = False
     for it in tqdm(range(max_iter), desc="A-VSI", disable=not progress):
         g_r = g - at * HT._forward(f)
@@ -131,20 +129,19 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
             f_new = conjugate_gradient(normal_f, eta1, x0=f, rtol=1e-6, maxiter=inner_iter)
         eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D._forward(f_new) + chi3)
         z = HP.solve_normal(eta2, s2 + s3)
-        theta_z = _soft(psi_z.analysis(z) + chi2, thr_z)
-        theta_f = _soft(psi_f.analysis(f_new) + chi1, thr_f)
-        chi1 = chi1 - (theta_f - psi_f.analysis(f_new))
-        chi2 = chi2 - (theta_z - psi_z.analysis(z))
+        az, af = psi_z.analysis(z), psi_f.analysis(f_new)  # each transform once per iteration
+        theta_z = _soft(az + chi2, thr_z)
+        theta_f = _soft(af + chi1, thr_f)
+        chi1 = chi1 - (theta_f - af)
+        chi2 = chi2 - (theta_z - az)
         chi3 = chi3 - (z - D._forward(f_new))
-        change = float(tl.norm(f_new - f)) / max(float(tl.norm(f_new)), tiny)
+        change = relative_change(f_new, f)
         f = f_new
         res = relative_residual(system, f, g)
-        hist["residual"].append(res)
-        hist["objective"].append(0.5 * (res * float(tl.norm(g))) ** 2
-                                 + tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f)))
-                                 + tau_z * s * rms_z * float(tl.sum(tl.abs(theta_z))))
-        hist["change"].append(change)
-        hist["seconds"].append(time.perf_counter() - t0)
+        hist.record(residual=res, change=change,
+                    objective=0.5 * (res * float(tl.norm(g))) ** 2
+                    + tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f)))
+                    + tau_z * s * rms_z * float(tl.sum(tl.abs(theta_z))))
         if change < tol and it > 0:
             converged = True
             break

@@ -28,14 +28,13 @@ steps: the lifted operators have no cheap ``A Aᵀ`` structure, and GAP's
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
 from ..operators import Code, Replicate
-from ._base import check_positive, register_method, relative_residual
+from ._base import History, check_positive, register_method, relative_change, relative_residual
 from .gap_tv import tv_denoise
 from .otd import _check_int
 
@@ -60,8 +59,7 @@ def fista_tv(op, g, start, *, max_iter: int = 60, tv_weight: float = 0.05, tol: 
     weight = tv_weight * max(float(tl.max(tl.abs(start))), np.finfo(float).tiny) / 10
     x, y, t = start, start, 1.0
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-    t0 = time.perf_counter()
+    hist = History()
     converged = False
     for it in tqdm(range(max_iter), desc=desc, disable=not progress):
         x_new = tv_denoise(y + op._adjoint(g - op._forward(y)) / L, weight)
@@ -69,13 +67,10 @@ def fista_tv(op, g, start, *, max_iter: int = 60, tv_weight: float = 0.05, tol: 
             x_new = project(x_new)
         t_new = (1 + np.sqrt(1 + 4 * t * t)) / 2
         y = x_new + ((t - 1) / t_new) * (x_new - x)
-        change = float(tl.norm(x_new - x)) / max(float(tl.norm(x_new)), np.finfo(float).tiny)
+        change = relative_change(x_new, x)
         x, t = x_new, t_new
         res = float(tl.norm(op._forward(x) - g)) / gnorm
-        hist["residual"].append(res)
-        hist["objective"].append(0.5 * (res * gnorm) ** 2)
-        hist["change"].append(change)
-        hist["seconds"].append(time.perf_counter() - t0)
+        hist.record(residual=res, objective=0.5 * (res * gnorm) ** 2, change=change)
         if change < tol and it > 0:
             converged = True
             break
@@ -88,8 +83,8 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
 
     Parameters
     ----------
-    max_iter, tv_weight, tol, eps
-        Per stage, as in :func:`~tensor_cosdi.solvers.gap_tv.gap_tv`.
+    max_iter, tv_weight, tol
+        Per stage, as in :func:`fista_tv`.
 
     Returns
     -------

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 import tensorly as tl
 from skimage.restoration import denoise_tv_chambolle
 
 from .. import _backend as B
-from ._base import check_positive, register_method
+from ._base import History, check_positive, register_method, relative_change
 from ..systems._base import sensing_gain
 
 __all__ = ["gap_tv", "gap_tv_operator", "tv_denoise"]
@@ -72,8 +71,7 @@ def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=
     x = op._adjoint(op.solve_dual(g, lam))  # least-norm start
     weight = tv_weight * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
     g_hat = g
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-    t0 = time.perf_counter()
+    hist = History()
     converged = False
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
     for _ in tqdm(range(max_iter), desc=desc, disable=not progress):
@@ -81,13 +79,10 @@ def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=
         if accelerate:
             g_hat = g_hat + (g - ax)
         x_new = denoise(x + op._adjoint(op.solve_dual(g_hat - ax, lam)), weight)
-        change = float(tl.norm(x_new - x)) / max(float(tl.norm(x_new)), np.finfo(float).tiny)
+        change = relative_change(x_new, x)
         x = x_new
         res = float(tl.norm(op._forward(x) - g)) / gnorm
-        hist["residual"].append(res)
-        hist["objective"].append((res * float(tl.norm(g))) ** 2)
-        hist["change"].append(change)
-        hist["seconds"].append(time.perf_counter() - t0)
+        hist.record(residual=res, objective=(res * gnorm) ** 2, change=change)
         if change < tol:
             converged = True
             break

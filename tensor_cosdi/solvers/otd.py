@@ -26,7 +26,6 @@ estimate's mode-n unfolding (Eq. 97, Alg. 5 steps 16-18).  **WDCT**
 from __future__ import annotations
 
 import numbers
-import time
 
 import numpy as np
 import tensorly as tl
@@ -35,7 +34,7 @@ from tensorly import tenalg
 from .. import _backend as B
 from ..bases import dct, tucker_bases, wavelet
 from ..systems._base import sensing_gain
-from ._base import check_positive, register_method, relative_residual
+from ._base import History, check_positive, register_method, relative_change, relative_residual
 
 __all__ = [
     "online_tucker_admm",
@@ -280,23 +279,17 @@ def tucker_admm(
     omega = _soft(theta, thresh)
     prev = omega
     nu = tl.zeros_like(omega)
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-    t0 = time.perf_counter()
+    hist = History()
     converged = False
-    tiny = np.finfo(float).tiny
     for it in tqdm(range(max_iter), desc=desc, disable=not progress):
         f_new, theta = theta_step(op, basis, atg, omega + nu, mu_a)
-        change = float(tl.norm(f_new - f)) / max(float(tl.norm(f_new)), tiny)
+        change = relative_change(f_new, f)
         f = f_new
         omega = omega_step(theta, nu, prev, thresh, mu_a, beta_a)
         nu = nu - (theta - omega)
         res = relative_residual(system, f, g)
-        hist["residual"].append(res)
-        hist["objective"].append(
-            (res * float(tl.norm(g))) ** 2 + 2 * lam * s * scale * float(tl.sum(tl.abs(omega)))
-        )
-        hist["change"].append(change)
-        hist["seconds"].append(time.perf_counter() - t0)
+        hist.record(residual=res, change=change,
+                    objective=(res * float(tl.norm(g))) ** 2 + 2 * lam * s * scale * float(tl.sum(tl.abs(omega))))
         if change < tol and it > 0:
             converged = True
             break

@@ -23,15 +23,14 @@ solved by one PnP-ADMM on the cube.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import tensorly as tl
+from tqdm import tqdm
 
 from .. import _backend as B
 from ..operators import Code, Replicate
 from ..systems._base import sensing_gain
-from ._base import check_positive, register_method, relative_residual
+from ._base import History, check_positive, register_method, relative_change, relative_residual
 from .denoisers import resolve
 from .otd import _check_int
 
@@ -74,23 +73,17 @@ def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 
     x = solve(atg, None) if start is None else start
     weight = sigma * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
     v, u = x, tl.zeros_like(x)
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
+    hist = History()
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    t0 = time.perf_counter()
     converged = False
-    from tqdm import tqdm
-
     for it in tqdm(range(max_iter), desc=desc, disable=not progress):
         x_new = solve(atg + r * (v - u), x)
         v = den(x_new + u, weight)
         u = u + x_new - v
-        change = float(tl.norm(x_new - x)) / max(float(tl.norm(x_new)), np.finfo(float).tiny)
+        change = relative_change(x_new, x)
         x = x_new
         res = float(tl.norm(op._forward(v) - g)) / gnorm
-        hist["residual"].append(res)
-        hist["objective"].append(0.5 * (res * gnorm) ** 2)
-        hist["change"].append(change)
-        hist["seconds"].append(time.perf_counter() - t0)
+        hist.record(residual=res, objective=0.5 * (res * gnorm) ** 2, change=change)
         if change < tol and it > 0:
             converged = True
             break
@@ -128,10 +121,10 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
                                   tie=tie, progress=progress, desc="PnP-ADMM F")
     f = tl.clip(f, 0, None)
     cube = mod._forward(f)
-    res = relative_residual(system, cube, g)
-    hist = {k: h1[k] + h2[k] for k in ("objective", "change")}
-    hist["residual"] = [float("nan")] * len(h1["residual"]) + h2["residual"][:-1] + [res]
-    hist["seconds"] = h1["seconds"] + [h1["seconds"][-1] + s for s in h2["seconds"]]
+    hist = History()
+    hist.extend(h1)  # stage residuals: ‖G − A_stage x‖/‖G‖ of each stage's model …
+    hist.extend(h2)
+    hist["residual"][-1] = relative_residual(system, cube, g)  # … and the system's at the end
     phase = None
     K = n_steps
     if K is not None:

@@ -93,5 +93,6 @@ def test_result_depth_of_mu_cosdi_modalities():
 
     mono = tc.systems.MuCoSDI.example((16, 16, 4), modality="monocular", depth_estimator=estimator)
     res = tc.reconstruct(mono, mono.forward(np.ones(mono.cube_shape)), "lsq")
-    assert calls == [] and res.depth.shape == (16, 16) and calls == [(16, 16, 4)]  # lazy, then once
-    assert res.depth.shape == (16, 16) and len(calls) == 1
+    assert calls == []  # nothing estimated until the depth is asked for
+    assert res.depth.shape == (16, 16) and calls == [(16, 16, 4)]
+    assert res.depth.shape == (16, 16) and len(calls) == 1  # computed once

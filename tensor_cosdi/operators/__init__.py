@@ -4,21 +4,9 @@ Every imager in :mod:`tensor_cosdi.systems` is a composition of these
 primitives; each has an exact adjoint and an explicit sparse matrix for tests.
 """
 
-from ._base import (
-    Adjoint,
-    Composition,
-    Identity,
-    OperatorSum,
-    Routing,
-    Scaled,
-    Stack,
-    TensorOperator,
-    unvec,
-    validate_shape,
-    vec,
-    vec_index,
-    weighted_sum,
-)
+from ._base import TensorOperator, unvec, validate_shape, vec, vec_index
+from .combinators import Adjoint, Composition, Identity, OperatorSum, Scaled, Stack, weighted_sum
+from .routing import Routing
 from .blur import Blur
 from .codes import Code
 from .integrate import Replicate, SumAxis

@@ -41,7 +41,17 @@ __all__ = [
     "conjugate_gradient",
     "probe_structure",
     "pattern_from_terms",
+    "StructureError",
+    "check_structure",
 ]
+
+#: Largest relative error of the structured ``A Aᵀ v`` against ``A(Aᵀ v)`` on the float64 probe
+#: that :func:`check_structure` accepts.
+SELF_CHECK_RTOL = 1e-6
+
+
+class StructureError(ValueError):
+    """The structure derived for ``A Aᵀ`` does not reproduce ``A(Aᵀ v)``: a mis-routed operator."""
 
 #: Widest band (one side) that is probed and factored; wider couplings use CG.
 MAX_BANDWIDTH = 512
@@ -121,7 +131,38 @@ def _apply_gram(op, probe_np: np.ndarray) -> np.ndarray:
 
 
 def probe_structure(op, pattern: Pattern):
-    """Measure the entries of ``A Aᵀ`` allowed by ``pattern`` with probe tensors."""
+    """Measure the entries of ``A Aᵀ`` allowed by ``pattern`` with probe tensors, then check them.
+
+    The result is verified by :func:`check_structure` before it is returned,
+    so a wrong pattern (an index map that misses a coupling) is an error
+    instead of a silently wrong solve.
+    """
+    structure = _probe(op, pattern)
+    if structure is not None:
+        check_structure(op, structure)
+    return structure
+
+
+def check_structure(op, structure, *, rtol: float = SELF_CHECK_RTOL, seed: int = 12345) -> float:
+    """One random probe: ``structure.matvec(v)`` against ``A(Aᵀ v)`` in float64.
+
+    Returns the relative error; raises :class:`StructureError` naming the
+    operator and the structure when it exceeds ``rtol``.
+    """
+    v = np.random.default_rng(seed).standard_normal(op.output_shape)
+    exact = _apply_gram(op, v)
+    got = np.asarray(B.to_numpy(structure.matvec(B.as_tensor(v, "float64"))), dtype=np.float64)
+    err = float(np.linalg.norm(got - exact)) / max(float(np.linalg.norm(exact)), np.finfo(float).tiny)
+    if not err <= rtol:
+        raise StructureError(
+            f"the {structure!r} derived for A Aᵀ of {op!r} does not reproduce A(Aᵀ v): relative "
+            f"error {err:.3g} > {rtol:g}; an operator reports a wrong index map (_routing or "
+            "_gram_pattern)"
+        )
+    return err
+
+
+def _probe(op, pattern: Pattern):
     shape = op.output_shape
     if pattern.kind == "diag":
         return Diagonal(_apply_gram(op, np.ones(shape)))
@@ -304,6 +345,16 @@ class RowBanded(_Structure):
             x[f] = scipy.linalg.cho_solve_banded((cb, False), flat[f], check_finite=False)
         x = np.moveaxis(x.reshape(lead + (bn.shape[-1],)), -1, self.axis)
         return B.tensor_like(x, b)
+
+    def matvec(self, b):
+        """``(A Aᵀ) b`` from the stored bands (host computation)."""
+        bn = np.moveaxis(np.asarray(B.to_numpy(b), dtype=np.float64), self.axis, -1)
+        n = bn.shape[-1]
+        out = self.bands[0] * bn
+        for o in range(1, self.bandwidth + 1):
+            out[..., : n - o] += self.bands[o, ..., : n - o] * bn[..., o:]
+            out[..., o:] += self.bands[o, ..., : n - o] * bn[..., : n - o]
+        return B.tensor_like(np.moveaxis(out, -1, self.axis), b)
 
     def to_dense(self) -> np.ndarray:
         n = self.bands.shape[-1]

@@ -6,9 +6,12 @@ For a 256×256×28 float32 cube, a 256×256 mask and a 2-px-per-band shear
 of the cube measured in the same run, for two memory layouts of the same
 logical ``(x, y, λ)`` tensor:
 
-* ``C``: NumPy's default, λ fastest in memory;
-* ``band-major``: each band slice ``cube[:, :, l]`` contiguous (what the
-  adjoint returns, so solver iterates stay in it).
+* ``F (λ, y, x)``: Fortran order, what the adjoint returns (so solver
+  iterates stay in it) and what the strided kernel of
+  ``tensor_cosdi/operators/_kernels.py`` reads;
+* ``band-major``: each band slice ``cube[:, :, l]`` C-contiguous (the
+  per-band loop);
+* ``C``: NumPy's default, λ fastest in memory (the per-band loop).
 
 Reference rows: the same composition executed factor by factor (no fusion)
 and a plain per-band loop over the C layout.
@@ -68,6 +71,7 @@ def main(argv=None):
     rng = np.random.default_rng(1)
     cube_c = rng.random(shape, dtype=np.float32)
     cube_b = np.moveaxis(np.ascontiguousarray(np.moveaxis(cube_c, 2, 0)), 0, 2)
+    cube_f = np.asfortranarray(cube_c)
     y = op.forward(cube_c)
 
     def naive_forward(x):
@@ -89,17 +93,20 @@ def main(argv=None):
 
     rows = []
     r = args.repeats
-    for layout, cube in (("C", cube_c), ("band-major", cube_b)):
+    for layout, cube in (("F (λ, y, x)", cube_f), ("band-major", cube_b), ("C", cube_c)):
         t_copy = median_seconds(lambda: np.copy(cube, order="K"), r)
         entries = [
             ("forward (checked)", lambda: op.forward(cube)),
             ("forward (kernel)", lambda: op._forward(cube)),
             ("adjoint (checked)", lambda: op.adjoint(y)),
+            ("adjoint (kernel)", lambda: op._adjoint(y)),
             ("forward, unfused factors", lambda: unfused_forward(cube)),
             ("adjoint, unfused factors", lambda: unfused_adjoint(y)),
         ]
         if layout == "C":
             entries.append(("forward, naive per-band loop", lambda: naive_forward(cube)))
+        if layout != "F (λ, y, x)":
+            entries = [e for e in entries if "adjoint" not in e[0]]  # the adjoint ignores the cube layout
         for name, fn in entries:
             t = median_seconds(fn, r)
             rows.append((layout, name, t * 1e3, t / t_copy, t_copy * 1e3))

@@ -9,6 +9,7 @@ import tensorly as tl
 
 from .. import _backend as B
 from ._base import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
+from ._kernels import linear_step, moved, shear_sum_adjoint, shear_sum_forward
 from .codes import Code
 from .shear import Shear
 
@@ -132,6 +133,8 @@ class _CodedShearSum(TensorOperator):
             self._wslices = [np.take(weights, l, axis=sum_axis) for l in range(nb)]
         else:
             self._wslices = None
+        # linear integer shifts s·l: the strided kernels of _kernels.py (NumPy tensors)
+        self._step = None if shift_axis is None else linear_step(self.shifts)
 
     def _fuse_with(self, inner):
         if isinstance(inner, Code):
@@ -152,10 +155,20 @@ class _CodedShearSum(TensorOperator):
     def _w(self, l, like):
         return self._params.get(f"w{l}", self._wslices[l], like)
 
+    def _w_moved(self, like):
+        if self.weights is None:
+            return None
+        w = moved(self.weights, self.sum_axis, self.shift_axis)
+        return self._params.get("w_moved", w, like)  # contiguous, in like's dtype
+
     def _forward(self, x):
+        numpy = isinstance(x, np.ndarray)
+        if numpy and self._step is not None:
+            y = shear_sum_forward(x, self._w_moved(x), self.sum_axis, self.shift_axis, self._step)
+            if y is not None:
+                return y
         y = B.zeros_like_shape(self.output_shape, x)
         nb = self.input_shape[self.sum_axis]
-        numpy = isinstance(x, np.ndarray)
         tmp = None
         for l in range(nb):
             xl = x[self._band(l)]
@@ -173,6 +186,9 @@ class _CodedShearSum(TensorOperator):
 
     def _adjoint(self, y):
         nb = self.input_shape[self.sum_axis]
+        if isinstance(y, np.ndarray) and self._step is not None:
+            return shear_sum_adjoint(y, self._w_moved(y), self.sum_axis, self.shift_axis, self._step, nb,
+                                     self.input_shape[self.shift_axis])
         rest = self.input_shape[: self.sum_axis] + self.input_shape[self.sum_axis + 1 :]
         out = B.zeros_like_shape((nb,) + rest, y) if not isinstance(y, np.ndarray) else np.empty(
             (nb,) + rest, dtype=y.dtype

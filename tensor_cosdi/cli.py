@@ -269,13 +269,9 @@ def run_reconstruct(args) -> int:
 
 
 def _method_defaults(name):
-    from .solvers._base import _METHODS
+    from .solvers import METHODS
 
-    if name not in _METHODS:
-        from .solvers import methods
-
-        raise ValueError(f"unknown method {name!r}; registered methods: {list(methods())}")
-    return _METHODS[name].defaults
+    return METHODS[name].defaults  # an unknown name is an error listing the registered ones
 
 
 def _jsonable(v) -> bool:

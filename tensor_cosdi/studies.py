@@ -251,9 +251,9 @@ def compare(problem: Problem, methods=("otd", "gap_tv"), options=None, *, progre
 
 
 def _defaults(method):
-    from .solvers._base import _METHODS
+    from .solvers import METHODS
 
-    return _METHODS[method].defaults
+    return METHODS[method].defaults
 
 
 def spectral_view(problem: Problem, cube) -> np.ndarray:

@@ -1,12 +1,15 @@
 """Reconstruction methods behind :func:`tensor_cosdi.reconstruct` (SPEC §5, §6).
 
-The harness (:class:`Result`, the registry) and four methods that work on
+The harness (:class:`Result`, the :data:`METHODS` registry), one engine
+per splitting (:mod:`~tensor_cosdi.solvers.engine`: ADMM, GAP, FISTA) with
+priors as parts (:mod:`~tensor_cosdi.solvers.priors`), and four methods that work on
 every system: the online Tucker dictionary ADMM (``"otd"``), ADMM in the
 fixed WDCT basis (``"wdct"``), GAP-TV (``"gap_tv"``) and regularised least
 squares (``"lsq"``).
 """
 
-from ._base import Result, methods, reconstruct, register_method
+from ._base import METHODS, Method, Result, methods, reconstruct, register_method
+from . import engine, priors
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
@@ -15,4 +18,4 @@ from .pnp import pnp_admm, pnp_admm_operator
 from .dfa import multiresolution_dfa
 from . import denoisers
 
-__all__ = ["Result", "reconstruct", "methods", "register_method", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers", "multiresolution_dfa"]
+__all__ = ["Result", "reconstruct", "methods", "register_method", "METHODS", "Method", "engine", "priors", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers", "multiresolution_dfa"]

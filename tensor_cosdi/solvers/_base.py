@@ -8,7 +8,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["Result", "reconstruct", "register_method", "methods", "History", "relative_change"]
+from .._registry import Registry
+
+__all__ = ["Result", "reconstruct", "register_method", "methods", "METHODS", "Method", "History",
+           "relative_change"]
 
 
 @dataclass(frozen=True)
@@ -62,29 +65,39 @@ class Result:
 
 
 @dataclass(frozen=True)
-class _Method:
+class Method:
+    """A registered reconstruction method: the function, every option with its default, one line."""
+
     func: Callable
     defaults: dict = field(default_factory=dict)
     summary: str = ""
+    name: str = ""
+
+    def __call__(self, system, measurement, **options):
+        return reconstruct(system, measurement, self.name, **options)
 
 
-_METHODS: dict[str, _Method] = {}
+METHODS = Registry("method")
+"""``name → Method``: every method :func:`reconstruct` accepts (read-only; add with :func:`register_method`)."""
 
 
-def register_method(name: str, func: Callable, defaults: dict, summary: str = "") -> None:
+def register_method(name: str, func: Callable, defaults: dict, summary: str = "", *,
+                    replace: bool = False) -> None:
     """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
 
     ``defaults`` lists every option the method accepts with its default;
-    anything else passed to :func:`reconstruct` is an error.
+    anything else passed to :func:`reconstruct` is an error.  A name that is
+    taken needs ``replace=True``; the library's own methods cannot be replaced.
     """
-    if name in _METHODS:
-        raise ValueError(f"a method named {name!r} is already registered")
-    _METHODS[name] = _Method(func, dict(defaults), summary)
+    if not callable(func):
+        raise ValueError(f"a method must be callable, got {func!r}")
+    builtin = getattr(func, "__module__", "").startswith("tensor_cosdi.")
+    METHODS.register(name, Method(func, dict(defaults), summary, name), replace=replace, builtin=builtin)
 
 
 def methods() -> tuple[str, ...]:
     """Names of the registered reconstruction methods."""
-    return tuple(sorted(_METHODS))
+    return METHODS.names()
 
 
 def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
@@ -104,9 +117,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     -------
     Result
     """
-    if method not in _METHODS:
-        raise ValueError(f"unknown method {method!r}; registered methods: {list(methods())}")
-    entry = _METHODS[method]
+    entry = METHODS[method]  # an unknown name lists the registered ones
     unknown = sorted(set(options) - set(entry.defaults))
     if unknown:
         raise ValueError(

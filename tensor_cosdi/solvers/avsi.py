@@ -38,8 +38,11 @@ from .. import bases as _bases
 from ..operators import Replicate
 from ..operators.woodbury import conjugate_gradient
 from ..systems._base import sensing_gain
-from ._base import History, check_positive, register_method, relative_change, relative_residual
-from .otd import _Basis, _check_int, _soft
+from . import engine
+from ._base import check_positive, register_method, relative_change, relative_residual
+from .priors import rms, soft
+
+_check_int = engine.check_int
 
 __all__ = ["avsi"]
 
@@ -72,7 +75,6 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
     (32, 32, 8)
     """
     from ..systems import CASSIVSI
-    from tqdm import tqdm
 
     if not isinstance(system, CASSIVSI):
         raise ValueError(f"avsi reconstructs CASSIVSI systems (Alg. 1), got {type(system).__name__}; "
@@ -103,20 +105,19 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
 
     f = H.solve_normal(H._adjoint(g), s1)
     z = D._forward(f)
-    psi_f = _Basis({0: _bases.wavelet(nx, wavelet_name), 1: _bases.wavelet(ny, wavelet_name), 2: _bases.dct(nl)}, g)
-    psi_z = _Basis({0: _bases.wavelet(nx, wavelet_name), 1: _bases.wavelet(ny, wavelet_name)}, g)
-    tiny = np.finfo(float).tiny
-    rms_f = max(float(tl.norm(f)) / np.sqrt(np.prod(system.cube_shape)), tiny)
-    rms_z = max(float(tl.norm(z)) / np.sqrt(nx * ny), tiny)
+    wx, wy = _bases.Wavelet(nx, wavelet_name), _bases.Wavelet(ny, wavelet_name)
+    psi_f = _bases.KroneckerBasis((nx, ny, nl), {0: wx, 1: wy, 2: _bases.DCT(nl)})
+    psi_z = _bases.KroneckerBasis((nx, ny), {0: wx, 1: wy})
+    rms_f, rms_z = rms(f), rms(z)
     thr_f = float(tau_f * rms_f / (s1 / s))
     thr_z = float(tau_z * rms_z / (s2 / s))
-    theta_f = _soft(psi_f.analysis(f), thr_f)
-    theta_z = _soft(psi_z.analysis(z), thr_z)
+    theta_f = soft(psi_f.analysis(f), thr_f)
+    theta_z = soft(psi_z.analysis(z), thr_z)
     chi1, chi2, chi3 = tl.zeros_like(theta_f), tl.zeros_like(theta_z), tl.zeros_like(z)
     htg, hpg = H._adjoint(g), HP._adjoint(g)
-    hist = History()
-    converged = False
-    for it in tqdm(range(max_iter), desc="A-VSI", disable=not progress):
+    loop = engine.Loop(max_iter, tol, progress=progress, desc="A-VSI")
+    gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
+    for it in loop:
         g_r = g - at * HT._forward(f)
         g_t = g - ar * HR._forward(f)
         eta1 = htg + s1 * psi_f.synthesis(theta_f - chi1) + s3 * D._adjoint(z - chi3)
@@ -130,22 +131,19 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
         eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D._forward(f_new) + chi3)
         z = HP.solve_normal(eta2, s2 + s3)
         az, af = psi_z.analysis(z), psi_f.analysis(f_new)  # each transform once per iteration
-        theta_z = _soft(az + chi2, thr_z)
-        theta_f = _soft(af + chi1, thr_f)
+        theta_z = soft(az + chi2, thr_z)
+        theta_f = soft(af + chi1, thr_f)
         chi1 = chi1 - (theta_f - af)
         chi2 = chi2 - (theta_z - az)
         chi3 = chi3 - (z - D._forward(f_new))
         change = relative_change(f_new, f)
         f = f_new
-        res = relative_residual(system, f, g)
-        hist.record(residual=res, change=change,
-                    objective=0.5 * (res * float(tl.norm(g))) ** 2
-                    + tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f)))
-                    + tau_z * s * rms_z * float(tl.sum(tl.abs(theta_z))))
-        if change < tol and it > 0:
-            converged = True
+        prior = (tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f)))
+                 + tau_z * s * rms_z * float(tl.sum(tl.abs(theta_z))))
+        if loop.record(it, residual_norm=relative_residual(system, f, g) * gnorm, gnorm=gnorm, change=change,
+                       prior_term=prior):
             break
-    return f, hist, converged
+    return f, loop.history, loop.converged
 
 
 register_method(

@@ -34,9 +34,11 @@ import tensorly as tl
 
 from .. import _backend as B
 from ..operators import Code, Replicate
-from ._base import History, check_positive, register_method, relative_change, relative_residual
-from .gap_tv import tv_denoise
-from .otd import _check_int
+from . import engine
+from ._base import History, check_positive, register_method, relative_residual
+from .priors import TV
+
+_check_int = engine.check_int
 
 __all__ = ["multiresolution_dfa", "fista_tv"]
 
@@ -45,36 +47,12 @@ def fista_tv(op, g, start, *, max_iter: int = 60, tv_weight: float = 0.05, tol: 
              desc: str = "FISTA-TV", progress: bool = False):
     """``min ½‖g − A x‖² + TV(x)`` by FISTA from ``start``; ``project(x)`` (optional) after each TV step.
 
-    ``tv_weight`` is relative to the largest value of ``start``.  Returns
-    ``(x, history, converged)``.
+    :func:`tensor_cosdi.solvers.engine.fista` with the
+    :class:`~tensor_cosdi.solvers.priors.TV` prior; ``tv_weight / 10`` is
+    relative to the largest value of ``start``.  Returns ``(x, history, converged)``.
     """
-    from tqdm import tqdm
-
-    # Lipschitz constant of the gradient: ‖A‖² by 20 power iterations
-    v = B.tensor_like(np.random.default_rng(0).random(op.input_shape), g)
-    for _ in range(20):
-        v = op._adjoint(op._forward(v))
-        v = v / max(float(tl.norm(v)), np.finfo(float).tiny)
-    L = 1.05 * float(tl.norm(op._adjoint(op._forward(v))))
-    weight = tv_weight * max(float(tl.max(tl.abs(start))), np.finfo(float).tiny) / 10
-    x, y, t = start, start, 1.0
-    gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    hist = History()
-    converged = False
-    for it in tqdm(range(max_iter), desc=desc, disable=not progress):
-        x_new = tv_denoise(y + op._adjoint(g - op._forward(y)) / L, weight)
-        if project is not None:
-            x_new = project(x_new)
-        t_new = (1 + np.sqrt(1 + 4 * t * t)) / 2
-        y = x_new + ((t - 1) / t_new) * (x_new - x)
-        change = relative_change(x_new, x)
-        x, t = x_new, t_new
-        res = float(tl.norm(op._forward(x) - g)) / gnorm
-        hist.record(residual=res, objective=0.5 * (res * gnorm) ** 2, change=change)
-        if change < tol and it > 0:
-            converged = True
-            break
-    return x, hist, converged
+    return engine.fista(op, g, TV(tv_weight / 10), start, max_iter=max_iter, tol=tol, project=project,
+                        progress=progress, desc=desc)
 
 
 def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: float = 0.05, tol: float = 1e-4,
@@ -109,13 +87,8 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
     op = system.operator
     nx, ny, nl, nz = system.cube_shape
     kw = dict(max_iter=max_iter, tv_weight=tv_weight, tol=tol, progress=progress)
-    hist = {"objective": [], "residual": [], "change": [], "seconds": []}
-
-    def add(h):
-        base = hist["seconds"][-1] if hist["seconds"] else 0.0
-        for k in ("objective", "residual", "change"):
-            hist[k].extend(h[k])
-        hist["seconds"].extend(base + s for s in h["seconds"])
+    hist = History()
+    add = hist.extend
 
     # 1. all-in-focus grayscale
     lift_g = (1.0 / (nl * nz)) * (Replicate((nx, ny, nl), 3, nz) @ Replicate((nx, ny), 2, nl))

@@ -1,29 +1,23 @@
-"""GAP-TV: generalised alternating projection with a total-variation denoiser (baseline, SPEC §5)."""
+"""GAP-TV: generalised alternating projection with a total-variation denoiser (baseline, SPEC §5).
+
+:func:`tensor_cosdi.solvers.engine.gap` with the :class:`~tensor_cosdi.solvers.priors.TV` prior.
+"""
 
 from __future__ import annotations
 
-
-import numpy as np
-import tensorly as tl
-from skimage.restoration import denoise_tv_chambolle
-
-from .. import _backend as B
-from ._base import History, check_positive, register_method, relative_change
-from ..systems._base import sensing_gain
+from . import engine
+from ._base import check_positive, register_method
+from .priors import TV
 
 __all__ = ["gap_tv", "gap_tv_operator", "tv_denoise"]
 
 
-def tv_denoise(cube, weight: float, *, n_iter: int = 50):
-    """Isotropic 2-D TV (Chambolle, scikit-image) of every band/slice: spatial axes 0 and 1.
-
-    Runs on the host: tensors of other backends go through NumPy and back.
-    """
-    x = np.asarray(B.to_numpy(cube), dtype=np.float64)
-    shape = x.shape
-    flat = x.reshape(shape[:2] + (-1,))
-    out = denoise_tv_chambolle(flat, weight=weight, max_num_iter=n_iter, channel_axis=2)
-    return B.tensor_like(out.reshape(shape), cube)
+def tv_denoise(*args, **kwargs):
+    """Removed: use :func:`tensor_cosdi.solvers.denoisers.tv` (the same Chambolle TV per slice)."""
+    raise AttributeError(
+        "tensor_cosdi.solvers.tv_denoise was merged into tensor_cosdi.solvers.denoisers.tv "
+        "(same arguments: x, weight, n_iter=50); call that instead"
+    )
 
 
 def gap_tv(
@@ -47,11 +41,6 @@ def gap_tv(
     first (least-norm) estimate.  Stops when the relative change of ``x`` is
     below ``tol`` or after ``max_iter`` iterations.  Registered as ``"gap_tv"``.
     """
-    tv_weight = check_positive("tv_weight", tv_weight)
-    eps = check_positive("eps", eps)
-    tol = check_positive("tol", tol)
-    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
-        raise ValueError(f"max_iter must be an integer ≥ 1, got {max_iter!r}")
     return gap_tv_operator(system.operator, measurement, max_iter=max_iter, tv_weight=tv_weight,
                            accelerate=accelerate, tol=tol, eps=eps, progress=progress)
 
@@ -60,33 +49,15 @@ def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=
                     progress=False, desc="GAP-TV", denoiser=None):
     """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1 spatial).
 
-    ``denoiser(x, weight)`` replaces the TV step (default :func:`tv_denoise`);
-    OTD's subspace panchromatic start uses it.
+    ``denoiser(x, weight)`` replaces the TV step (default
+    :func:`tensor_cosdi.solvers.denoisers.tv`).
     """
-    denoise = tv_denoise if denoiser is None else denoiser
-    from tqdm import tqdm
-
-    g = measurement
-    lam = eps * sensing_gain(op, g)
-    x = op._adjoint(op.solve_dual(g, lam))  # least-norm start
-    weight = tv_weight * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
-    g_hat = g
-    hist = History()
-    converged = False
-    gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    for _ in tqdm(range(max_iter), desc=desc, disable=not progress):
-        ax = op._forward(x)
-        if accelerate:
-            g_hat = g_hat + (g - ax)
-        x_new = denoise(x + op._adjoint(op.solve_dual(g_hat - ax, lam)), weight)
-        change = relative_change(x_new, x)
-        x = x_new
-        res = float(tl.norm(op._forward(x) - g)) / gnorm
-        hist.record(residual=res, objective=(res * gnorm) ** 2, change=change)
-        if change < tol:
-            converged = True
-            break
-    return x, hist, converged
+    tv_weight = check_positive("tv_weight", tv_weight)
+    eps = check_positive("eps", eps)
+    tol = check_positive("tol", tol)
+    engine.check_int("max_iter", max_iter, 1)
+    return engine.gap(op, measurement, TV(tv_weight, denoise=denoiser), eps=eps, accelerate=accelerate,
+                      max_iter=max_iter, tol=tol, progress=progress, desc=desc)
 
 
 register_method(

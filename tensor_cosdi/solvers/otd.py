@@ -25,16 +25,14 @@ estimate's mode-n unfolding (Eq. 97, Alg. 5 steps 16-18).  **WDCT**
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
-import tensorly as tl
 from tensorly import tenalg
 
 from .. import _backend as B
-from ..bases import dct, tucker_bases, wavelet
-from ..systems._base import sensing_gain
-from ._base import History, check_positive, register_method, relative_change, relative_residual
+from ..bases import DCT, Dense, Wavelet, dct, tucker_bases
+from . import engine
+from ._base import check_positive, register_method
+from .priors import TV, FixedBasis, TuckerDictionary, soft
 
 __all__ = [
     "online_tucker_admm",
@@ -50,10 +48,7 @@ __all__ = [
 SPATIAL_BASES = ("panchromatic", "wavelet", "dct")
 
 
-def _check_int(name, value, low):
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise ValueError(f"{name} must be an integer ≥ {low}, got {value!r}")
-    return int(value)
+_check_int = engine.check_int
 
 
 def panchromatic_estimate(system, measurement, *, pan_iter: int = 60, pan_atoms: int = 3):
@@ -79,7 +74,7 @@ def panchromatic_estimate(system, measurement, *, pan_iter: int = 60, pan_atoms:
 
 def initial_bases(system, measurement, *, spatial: str = "panchromatic", wavelet_name: str = "sym8",
                   pan_iter: int = 60, pan_atoms: int = 3):
-    """The starting per-mode bases ``{mode: (n, n) ndarray}`` of OTD (or WDCT), and a starting cube.
+    """The starting per-mode bases ``{mode: ModeTransform}`` of OTD (or WDCT), and a starting cube.
 
     Parameters
     ----------
@@ -99,22 +94,24 @@ def initial_bases(system, measurement, *, spatial: str = "panchromatic", wavelet
     Returns
     -------
     bases : dict
-        Every mode of ``system.cube_shape``; modes ≥ 2 are DCT (SPEC §5 step 3).
+        Every mode of ``system.cube_shape`` as a
+        :class:`~tensor_cosdi.bases.ModeTransform` (``.matrix`` is the dense
+        ``Ψn``); modes ≥ 2 are DCT (SPEC §5 step 3).
     start : tensor or None
         The cube estimated on the way to ``Z``, if any.
     """
     if spatial not in SPATIAL_BASES:
         raise ValueError(f"spatial must be one of {SPATIAL_BASES}, got {spatial!r}")
     shape = system.cube_shape
-    mats = {m: dct(n) for m, n in enumerate(shape) if m >= 2}
+    mats = {m: DCT(n) for m, n in enumerate(shape) if m >= 2}
     start = None
     if spatial == "panchromatic":
         z, start = panchromatic_estimate(system, measurement, pan_iter=pan_iter, pan_atoms=pan_atoms)
-        mats.update(tucker_bases(z, modes=[0, 1]))
+        mats.update({m: Dense(u) for m, u in tucker_bases(z, modes=[0, 1]).items()})
     elif spatial == "wavelet":
-        mats[0], mats[1] = wavelet(shape[0], wavelet_name), wavelet(shape[1], wavelet_name)
+        mats[0], mats[1] = Wavelet(shape[0], wavelet_name), Wavelet(shape[1], wavelet_name)
     else:
-        mats[0], mats[1] = dct(shape[0]), dct(shape[1])
+        mats[0], mats[1] = DCT(shape[0]), DCT(shape[1])
     return mats, start
 
 
@@ -136,7 +133,7 @@ def subspace_gap_tv(system, measurement, *, n_atoms: int = 3, max_iter: int = 60
     cube : tensor of ``system.cube_shape``
         The subspace estimate; ``system.decimation.forward(cube)`` is ``Z``.
     """
-    from .gap_tv import gap_tv_operator, tv_denoise
+    from .denoisers import tv
 
     n_atoms = _check_int("n_atoms", n_atoms, 1)
     max_iter = _check_int("max_iter", max_iter, 1)
@@ -147,41 +144,14 @@ def subspace_gap_tv(system, measurement, *, n_atoms: int = 3, max_iter: int = 60
 
     def subspace_tv(v, weight):
         coef = tenalg.multi_mode_dot(v, mats, modes=modes, transpose=True)
-        return tenalg.multi_mode_dot(tv_denoise(coef, weight), mats, modes=modes)
+        return tenalg.multi_mode_dot(tv(coef, weight), mats, modes=modes)
 
-    x, _, _ = gap_tv_operator(system.operator, g, max_iter=max_iter, tv_weight=tv_weight, eps=eps,
-                              denoiser=subspace_tv, desc="panchromatic")
+    x, _, _ = engine.gap(system.operator, g, TV(tv_weight, denoise=subspace_tv), eps=eps, max_iter=max_iter,
+                         desc="panchromatic")
     return x
 
 
-def _soft(x, t):
-    return tl.sign(x) * tl.clip(tl.abs(x) - t, 0, None)
-
-
-class _Basis:
-    """Per-mode orthonormal matrices as tensors of the data's backend/dtype."""
-
-    def __init__(self, mats: dict, like):
-        self.like = like
-        self.np = {m: np.asarray(v, dtype=np.float64) for m, v in mats.items()}
-        self._t = {m: B.tensor_like(v, like) for m, v in self.np.items()}
-
-    def _apply(self, x, transpose):
-        modes = sorted(self._t)
-        return tenalg.multi_mode_dot(x, [self._t[m] for m in modes], modes=modes, transpose=transpose)
-
-    def synthesis(self, theta):
-        return self._apply(theta, False)
-
-    def analysis(self, cube):
-        return self._apply(cube, True)
-
-    def replace(self, mode, new, *tensors):
-        """Swap mode ``mode`` for ``new``; re-express coefficient tensors in it (``×ₙ newᵀ old``)."""
-        rot = B.tensor_like(new.T @ self.np[mode], self.like)
-        self.np[mode] = new
-        self._t[mode] = B.tensor_like(new, self.like)
-        return [tenalg.mode_dot(t, rot, mode) for t in tensors]
+_soft = soft
 
 
 def theta_step(operator, basis, atg, w, mu):
@@ -192,7 +162,7 @@ def theta_step(operator, basis, atg, w, mu):
     ``F = Ψ Θ``.
     """
     f = operator.solve_normal(atg + mu * basis.synthesis(w), mu)
-    return f, basis.analysis(f)
+    return f, basis.analysis(f)  # basis: a tensor_cosdi.bases.KroneckerBasis
 
 
 def omega_step(theta, nu, prev, thresh, mu, beta):
@@ -224,11 +194,15 @@ def tucker_admm(
     progress: bool = False,
     desc: str = "ADMM",
 ):
-    """The ADMM engine behind ``"otd"`` and ``"wdct"`` (see the module notes).
+    """ADMM in a Kronecker basis, the engine call behind ``"otd"`` and ``"wdct"`` (see the module notes).
+
+    :func:`tensor_cosdi.solvers.engine.admm` with a
+    :class:`~tensor_cosdi.solvers.priors.TuckerDictionary` prior (a
+    :class:`~tensor_cosdi.solvers.priors.FixedBasis` when nothing is re-learned).
 
     Parameters
     ----------
-    bases : dict {mode: (n, n) orthonormal ndarray}
+    bases : dict {mode: (n, n) orthonormal ndarray or ModeTransform}
         Starting synthesis bases (modes not listed: identity).
     start : tensor of ``system.cube_shape``, optional
         Starting cube (default: regularised least squares with weight ``mu``).
@@ -239,9 +213,9 @@ def tucker_admm(
         ADMM penalty and proximal weight, relative to the sensing gain
         ``s = ‖A 1‖²/‖1‖²``.
     lam : float
-        Sparsity weight: the ℓ1 weight is ``2·lam·s·c`` with ``c`` the RMS
-        of the starting cube, so the soft threshold is ``lam·c/(mu + beta)``
-        in the cube's units.  Noisier data want more (0.3 at 20 dB SNR).
+        Sparsity weight: the soft threshold is ``lam·c/(mu + beta)`` in the
+        cube's units, ``c`` the RMS of the starting cube (ℓ1 weight
+        ``lam·s·c`` in ``½‖A x − g‖² + λ‖Θ‖₁``).  Noisier data want more (0.3 at 20 dB SNR).
     weights : array of ``system.cube_shape``, optional
         Per-coefficient ℓ1 weights (``λ‖w ∘ Θ‖₁``), e.g. larger on atoms
         known to carry noise.
@@ -259,46 +233,13 @@ def tucker_admm(
         raise ValueError(f"beta must be a finite number ≥ 0, got {beta!r}")
     max_iter = _check_int("max_iter", max_iter, 1)
     update_every = _check_int("update_every", update_every, 0)
-    from tqdm import tqdm
-
-    op = system.operator
-    g = measurement
-    s = sensing_gain(op, g)
-    mu_a, beta_a = mu * s, float(beta) * s
-    atg = op._adjoint(g)
-    f = op.solve_normal(atg, mu_a) if start is None else start  # default: regularised least squares
-    scale = float(tl.norm(f)) / float(np.sqrt(np.prod(system.cube_shape)))
-    thresh = float(lam * max(scale, np.finfo(float).tiny) / (mu + float(beta)))
-    if weights is not None:
-        w = np.asarray(B.to_numpy(weights), dtype=np.float64)
-        if w.shape != tuple(system.cube_shape) or not (np.isfinite(w).all() and (w >= 0).all()):
-            raise ValueError(f"weights must be finite, ≥ 0 and of shape {system.cube_shape}, got shape {w.shape}")
-        thresh = B.tensor_like(w * thresh, g)
-    basis = _Basis(bases, g)
-    theta = basis.analysis(f)
-    omega = _soft(theta, thresh)
-    prev = omega
-    nu = tl.zeros_like(omega)
-    hist = History()
-    converged = False
-    for it in tqdm(range(max_iter), desc=desc, disable=not progress):
-        f_new, theta = theta_step(op, basis, atg, omega + nu, mu_a)
-        change = relative_change(f_new, f)
-        f = f_new
-        omega = omega_step(theta, nu, prev, thresh, mu_a, beta_a)
-        nu = nu - (theta - omega)
-        res = relative_residual(system, f, g)
-        hist.record(residual=res, change=change,
-                    objective=(res * float(tl.norm(g))) ** 2 + 2 * lam * s * scale * float(tl.sum(tl.abs(omega))))
-        if change < tol and it > 0:
-            converged = True
-            break
-        if update_modes and update_every and (it + 1) % update_every == 0 and it + 1 < max_iter:
-            for mode in update_modes:
-                new = tucker_bases(f, modes=[mode])[mode]
-                omega, nu, prev = basis.replace(mode, new, omega, nu, prev)
-            prev = omega
-    return basis.synthesis(omega), hist, converged
+    if update_modes and update_every:
+        prior = TuckerDictionary(bases, lam=lam, mu=mu, beta=float(beta), weights=weights,
+                                 update_modes=update_modes, update_every=update_every)
+    else:
+        prior = FixedBasis(bases, lam=lam, mu=mu, beta=float(beta), weights=weights)
+    return engine.admm(system.operator, measurement, prior, rho=mu, start=start, max_iter=max_iter, tol=tol,
+                       progress=progress, desc=desc)
 
 
 _COMMON = {"max_iter": 60, "lam": 0.1, "beta": 0.0, "tol": 1e-4, "weights": None, "progress": False}

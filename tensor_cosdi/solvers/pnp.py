@@ -25,14 +25,16 @@ from __future__ import annotations
 
 import numpy as np
 import tensorly as tl
-from tqdm import tqdm
 
 from .. import _backend as B
 from ..operators import Code, Replicate
 from ..systems._base import sensing_gain
-from ._base import History, check_positive, register_method, relative_change, relative_residual
+from . import engine
+from ._base import History, check_positive, register_method, relative_residual
 from .denoisers import resolve
-from .otd import _check_int
+from .priors import Denoiser
+
+_check_int = engine.check_int
 
 __all__ = ["pnp_admm", "pnp_admm_operator", "hierarchical_pnp"]
 
@@ -41,53 +43,32 @@ def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 
                       tol: float = 1e-4, start=None, tie=None, progress: bool = False, desc: str = "PnP-ADMM"):
     """PnP-ADMM on a bare operator: ``min ½‖g − A x‖² + R(x)`` with ``R`` implied by ``denoiser``.
 
-    ``rho`` is relative to the sensing gain of ``op``; ``sigma`` (the
-    denoiser strength) relative to the largest value of the start.  ``tie``
-    = ``(T, t, weight)`` adds ``weight/2 ‖T x − t‖²`` (the hierarchical
-    coupling); then the x-step runs on the stacked normal equations by CG.
-    Returns ``(x, history, converged)``.
+    :func:`tensor_cosdi.solvers.engine.admm` with a
+    :class:`~tensor_cosdi.solvers.priors.Denoiser` prior.  ``rho`` is
+    relative to the sensing gain of ``op``; ``sigma`` (the denoiser
+    strength) relative to the largest value of the start.  ``tie`` =
+    ``(T, t, weight)`` adds ``weight/2 ‖T x − t‖²`` (the hierarchical
+    coupling); then the x-step runs on the stacked normal equations by
+    warm-started CG.  Returns ``(x, history, converged)``.
     """
-    from ..operators.woodbury import conjugate_gradient
-    import warnings
-
-    den = resolve(denoiser)
-    s = sensing_gain(op, g)
-    r = rho * s
-    atg = op._adjoint(g)
+    normal_solve = None
     if tie is not None:
         T, t_val, w = tie
-        w = w * s
-        atg = atg + w * T._adjoint(t_val)
+        s = sensing_gain(op, g)
+        w, r = w * s, rho * s
 
-        def solve(b, x0):
-            def normal(v):
-                return op._adjoint(op._forward(v)) + w * T._adjoint(T._forward(v)) + r * v
+        def normal(v):
+            return op._adjoint(op._forward(v)) + w * T._adjoint(T._forward(v)) + r * v
 
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                return conjugate_gradient(normal, b, x0=x0, rtol=1e-6, maxiter=20)
-    else:
-        def solve(b, x0):
-            return op.solve_normal(b, r)
+        cg = engine.cg_solver(normal, rtol=1e-6, maxiter=20)
+        extra = w * T._adjoint(t_val)
 
-    x = solve(atg, None) if start is None else start
-    weight = sigma * max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
-    v, u = x, tl.zeros_like(x)
-    hist = History()
-    gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    converged = False
-    for it in tqdm(range(max_iter), desc=desc, disable=not progress):
-        x_new = solve(atg + r * (v - u), x)
-        v = den(x_new + u, weight)
-        u = u + x_new - v
-        change = relative_change(x_new, x)
-        x = x_new
-        res = float(tl.norm(op._forward(v) - g)) / gnorm
-        hist.record(residual=res, objective=0.5 * (res * gnorm) ** 2, change=change)
-        if change < tol and it > 0:
-            converged = True
-            break
-    return v, hist, converged
+        def normal_solve(b, x0):
+            # the engine forms Aᵀg + ρ(z − u); the tie adds w Tᵀt to the right-hand side
+            return cg(b + extra, x0)
+
+    return engine.admm(op, g, Denoiser(denoiser, sigma=sigma), rho=rho, start=start, max_iter=max_iter, tol=tol,
+                       normal_solve=normal_solve, progress=progress, desc=desc)
 
 
 def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: float = 0.05,

@@ -8,7 +8,8 @@ import tensor_cosdi as tc
 from tensor_cosdi import studies
 from tensor_cosdi.bases import dct, is_orthonormal, svd_basis, wavelet
 from tensor_cosdi.operators import vec
-from tensor_cosdi.solvers.otd import _Basis, initial_bases, omega_step, subspace_gap_tv, theta_step
+from tensor_cosdi.bases import KroneckerBasis
+from tensor_cosdi.solvers.otd import initial_bases, omega_step, subspace_gap_tv, theta_step
 from tensor_cosdi.systems import (
     C3SLFI,
     CASSDIDFA,
@@ -54,7 +55,7 @@ def test_theta_step_equals_the_dense_solve(name):
     w = rng.standard_normal(shape)
     H = system.matrix().toarray()
     Psi = _kron(bases, shape)
-    basis = _Basis(bases, g)
+    basis = KroneckerBasis(system.cube_shape, bases)
     for mu in (1e-2, 1.0):
         f, theta = theta_step(system.operator, basis, system.adjoint(g), w, mu)
         M = Psi.T @ H.T @ H @ Psi + mu * np.eye(H.shape[1])
@@ -80,7 +81,8 @@ def test_omega_step_is_the_exact_proximal_minimiser():
 
 def test_initial_bases_are_orthonormal_and_come_from_the_panchromatic_image():
     p = studies.make_problem("c3slfi", "colorchecker", shape=(16, 16), n_bands=6, views=(2, 2), snr_db=None)
-    bases, start = initial_bases(p.system, p.measurement)
+    transforms, start = initial_bases(p.system, p.measurement)
+    bases = {m: t.matrix for m, t in transforms.items()}
     assert start is None  # Lemma 1: exact panchromatic, no estimate needed
     z = p.cube.sum(axis=2)
     for m in (0, 1):
@@ -90,7 +92,8 @@ def test_initial_bases_are_orthonormal_and_come_from_the_panchromatic_image():
     assert np.abs(core - np.diag(np.diag(core))).max() < 1e-9 * np.abs(z).max()
     np.testing.assert_allclose(bases[2], dct(6))
     wb, _ = initial_bases(p.system, p.measurement, spatial="wavelet")
-    np.testing.assert_allclose(wb[0], wavelet(16))
+    np.testing.assert_allclose(wb[0].matrix, wavelet(16))
+    assert (transforms[2].kind, wb[0].kind, wb[1].kind) == ("dct", "wavelet", "wavelet")  # fast transforms
     with pytest.raises(ValueError, match="spatial must be one of"):
         initial_bases(p.system, p.measurement, spatial="curvelet")
 

@@ -12,7 +12,7 @@ def test_registry_lists_methods_and_rejects_unknown_ones():
     assert "lsq" in tc.reconstruct.methods()
     sd = SDCASSI.example((6, 7, 4))
     g = np.zeros(sd.measurement_shape)
-    with pytest.raises(ValueError, match=r"unknown method 'nope'; registered methods: \[.*'lsq'"):
+    with pytest.raises(ValueError, match=r"unknown method 'nope'; valid names: \[.*'lsq'"):
         tc.reconstruct(sd, g, method="nope")
     with pytest.raises(ValueError, match=r"unknown option\(s\) \['iters'\] for method 'lsq'; valid options: \['mu'\]"):
         tc.reconstruct(sd, g, method="lsq", iters=3)
@@ -20,8 +20,17 @@ def test_registry_lists_methods_and_rejects_unknown_ones():
         tc.reconstruct(sd, np.zeros((6, 7)), method="lsq")
     with pytest.raises(ValueError, match="mu must be a finite number > 0"):
         tc.reconstruct(sd, g, method="lsq", mu=0)
-    with pytest.raises(ValueError, match="already registered"):
-        tc.solvers.register_method("lsq", lambda s, g: None, {})
+    with pytest.raises(ValueError, match="'lsq' is a built-in method and cannot be replaced"):
+        tc.solvers.register_method("lsq", lambda s, g: None, {}, replace=True)
+    tc.solvers.register_method("user_lsq_test", lambda s, g, **o: None, {})
+    try:
+        with pytest.raises(ValueError, match="already registered; pass replace=True"):
+            tc.solvers.register_method("user_lsq_test", lambda s, g, **o: None, {})
+        tc.solvers.register_method("user_lsq_test", lambda s, g, **o: None, {"a": 1}, replace=True)
+        assert tc.solvers.METHODS["user_lsq_test"].defaults == {"a": 1}
+    finally:
+        tc.solvers.METHODS.unregister("user_lsq_test")
+    assert "user_lsq_test" not in tc.solvers.METHODS
 
 
 @pytest.mark.parametrize(

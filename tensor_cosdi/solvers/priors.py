@@ -1,0 +1,237 @@
+"""Priors: the regularising parts the engines of :mod:`tensor_cosdi.solvers.engine` plug in.
+
+The protocol is small:
+
+``setup(start, *, penalty, gain)``
+    Called once with the starting estimate; fixes the prior's absolute
+    strength from its relative option (see the engine's objective
+    convention).  ``penalty`` is the engine's step scale (ADMM ``ρ``, GAP 1,
+    FISTA ``L``), ``gain`` the sensing gain ``s``.
+``prox(v)``
+    The proximal / denoising step at that strength.
+``objective(z)``
+    ``λ R(z)`` in the convention ``½‖A x − g‖² + λ R(x)`` (``0.0`` for
+    implicit plug-and-play priors).
+``update(x, iteration)``
+    Hook after each iteration (learned priors re-fit themselves to ``x``).
+
+=========================  ============================================================
+prior                      prox
+=========================  ============================================================
+:class:`SparseInBasis`     ``Ψ soft(Ψᵀ v, t)`` in a fixed Kronecker basis (``"wdct"``)
+:class:`TuckerDictionary`  the same, bases re-learned by HOSVD every few iterations
+                           (online Tucker dictionary, ``"otd"``, thesis Alg. 5)
+:class:`TV`                2-D isotropic total variation per slice (``"gap_tv"``, DFA)
+:class:`Denoiser`          any registered denoiser at a fixed σ (``"pnp_admm"``)
+=========================  ============================================================
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import tensorly as tl
+
+from .. import _backend as B
+from ..bases import KroneckerBasis, tucker_bases
+from .denoisers import resolve
+
+__all__ = ["Prior", "SparseInBasis", "TuckerDictionary", "FixedBasis", "TV", "Denoiser", "soft", "rms",
+           "total_variation"]
+
+
+def soft(x, t):
+    """Soft thresholding ``sign(x) · max(|x| − t, 0)`` (``t`` a scalar or a tensor of ``x``'s shape)."""
+    return tl.sign(x) * tl.clip(tl.abs(x) - t, 0, None)
+
+
+def rms(x) -> float:
+    """Root mean square of a tensor (never 0: the smallest positive float instead)."""
+    n = float(np.prod(tl.shape(x)))
+    return float(max(float(tl.norm(x)) / np.sqrt(n), np.finfo(float).tiny))
+
+
+def _peak(x) -> float:
+    return max(float(tl.max(tl.abs(x))), np.finfo(float).tiny)
+
+
+def total_variation(x) -> float:
+    """Isotropic 2-D TV over axes 0 and 1, summed over every other index."""
+    a = np.asarray(B.to_numpy(x), dtype=np.float64)
+    dx = np.diff(a, axis=0, append=a[-1:])
+    dy = np.diff(a, axis=1, append=a[:, -1:])
+    return float(np.sqrt(dx * dx + dy * dy).sum())
+
+
+class Prior:
+    """Base of the priors (see the module notes for the protocol)."""
+
+    name = "prior"
+    penalty = 1.0
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        self.penalty = float(penalty)
+
+    def prox(self, v):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def objective(self, z) -> float:
+        return 0.0
+
+    def update(self, x, iteration: int) -> None:
+        return None
+
+
+class SparseInBasis(Prior):
+    """``λ‖w ∘ Ψᵀx‖₁`` in an orthonormal Kronecker basis, with an optional proximal memory ``β``.
+
+    Parameters
+    ----------
+    bases : dict {mode: matrix, transform or name}
+        The starting synthesis bases (:class:`~tensor_cosdi.bases.KroneckerBasis`).
+    lam : float
+        Relative sparsity weight: the soft threshold is
+        ``lam · RMS(start) / (mu + beta)`` cube units.
+    mu, beta : float
+        The ADMM penalty and the proximal weight (``β‖Ω − Ω_prev‖²``, SPEC
+        §12), both relative to the sensing gain; ``Ω_prev`` is the
+        coefficient tensor at the last basis change.
+    weights : array of the cube's shape, optional
+        Per-coefficient ℓ1 weights (≥ 0).
+    """
+
+    name = "sparse"
+
+    def __init__(self, bases, *, lam: float, mu: float, beta: float = 0.0, weights=None):
+        self.bases = dict(bases)
+        self.lam, self.mu, self.beta = float(lam), float(mu), float(beta)
+        self.weights = weights
+        self.basis = None
+        self._prev = None  # coefficients Ω_prev (None: the next prox is a plain soft threshold)
+        self._prev_cube = None
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        super().setup(start, penalty=penalty, gain=gain)
+        shape = tuple(tl.shape(start))
+        self.basis = KroneckerBasis(shape, self.bases)
+        self.scale = rms(start)
+        self.gain = float(gain)
+        thresh = self.lam * self.scale / (self.mu + self.beta)
+        if self.weights is not None:
+            w = np.asarray(B.to_numpy(self.weights), dtype=np.float64)
+            if w.shape != shape or not (np.isfinite(w).all() and (w >= 0).all()):
+                raise ValueError(f"weights must be finite, ≥ 0 and of shape {shape}, got shape {w.shape}")
+            self._w = B.tensor_like(w, start)
+            thresh = B.tensor_like(w * thresh, start)
+        else:
+            self._w = None
+        self.thresh = thresh
+        self._prev = self._prev_cube = None
+        self._omega_l1 = 0.0
+
+    def prox(self, v):
+        theta = self.basis.analysis(v)
+        if self.beta > 0 and self._prev_cube is not None:
+            if self._prev is None:
+                self._prev = self.basis.analysis(self._prev_cube)
+            theta = (self.beta * self._prev + self.mu * theta) / (self.beta + self.mu)
+        omega = soft(theta, self.thresh)
+        self._omega_l1 = float(tl.sum(tl.abs(omega if self._w is None else self._w * omega)))
+        z = self.basis.synthesis(omega)
+        if self._prev_cube is None:
+            self._prev_cube, self._prev = z, omega
+        return z
+
+    def objective(self, z) -> float:
+        # λ = lam · RMS(start) · s, the ℓ1 weight whose threshold at ρ + β_s is the one above
+        return self.lam * self.scale * self.gain * self._omega_l1
+
+    def _rebase(self, mode, matrix, z_last):
+        self.basis = self.basis.with_mode(mode, matrix)
+        self._prev_cube, self._prev = z_last, None  # Ω_prev = Ω at the basis change
+
+
+class FixedBasis(SparseInBasis):
+    """:class:`SparseInBasis` in a basis that never changes (WDCT: Symlet-8 ⊗ Symlet-8 ⊗ DCT)."""
+
+    name = "fixed_basis"
+
+
+class TuckerDictionary(SparseInBasis):
+    """The online Tucker dictionary (thesis Alg. 5): sparse in per-mode bases re-learned from the estimate.
+
+    Every ``update_every`` iterations (0: never) the bases of ``update_modes``
+    are replaced by the HOSVD bases of the current estimate's unfoldings
+    (Eq. 97); the ADMM variables live in cube space, so they carry over to
+    the new basis unchanged.
+    """
+
+    name = "tucker_dictionary"
+
+    def __init__(self, bases, *, lam: float, mu: float, beta: float = 0.0, weights=None, update_modes=(),
+                 update_every: int = 10):
+        super().__init__(bases, lam=lam, mu=mu, beta=beta, weights=weights)
+        self.update_modes = tuple(update_modes)
+        self.update_every = int(update_every)
+        self._last = None
+
+    def prox(self, v):
+        self._last = super().prox(v)
+        return self._last
+
+    def update(self, x, iteration: int) -> None:
+        if not (self.update_modes and self.update_every and iteration % self.update_every == 0):
+            return
+        learned = tucker_bases(x, modes=list(self.update_modes))
+        for mode in self.update_modes:
+            self._rebase(mode, learned[mode], self._last)
+
+
+class TV(Prior):
+    """Isotropic 2-D total variation of every slice (axes 0, 1), by Chambolle's method (scikit-image).
+
+    Parameters
+    ----------
+    weight : float
+        Relative strength: the denoising weight is ``weight · max|start|``.
+    denoise : callable ``(x, weight) -> x``, optional
+        Replaces :func:`tensor_cosdi.solvers.denoisers.tv` (e.g. TV of a
+        subspace's coefficient images).
+    """
+
+    name = "tv"
+
+    def __init__(self, weight: float, *, denoise=None):
+        self.weight = float(weight)
+        self._denoise = resolve("tv") if denoise is None else denoise
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        super().setup(start, penalty=penalty, gain=gain)
+        self.strength = self.weight * _peak(start)
+
+    def prox(self, v):
+        return self._denoise(v, self.strength)
+
+    def objective(self, z) -> float:
+        return self.penalty * self.strength * total_variation(z)
+
+
+class Denoiser(Prior):
+    """A plug-and-play denoiser (any of :func:`~tensor_cosdi.solvers.denoisers.denoisers` or a callable).
+
+    ``sigma`` is relative: the denoiser runs at ``σ = sigma · max|start|``,
+    whatever the engine's step (the plug-and-play convention).  Implicit: its
+    objective term is 0.
+    """
+
+    name = "denoiser"
+
+    def __init__(self, denoiser="tv", *, sigma: float):
+        self._denoise = resolve(denoiser)
+        self.sigma = float(sigma)
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        super().setup(start, penalty=penalty, gain=gain)
+        self.strength = self.sigma * _peak(start)
+
+    def prox(self, v):
+        return self._denoise(v, self.strength)

@@ -76,7 +76,7 @@ def memory_probe(args, mask):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--systems", default=",".join(s for s in studies.SYSTEMS if s not in ("dd_cassi", "dual_camera")))
+    ap.add_argument("--systems", default=",".join(s for s in studies.SYSTEMS if s not in ("dd_cassi", "dual_camera_cassi")))
     ap.add_argument("--scenes", default="colorchecker,chelsea,coffee,astronaut")
     ap.add_argument("--snr", default="20,30")
     ap.add_argument("--methods", default=",".join(METHODS))

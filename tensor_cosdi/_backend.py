@@ -103,8 +103,9 @@ def all_finite(x) -> bool:
     if isinstance(x, np.ndarray):
         if x.dtype.kind == "f" and x.size and (x.flags.c_contiguous or x.flags.f_contiguous):
             v = x.ravel(order="K")
-            if np.isfinite(np.dot(v, v)):
-                return True
+            with np.errstate(over="ignore", invalid="ignore"):
+                if np.isfinite(np.dot(v, v)):
+                    return True
         return bool(np.isfinite(x).all())
     if backend_name() == "pytorch":
         import torch

@@ -41,16 +41,20 @@ import numpy as np
 
 __all__ = ["main", "build_parser"]
 
-# (system, scene, extra make_problem options): one row per imager, scenes from real data
-DEMO_CASES = (
-    ("sd_cassi", "colorchecker", {}),
-    ("cassi_vsi", "chelsea", {}),
-    ("cassdi_dfa", "motorcycle", {}),
-    ("c3slfi", "astronaut", {"views": (4, 4)}),
-    ("cs2li", "coffee", {}),
-    ("mu_cosdi", "rocket", {}),
-)
+def _demo_cases():
+    """``(system, scene, options)`` of every registered system with a ``demo_scene`` (registry order)."""
+    from .systems import REGISTRY
+
+    return tuple((name, cls.demo_scene, dict(cls.demo_options)) for name, cls in REGISTRY.items() if cls.demo_scene)
+
+
 DEMO_METHODS = ("otd", "gap_tv")
+
+
+def __getattr__(name):
+    if name == "DEMO_CASES":  # built from the registry on first use
+        return _demo_cases()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _to_uint8(img: np.ndarray, lo=None, hi=None) -> np.ndarray:
@@ -68,13 +72,16 @@ def _measurement_image(g: np.ndarray) -> np.ndarray:
     return _to_uint8(g)
 
 
-DEPTH_SYSTEMS = ("cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi")
+def _has_depth(system: str) -> bool:
+    from .systems import REGISTRY
+
+    return REGISTRY[system].has_depth
 
 
 def _demo_files(out: Path, cases) -> list[Path]:
     files = []
     for system, _, _ in cases:
-        parts = ("measurement", "truth", *DEMO_METHODS, "error_otd") + (("depth",) if system in DEPTH_SYSTEMS else ())
+        parts = ("measurement", "truth", *DEMO_METHODS, "error_otd") + (("depth",) if _has_depth(system) else ())
         files += [out / f"{system}_{part}.png" for part in parts]
     return files
 
@@ -113,7 +120,8 @@ def run_demo(args) -> int:
     if args.size % 4:
         raise ValueError(f"--size must be a multiple of 4 (the light field has 4×4 views), got {args.size}")
     out = Path(args.out)
-    targets = _demo_files(out, DEMO_CASES)
+    cases = _demo_cases()
+    targets = _demo_files(out, cases)
     existing = [str(t) for t in targets if t.exists()]
     if existing and not args.force:  # refuse before computing or writing anything
         raise FileExistsError(f"{len(existing)} demo file(s) exist, e.g. {existing[0]}; pass --force to overwrite")
@@ -124,8 +132,8 @@ def run_demo(args) -> int:
     rows = []
     images = {}
     t_all = time.perf_counter()
-    bar = tqdm(total=len(DEMO_CASES) * len(DEMO_METHODS), desc="reconstructing", disable=args.quiet)
-    for system, scene, extra in DEMO_CASES:
+    bar = tqdm(total=len(cases) * len(DEMO_METHODS), desc="reconstructing", disable=args.quiet)
+    for system, scene, extra in cases:
         problem = make_problem(system, scene, shape=(args.size, args.size), n_bands=args.bands,
                                snr_db=args.snr_db, rng=args.seed, **extra)
         results = []
@@ -133,9 +141,9 @@ def run_demo(args) -> int:
             results += compare(problem, [method])
             bar.update(1)
         for r in results:
-            r["depth"] = score_depth(problem, r["result"].depth) if system in DEPTH_SYSTEMS else {}
+            r["depth"] = score_depth(problem, r["result"].depth) if problem.system.depth_kind else {}
         rows += [(system, scene, r) for r in results]
-        if system in DEPTH_SYSTEMS:
+        if problem.system.depth_kind:
             is_phase = "phase" in problem.extras
             truth_depth = problem.extras["phase"] if is_phase else problem.depth
             images[f"{system}_depth.png"] = _depth_image(truth_depth, results[0]["result"].depth, is_phase)

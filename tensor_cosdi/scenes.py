@@ -13,6 +13,9 @@
   and a reflectance, ready for :func:`tensor_cosdi.systems.fringe_cube`.
 
 All take any spatial size and any band list (default 28 bands, 450–650 nm).
+:data:`SCENES` names the spectral scenes every imager's
+``example_problem`` can view (``scene_cube(name, shape, wavelengths)``);
+:func:`register_scene` adds your own.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _backend as B
-
+from ._registry import Registry
 from .operators import validate_shape
 
 __all__ = [
@@ -37,6 +40,9 @@ __all__ = [
     "light_field",
     "structured_light",
     "StructuredLightScene",
+    "SCENES",
+    "register_scene",
+    "scene_cube",
 ]
 
 PHOTOS = ("astronaut", "chelsea", "coffee", "rocket")
@@ -368,3 +374,27 @@ def structured_light(
     phase = np.broadcast_to(phase, (nx, ny, len(freqs))).copy()
     reflectance = photo(photo_name, (nx, ny), wavelengths)
     return StructuredLightScene(reflectance, height, phase, freqs, float(phase_per_height))
+
+
+# ---- the scene registry ---------------------------------------------------------------
+SCENES = Registry("scene")
+"""``name → builder(shape, wavelengths) -> (Nx, Ny, Nλ) reflectance``: what ``example_problem`` accepts."""
+
+
+def register_scene(name: str, builder, *, replace: bool = False) -> None:
+    """Make ``builder(shape, wavelengths)`` (an ``(Nx, Ny, Nλ)`` reflectance in [0, 1]) a named scene."""
+    if not callable(builder):
+        raise ValueError(f"a scene builder must be callable (shape, wavelengths) -> cube, got {builder!r}")
+    SCENES.register(name, builder, replace=replace)
+
+
+def scene_cube(name: str, shape, wavelengths) -> np.ndarray:
+    """The reflectance cube of the named scene at ``shape`` and ``wavelengths``."""
+    return SCENES[name](shape, wavelengths)
+
+
+SCENES.register("colorchecker", lambda shape, wl: colorchecker(shape, wl), builtin=True)
+for _name in PHOTOS:
+    SCENES.register(_name, lambda shape, wl, _n=_name: photo(_n, shape, wl), builtin=True)
+SCENES.register("motorcycle", lambda shape, wl: motorcycle(shape, wl)[0], builtin=True)
+del _name

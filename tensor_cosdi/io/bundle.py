@@ -9,7 +9,8 @@ stored as the string array ``__bundle__``:
     {"format": "tensor_cosdi-bundle", "format_version": 1,
      "software": {"tensor_cosdi": "…", "numpy": "…", "python": "…"},
      "created": "2026-11-22T10:00:00+00:00", "kind": "measurement",
-     "system": {"class": "SDCASSI", "params": {"n_bands": 28, …}, "arrays": {"code": "system.code", …}},
+     "system": {"system": "sd_cassi", "class": "SDCASSI", "params": {"n_bands": 28, …},
+                "arrays": ["code", "shifts", "wavelengths"]},
      "arrays": ["measurement", "calibration.white", …],
      "provenance": [{"path": "…", "sha256": "…", "bytes": 123}],
      "metadata": {…}}
@@ -59,63 +60,26 @@ def _np(x):
 
 
 def system_state(system) -> tuple[dict, dict]:
-    """``(description, arrays)`` that rebuild ``system`` with :func:`system_from_state`."""
-    from .. import systems as S
+    """``(description, arrays)`` that rebuild ``system`` with :func:`system_from_state`.
 
-    cls = type(system).__name__
-    params: dict = {}
-    arrays: dict = {"wavelengths": np.asarray(system.wavelengths)}
-    if isinstance(system, (S.SDCASSI, S.DDCASSI, S.DualCameraCASSI, S.CASSIVSI, S.CS2LI, S.MuCoSDI)):
-        arrays["code"] = np.asarray(system.code)
-        arrays["shifts"] = np.asarray(system.shifts)
-        params["n_bands"] = int(system.n_bands)
-    if isinstance(system, S.CASSIVSI):
-        params.update(alpha_t=float(system.alpha_t), beta=int(system.beta))
-    elif isinstance(system, S.CS2LI):
-        params["n_patterns"] = int(system.cube_shape[3])
-    elif isinstance(system, S.MuCoSDI):
-        params["modality"] = system.modality
-        if system.modality == "sl":
-            params["n_patterns"] = int(system.n_patterns)
-        elif system.modality == "lf":
-            params.update(views=list(system.views), raw_layout=system.raw_layout)
-        elif system.depth_estimator is not None:
-            raise ValueError("a Mu-CoSDI with a depth_estimator callable cannot be saved (code is not data); "
-                             "save it without one and pass the estimator again after loading")
-    elif isinstance(system, S.CASSDIDFA):
-        arrays.update(codes=np.asarray(system.codes), shifts=np.asarray(system.shifts))
-        params["n_bands"] = int(system.n_bands)
-        if system.psfs is not None:
-            arrays["psfs"] = np.asarray(system.psfs)
-    elif isinstance(system, S.C3SLFI):
-        if system.phi is not None:
-            raise ValueError("a separable C3SLFI (C3SLFI.separable) is saved by its Φ3 matrix, which bundles do not "
-                             "support yet; build it with explicit codes to save it")
-        arrays["codes"] = np.asarray(system.codes)
-        params.update(layout=system.layout, raw_layout=system.raw_layout, complementary=bool(system.complementary),
-                      views=None if system.views is None else [int(v) for v in system.views])
-    elif not isinstance(system, (S.SDCASSI, S.DDCASSI, S.DualCameraCASSI, S.CASSIVSI, S.CS2LI)):
-        raise ValueError(f"cannot save a {cls}: bundles know the systems of tensor_cosdi.systems")
-    return {"class": cls, "params": params, "arrays": sorted(arrays)}, arrays
+    The system describes itself (:meth:`~tensor_cosdi.systems.System.to_state`);
+    the description stores its registry name, class, parameters and array names.
+    """
+    to_state = getattr(system, "to_state", None)
+    if to_state is None or not getattr(system, "name", ""):
+        raise ValueError(f"cannot save a {type(system).__name__}: bundles know the systems of "
+                         "tensor_cosdi.systems.REGISTRY")
+    state = to_state()
+    arrays = state["arrays"]
+    return {"system": state["system"], "class": state["class"], "params": state["params"],
+            "arrays": sorted(arrays)}, arrays
 
 
 def system_from_state(desc: dict, arrays: dict):
-    """Rebuild a system saved by :func:`system_state`."""
-    from .. import systems as S
+    """Rebuild a system saved by :func:`system_state` (bundles that name only the class included)."""
+    from ..systems import System
 
-    cls = getattr(S, desc["class"], None)
-    if cls is None or not isinstance(cls, type):
-        raise ValueError(f"unknown system class {desc['class']!r} in the bundle")
-    p = dict(desc["params"])
-    wl = arrays["wavelengths"]
-    if desc["class"] == "C3SLFI":
-        views = p.pop("views")
-        return cls(arrays["codes"], views=None if views is None else tuple(views), wavelengths=wl, **p)
-    if desc["class"] == "CASSDIDFA":
-        return cls(arrays["codes"], shifts=arrays["shifts"], psfs=arrays.get("psfs"), wavelengths=wl, **p)
-    if desc["class"] == "MuCoSDI" and "views" in p:
-        p["views"] = tuple(p["views"])
-    return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=wl, **p)
+    return System.from_state({**desc, "arrays": arrays})
 
 
 @dataclass(frozen=True)

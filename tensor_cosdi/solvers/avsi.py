@@ -74,9 +74,7 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
     >>> res.cube.shape
     (32, 32, 8)
     """
-    from ..systems import CASSIVSI
-
-    if not isinstance(system, CASSIVSI):
+    if getattr(system, "name", None) != "cassi_vsi":
         raise ValueError(f"avsi reconstructs CASSIVSI systems (Alg. 1), got {type(system).__name__}; "
                          "use 'otd', 'wdct', 'gap_tv' or 'lsq' for other systems")
     s1, s2, s3 = (check_positive(n, v) for n, v in (("sigma1", sigma1), ("sigma2", sigma2), ("sigma3", sigma3)))

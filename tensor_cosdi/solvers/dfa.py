@@ -77,9 +77,7 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
     >>> res.cube.shape, res.depth.shape
     ((32, 32, 8, 3), (32, 32))
     """
-    from ..systems import CASSDIDFA
-
-    if not isinstance(system, CASSDIDFA):
+    if getattr(system, "name", None) != "cassdi_dfa":
         raise ValueError(f"dfa reconstructs CASSDIDFA systems (Alg. 2-4), got {type(system).__name__}")
     tv_weight, tol = (check_positive(n, v) for n, v in (("tv_weight", tv_weight), ("tol", tol)))
     max_iter = _check_int("max_iter", max_iter, 1)

@@ -147,9 +147,7 @@ def pnp_admm(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: flo
     >>> res.cube.shape, res.depth.shape
     ((32, 32, 8, 4), (32, 32, 1))
     """
-    from ..systems import CS2LI, MuCoSDI
-
-    if not isinstance(system, (CS2LI, MuCoSDI)):
+    if getattr(system, "name", None) not in ("cs2li", "mu_cosdi"):
         raise ValueError(f"pnp_admm reconstructs CS2LI and MuCoSDI systems (Alg. 6), got {type(system).__name__}")
     check_positive("rho", rho), check_positive("sigma", sigma), check_positive("tie_weight", tie_weight)
     check_positive("tol", tol)

@@ -11,6 +11,7 @@ import tensorly as tl
 from .. import _backend as B
 from ..noise import add_noise
 from ..operators import Code, SumAxis, TensorOperator, parse_shifts
+from ._roles import SystemRoles
 
 __all__ = ["System"]
 
@@ -86,13 +87,14 @@ def sensing_gain(operator: TensorOperator, like) -> float:
 
 
 # ---- the base class ---------------------------------------------------------------
-class System:
+class System(SystemRoles):
     """Base of every imager in :mod:`tensor_cosdi.systems`.
 
     A system is a small frozen object: its physical parameters (codes,
     shifts, weights, PSFs, wavelengths) and the :class:`~tensor_cosdi.operators.TensorOperator`
     composed from them.  Subclasses set the parameters and call
-    :meth:`_finish`.
+    :meth:`_finish`; what the rest of the library asks of a system (state,
+    frames, depth, seeded problems) is :class:`~tensor_cosdi.systems._roles.SystemRoles`.
 
     Attributes
     ----------
@@ -260,6 +262,12 @@ class System:
         compare the two.  For small sizes only.
         """
         raise NotImplementedError  # pragma: no cover
+
+
+def coded_state(system, *, code: str = "code") -> tuple[dict, dict]:
+    """``(params, arrays)`` of the systems built from one code, shifts and ``n_bands``."""
+    return {"n_bands": int(system.n_bands)}, {code: np.asarray(getattr(system, code)),
+                                              "shifts": np.asarray(system.shifts)}
 
 
 # ---- building blocks of the explicit matrices ----------------------------------------

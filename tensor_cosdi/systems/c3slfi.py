@@ -154,6 +154,85 @@ class C3SLFI(System):
     def n_snapshots(self) -> int:
         return self.codes.shape[-1]
 
+    # ---- roles (systems/_roles.py) -------------------------------------------------------
+    name = "c3slfi"
+    demo_scene = "astronaut"
+    demo_options = {"views": (4, 4)}
+    has_depth = True
+    example_options = {"views": (4, 4), "n_snapshots": 4, "max_disparity": 1.0}
+
+    @property
+    def depth_kind(self):
+        return None if self.views is None else "disparity"
+
+    def _state(self):
+        if self.phi is not None:
+            raise ValueError("a separable C3SLFI (C3SLFI.separable) is saved by its Φ3 matrix, which bundles do not "
+                             "support yet; build it with explicit codes to save it")
+        return ({"layout": self.layout, "raw_layout": self.raw_layout, "complementary": bool(self.complementary),
+                 "views": None if self.views is None else [int(v) for v in self.views]},
+                {"codes": np.asarray(self.codes)})
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        views = params.pop("views", None)
+        return cls(arrays["codes"], views=None if views is None else tuple(views), wavelengths=arrays["wavelengths"],
+                   **params)
+
+    @property
+    def frame_count(self) -> int:
+        return self.n_snapshots
+
+    def frames_to_measurement(self, frames):
+        """``K`` raw lenslet frames (snapshot order, :attr:`raw_layout`) → the measurement (3-D or 5-D)."""
+        from ._roles import stack_frames
+
+        a = stack_frames(frames)
+        shape = tuple(self.measurement_shape)
+        if self.layout == "3d":
+            if a.shape != shape:
+                raise ValueError(f"C3SLFI frames: expected {shape[2]} frames of {shape[:2]}, got {a.shape}")
+            return a
+        g3_shape = (shape[0] * shape[3], shape[1] * shape[4], shape[2])
+        if a.shape != g3_shape:
+            raise ValueError(f"C3SLFI frames: expected {g3_shape[2]} lenslet frames of {g3_shape[:2]}, got {a.shape}")
+        return np.asarray(self._layout(self.n_snapshots).adjoint(a))
+
+    def measurement_to_frames(self, measurement):
+        g = self._frames_check(measurement)
+        return np.asarray(self.measurement_to_3d(g)) if self.layout == "5d" else g
+
+    def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
+        """Disparity (px per view step) of the centre view, over all bands; ``None`` without views."""
+        from ._roles import views_disparity
+
+        if self.layout == "3d" and self.views is None:
+            return None
+        return views_disparity(self.to_5d(cube), max_disparity)
+
+    def spectral_view(self, cube):
+        """The centre view of the light field."""
+        five = np.asarray(self.to_5d(np.asarray(cube, dtype=np.float64)))
+        return five[:, :, :, five.shape[3] // 2, five.shape[4] // 2]
+
+    @classmethod
+    def _example(cls, scene, shape, wl, seed, shifts, views, n_snapshots, max_disparity):
+        from .. import scenes
+        from ..operators import validate_shape
+
+        nx, ny = shape
+        n4, n5 = validate_shape(views, "views")
+        if nx % n4 or ny % n5:
+            raise ValueError(f"c3slfi: shape {shape} must be divisible by views {views}")
+        if shifts != 1:
+            raise ValueError("c3slfi has no dispersion: shifts does not apply")
+        centre = scenes.scene_cube(scene, (nx // n4, ny // n5), wl)
+        _, disp = scenes.motorcycle((nx // n4, ny // n5), [550.0])
+        d = (disp - disp.mean()) / max(np.abs(disp - disp.mean()).max(), 1e-12) * max_disparity
+        lf = scenes.light_field(centre, d, views=(n4, n5))
+        system = cls.example((nx, ny, len(wl)), rng=seed, n_snapshots=n_snapshots, views=(n4, n5), wavelengths=wl)
+        return system, np.asarray(system.to_3d(lf)), centre, d, {}
+
     @classmethod
     def separable(
         cls, phi, cube_shape, *, views=None, raw_layout="interleaved", complementary=True, wavelengths=None

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from .. import _backend as B
 from ..codes import depth_codes
 from ..operators import Blur, Code, Shear, SumAxis
-from ._base import System, as_code, coded_shear_sum_matrix, count, shifts_for, wavelengths_for
+from ._base import System, as_code, coded_shear_sum_matrix, coded_state, count, shifts_for, wavelengths_for
 
 __all__ = ["CASSDIDFA"]
 
@@ -105,6 +105,44 @@ class CASSDIDFA(System):
     @property
     def n_depths(self) -> int:
         return self.codes.shape[2]
+
+    # ---- roles (systems/_roles.py) -------------------------------------------------------
+    name = "cassdi_dfa"
+    demo_scene = "motorcycle"
+    has_depth = True
+    example_options = {"n_depths": 3}
+    depth_kind = "planes"
+
+    def _state(self):
+        params, arrays = coded_state(self, code="codes")
+        if self.psfs is not None:
+            arrays["psfs"] = np.asarray(self.psfs)
+        return params, arrays
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["codes"], shifts=arrays["shifts"], psfs=arrays.get("psfs"),
+                   wavelengths=arrays["wavelengths"], **params)
+
+    def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
+        """Index of the depth plane holding most of each pixel's energy, ``argmax_z Σ_λ F`` (float)."""
+        x = np.asarray(B.to_numpy(cube), dtype=np.float64)
+        return np.argmax(x.sum(axis=2), axis=2).astype(np.float64)
+
+    def spectral_view(self, cube):
+        """The all-in-focus cube: the sum over depth planes."""
+        return np.asarray(B.to_numpy(cube), dtype=np.float64).sum(axis=3)
+
+    @classmethod
+    def _example(cls, scene, shape, wl, seed, shifts, n_depths):
+        from .. import scenes
+
+        reflectance = scenes.scene_cube(scene, shape, wl)
+        _, disp = scenes.motorcycle(shape, [550.0])
+        depth = scenes.depth_planes(disp, n_depths)
+        cube = scenes.depth_layers(reflectance, depth, n_depths)
+        system = cls.example(shape + (len(wl), n_depths), rng=seed, shifts=shifts, wavelengths=wl)
+        return system, cube, reflectance, depth, {}
 
     @classmethod
     def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, psf_size: int = 0, **overrides):

@@ -12,6 +12,7 @@ from ..noise import add_noise
 from ..operators import Code, Pad, Shear, Stack, SumAxis
 from ._base import (
     System,
+    coded_state,
     as_code,
     coded_shear_sum_matrix,
     count,
@@ -79,6 +80,17 @@ class SDCASSI(System):
     ((4, 5, 3), (4, 9))
     """
 
+    name = "sd_cassi"
+    demo_scene = "colorchecker"
+    example_options = {"code": None}
+
+    def _state(self):
+        return coded_state(self)
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
         nl = count(n_bands, "n_bands")
@@ -136,6 +148,15 @@ class DDCASSI(System):
     (4, 5, 3)
     """
 
+    name = "dd_cassi"
+
+    def _state(self):
+        return coded_state(self)
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
         nl = count(n_bands, "n_bands")
@@ -191,6 +212,39 @@ class DualCameraCASSI(System):
     >>> DualCameraCASSI(np.ones((4, 5)), n_bands=3).measurement_shape
     (4, 7, 2)
     """
+
+    name = "dual_camera_cassi"
+    example_options = {"code": None}
+
+    def _state(self):
+        return coded_state(self)
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+
+    @property
+    def frame_count(self) -> int:
+        return 2
+
+    def frames_to_measurement(self, frames):
+        """The CASSI frame ``(Nx, Ny + S)`` and the panchromatic one zero-padded to it → ``(Nx, Ny + S, 2)``.
+
+        Use :func:`tensor_cosdi.io.dual_camera_frames` to pad an ``(Nx, Ny)`` panchromatic frame.
+        """
+        from ._roles import stack_frames
+
+        a = stack_frames(frames)
+        if a.shape[2] != 2:
+            raise ValueError(f"DualCameraCASSI takes 2 frame(s) per measurement, got {a.shape[2]}")
+        nx, w = self.measurement_shape[:2]
+        ny = self.cube_shape[1]
+        if a.shape[:2] != (nx, w):
+            raise ValueError(f"DualCameraCASSI frames must be {nx}×{w} (CASSI) and {nx}×{ny} (panchromatic, "
+                             f"give it zero-padded to {nx}×{w} or use dual_camera_frames); got {a.shape[:2]}")
+        if np.any(a[:, ny:, 1] != 0):
+            raise ValueError(f"the panchromatic frame has non-zero columns beyond {ny}: not a {nx}×{ny} image")
+        return a.copy()
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2,))

@@ -9,7 +9,7 @@ import scipy.sparse as sp
 
 from ..codes import random_binary
 from ..operators import Code, Pad, Shear, SumAxis, weighted_sum
-from ._base import System, as_code, coded_shear_sum_matrix, count, shifts_for, wavelengths_for
+from ._base import System, as_code, coded_shear_sum_matrix, coded_state, count, shifts_for, wavelengths_for
 
 __all__ = ["CASSIVSI"]
 
@@ -65,6 +65,18 @@ class CASSIVSI(System):
     >>> vsi.measurement_shape, vsi.alpha_r
     ((4, 7), 0.3)
     """
+
+    name = "cassi_vsi"
+    demo_scene = "chelsea"
+    example_options = {"code": None}
+
+    def _state(self):
+        params, arrays = coded_state(self)
+        return {**params, "alpha_t": float(self.alpha_t), "beta": int(self.beta)}, arrays
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
 
     def __init__(self, code, *, n_bands, alpha_t=0.7, beta=None, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2,))

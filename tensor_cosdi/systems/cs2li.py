@@ -9,8 +9,10 @@ import tensorly as tl
 
 from .. import _backend as B
 from ..codes import colour_coded_aperture
+from ._roles import fringe_example, fringe_phase
 from ._base import (
     System,
+    coded_state,
     as_code,
     count,
     dual_disperser,
@@ -62,6 +64,32 @@ class CS2LI(System):
     >>> CS2LI(np.ones((4, 7)), n_bands=3, n_patterns=8).cube_shape
     (4, 5, 3, 8)
     """
+
+    name = "cs2li"
+    demo_scene = "coffee"
+    has_depth = True
+    example_options = {"n_steps": 4}
+    depth_kind = "phase"
+
+    def _state(self):
+        params, arrays = coded_state(self)
+        return {**params, "n_patterns": int(self.cube_shape[3])}, arrays
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+
+    def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
+        """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums (N-step PSA, ``K = n_steps``)."""
+        return fringe_phase(cube, n_steps)
+
+    def spectral_view(self, cube):
+        """The reflectance: the mean over the phase steps (fringe offset 1, Eq. 107)."""
+        return np.asarray(B.to_numpy(cube), dtype=np.float64).mean(axis=3)
+
+    @classmethod
+    def _example(cls, scene, shape, wl, seed, shifts, n_steps):
+        return fringe_example(cls, scene, shape, wl, seed, shifts, n_steps)
 
     def __init__(self, code, *, n_bands, n_patterns, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))

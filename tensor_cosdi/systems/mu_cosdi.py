@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 
+import numpy as np
+
+from .. import _backend as B
 from ..codes import random_binary
 from ..operators import LAYOUTS, LightFieldLayout
+from ._roles import fringe_example, fringe_phase, views_disparity
 from ._base import (
     System,
+    coded_state,
     as_code,
     count,
     dual_disperser,
@@ -69,6 +74,54 @@ class MuCoSDI(System):
     >>> MuCoSDI(np.ones((8, 11)), n_bands=4, modality="lf", views=(2, 2)).cube_shape
     (8, 8, 4)
     """
+
+    name = "mu_cosdi"
+    demo_scene = "rocket"
+    has_depth = True
+    example_options = {"n_steps": 4}
+
+    @property
+    def depth_kind(self):
+        if self.modality == "sl":
+            return "phase"
+        if self.modality == "lf":
+            return "disparity"
+        return None if self.depth_estimator is None else "estimator"
+
+    def _state(self):
+        params, arrays = coded_state(self)
+        params["modality"] = self.modality
+        if self.modality == "sl":
+            params["n_patterns"] = int(self.n_patterns)
+        elif self.modality == "lf":
+            params.update(views=list(self.views), raw_layout=self.raw_layout)
+        elif self.depth_estimator is not None:
+            raise ValueError("a Mu-CoSDI with a depth_estimator callable cannot be saved (code is not data); "
+                             "save it without one and pass the estimator again after loading")
+        return params, arrays
+
+    @classmethod
+    def _from_state(cls, params, arrays):
+        if "views" in params:
+            params["views"] = tuple(params["views"])
+        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+
+    def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
+        """``"sl"``: wrapped fringe phase per frequency; ``"lf"``: centre-view disparity; ``"monocular"``: the estimator."""
+        if self.modality == "sl":
+            return fringe_phase(cube, n_steps)
+        if self.modality == "lf":
+            return views_disparity(self.to_views(cube), max_disparity)
+        return None if self.depth_estimator is None else self.estimate_depth(cube)
+
+    def spectral_view(self, cube):
+        """``"sl"``: the mean over the phase steps (the reflectance); otherwise the cube."""
+        c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+        return c.mean(axis=3) if self.modality == "sl" else c
+
+    @classmethod
+    def _example(cls, scene, shape, wl, seed, shifts, n_steps):
+        return fringe_example(cls, scene, shape, wl, seed, shifts, n_steps)
 
     def __init__(self, code, *, n_bands, modality="sl", shifts=1, wavelengths=None, **modality_options):
         if modality not in MODALITIES:

@@ -22,32 +22,60 @@ from tensor_cosdi.operators import (
     vec,
     weighted_sum,
 )
+from tensor_cosdi.operators import TensorOperator
+from tensor_cosdi.operators.woodbury import Pattern, StructureError, check_structure
 from tensor_cosdi.testing import registry
 
 MUS = [1e-4, 1e-2, 1.0, 1e2, 1e4]
 NAMES = sorted(registry())
 
-EXPECTED = {
-    "sd_cassi": Diagonal,
-    "sd_cassi_step2": Diagonal,
-    "dd_cassi": Diagonal,
-    "dfa": Diagonal,
-    "cs2li": Diagonal,
-    "code": Diagonal,
-    "shear_per_band": Diagonal,
-    "lightfield_tiled_to_interleaved": Diagonal,
-    "scaled_difference": Diagonal,
-    "multishot_cassi": PixelBlocks,
+EXPECTED = {  # every registry entry (tests/operators: a new entry must state its structure)
+    "blur": type(None),
+    "blur_even": type(None),
     "c3slfi": PixelBlocks,
     "c3slfi_3d": PixelBlocks,
-    "replicate": PixelBlocks,
-    "mode_product_one": PixelBlocks,
-    "vsi": RowBanded,
-    "shear_fractional": RowBanded,
-    "sd_cassi_fractional": RowBanded,
-    "blur": type(None),
+    "code": Diagonal,
+    "code_axes": Diagonal,
+    "code_full": Diagonal,
+    "cs2li": Diagonal,
+    "dd_cassi": Diagonal,
+    "dfa": Diagonal,
     "dfa_psf": type(None),
+    "lightfield_interleaved": Diagonal,
+    "lightfield_tiled": Diagonal,
+    "lightfield_tiled_to_interleaved": Diagonal,
     "mode_product_all": type(None),
+    "mode_product_one": PixelBlocks,
+    "multishot_cassi": PixelBlocks,
+    "pad": Diagonal,
+    "replicate": PixelBlocks,
+    "scaled_difference": Diagonal,
+    "sd_cassi": Diagonal,
+    "sd_cassi_adjoint": type(None),
+    "sd_cassi_fractional": RowBanded,
+    "sd_cassi_step2": Diagonal,
+    "shear_axes": Diagonal,
+    "shear_fractional": RowBanded,
+    "shear_per_band": Diagonal,
+    "shear_step1": Diagonal,
+    "shear_step2": Diagonal,
+    "sum_axis": Diagonal,
+    "sum_axis0": Diagonal,
+    "system_c3slfi_3d": PixelBlocks,
+    "system_c3slfi_5d": PixelBlocks,
+    "system_c3slfi_separable": PixelBlocks,
+    "system_cassdi_dfa": Diagonal,
+    "system_cassdi_dfa_psf": type(None),
+    "system_cassi_vsi": RowBanded,
+    "system_cs2li": Diagonal,
+    "system_ddcassi": Diagonal,
+    "system_dual_camera": type(None),
+    "system_mu_cosdi_lf": Diagonal,
+    "system_mu_cosdi_sl": Diagonal,
+    "system_sdcassi": Diagonal,
+    "system_sdcassi_shots": PixelBlocks,
+    "transpose": Diagonal,
+    "vsi": RowBanded,
 }
 
 
@@ -70,11 +98,16 @@ def test_detected_structure(name):
 def test_gram_structure_equals_dense_product(name):
     op = registry()[name](np.random.default_rng(0))
     g = op.gram_dual()
-    if g is None:  # conjugate-gradient path, covered by the solve tests
-        assert EXPECTED.get(name, type(None)) is type(None), f"{name} lost its structure"
-        return
     M = dense(op)
-    np.testing.assert_allclose(g.to_dense(), M @ M.T, rtol=0, atol=1e-12)
+    gram = M @ M.T
+    if name not in EXPECTED:  # every registry entry states its structure (None included)
+        pytest.fail(f"{name}: add its expected A Aᵀ structure to EXPECTED")
+    if EXPECTED[name] is type(None):
+        # no structure claimed: A Aᵀ must really couple entries beyond a diagonal (CG is needed)
+        assert g is None
+        assert np.abs(gram - np.diag(np.diag(gram))).max() > 1e-6
+        return
+    np.testing.assert_allclose(g.to_dense(), gram, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -194,3 +227,41 @@ def test_band_structure_on_wide_rows():
     M = dense(op)
     np.testing.assert_allclose(gram.to_dense(), M @ M.T, atol=1e-12)
     assert tl.shape(op.solve_dual(g.standard_normal(op.output_shape), 1e-3)) == op.output_shape
+
+
+# ---- the runtime self-check of gram_dual (operators/woodbury.check_structure) ----------------
+class _Misrouted(TensorOperator):
+    """Wraps an operator and reports a wrong ``A Aᵀ`` pattern (a routing bug in a new primitive)."""
+
+    def __init__(self, op, pattern):
+        super().__init__(op.input_shape, op.output_shape)
+        self.op, self.pattern = op, pattern
+
+    def _forward(self, x):
+        return self.op._forward(x)
+
+    def _adjoint(self, y):
+        return self.op._adjoint(y)
+
+    def _gram_pattern(self):
+        return self.pattern
+
+
+@pytest.mark.parametrize(
+    "name, pattern",
+    [
+        ("mode_product_one", Pattern("diag")),  # truly K × K blocks, claimed diagonal
+        ("blur", Pattern("blocks", 2)),  # truly spatially coupled, claimed per-pixel blocks
+        ("vsi", Pattern("diag")),  # truly banded (b = 1 here), claimed diagonal
+        ("system_cassi_vsi", Pattern("band", 1, 1)),  # truly b = S, claimed b = 1
+    ],
+)
+def test_structure_self_check_fires_on_a_misrouted_operator(name, pattern):
+    op = _Misrouted(registry()[name](np.random.default_rng(0)), pattern)
+    with pytest.raises(StructureError, match="_Misrouted.*does not reproduce A\\(Aᵀ v\\)"):
+        op.gram_dual()
+
+
+def test_structure_self_check_passes_and_reports_the_error():
+    op = registry()["vsi"](np.random.default_rng(0))
+    assert check_structure(op, op.gram_dual()) < 1e-12

@@ -108,7 +108,7 @@ def test_subspace_panchromatic_is_far_better_than_the_flat_decimated_model():
     assert flat > 0.5 and sub < 0.3, (flat, sub)
 
 
-SYSTEM_CASES = ["sd_cassi", "dd_cassi", "dual_camera", "cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"]
+SYSTEM_CASES = ["sd_cassi", "dd_cassi", "dual_camera_cassi", "cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"]
 
 
 @pytest.fixture(scope="module")

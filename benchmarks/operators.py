@@ -32,7 +32,9 @@ import numpy as np
 
 from tensor_cosdi.operators import Code, Shear, SumAxis
 
-DEFAULT_MASK = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
+DEFAULT_MASK = (
+    Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
+)
 
 
 def median_seconds(fn, repeats):
@@ -51,7 +53,9 @@ def load_mask(path):
 
         return scipy.io.loadmat(path)["mask"].astype(np.float32), f"real mask {Path(path).name}"
     rng = np.random.default_rng(0)
-    return (rng.random((256, 256)) < 0.5).astype(np.float32), "random binary mask (real mask not found)"
+    return (rng.random((256, 256)) < 0.5).astype(
+        np.float32
+    ), "random binary mask (real mask not found)"
 
 
 def main(argv=None):
@@ -106,7 +110,9 @@ def main(argv=None):
         if layout == "C":
             entries.append(("forward, naive per-band loop", lambda: naive_forward(cube)))
         if layout != "F (λ, y, x)":
-            entries = [e for e in entries if "adjoint" not in e[0]]  # the adjoint ignores the cube layout
+            entries = [
+                e for e in entries if "adjoint" not in e[0]
+            ]  # the adjoint ignores the cube layout
         for name, fn in entries:
             t = median_seconds(fn, r)
             rows.append((layout, name, t * 1e3, t / t_copy, t_copy * 1e3))

@@ -1,4 +1,5 @@
-"""Reconstruction quality and speed: OTD vs WDCT-ADMM vs GAP-TV on every system (issue: reconstruction core).
+"""Reconstruction quality and speed: OTD vs WDCT-ADMM vs GAP-TV on every system (issue:
+reconstruction core).
 
 For each system at full size — spectral systems 256×256×28 (the real
 ``tsa_mask256.mat`` with a 2-px shift where a binary CASSI code is used:
@@ -35,8 +36,10 @@ from tensor_cosdi import studies
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_MASK = ROOT / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
 METHODS = ("otd", "wdct", "gap_tv")
-# Options per SNR, the same for every system (documented in the README): noisier data, a larger ℓ1 weight.
-# GAP-TV keeps its defaults (doubling its TV weight at 20 dB made it collapse to 9.8 dB on the ColorChecker).
+# Options per SNR, the same for every system (documented in the README): noisier data, a larger ℓ1
+# weight.
+# GAP-TV keeps its defaults (doubling its TV weight at 20 dB made it collapse to 9.8 dB on the
+# ColorChecker).
 OPTIONS = {20.0: {"otd": {"lam": 0.3}, "wdct": {"lam": 0.3}}, 30.0: {}}
 MASK_SYSTEMS = ("sd_cassi", "cassi_vsi")
 
@@ -70,13 +73,20 @@ def memory_probe(args, mask):
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return {"cube_bytes": cube_bytes, "peak_traced_bytes": peak, "peak_cubes": peak / cube_bytes,
-            "rss_growth_kib": rss1 - rss0}
+    return {
+        "cube_bytes": cube_bytes,
+        "peak_traced_bytes": peak,
+        "peak_cubes": peak / cube_bytes,
+        "rss_growth_kib": rss1 - rss0,
+    }
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--systems", default=",".join(s for s in studies.SYSTEMS if s not in ("dd_cassi", "dual_camera_cassi")))
+    ap.add_argument(
+        "--systems",
+        default=",".join(s for s in studies.SYSTEMS if s not in ("dd_cassi", "dual_camera_cassi")),
+    )
     ap.add_argument("--scenes", default="colorchecker,chelsea,coffee,astronaut")
     ap.add_argument("--snr", default="20,30")
     ap.add_argument("--methods", default=",".join(METHODS))
@@ -99,8 +109,12 @@ def main(argv=None):
     partial = out / f"{args.name}.partial.json"
     mem = None if args.no_memory else memory_probe(args, mask)
     if mem:
-        print(f"memory: OTD peak {mem['peak_traced_bytes'] / 2**20:.0f} MiB traced = {mem['peak_cubes']:.1f} cubes; "
-              f"RSS growth {mem['rss_growth_kib'] / 1024:.0f} MiB", flush=True)
+        print(
+            f"memory: OTD peak {mem['peak_traced_bytes'] / 2**20:.0f} MiB traced = "
+            f"{mem['peak_cubes']:.1f} cubes; "
+            f"RSS growth {mem['rss_growth_kib'] / 1024:.0f} MiB",
+            flush=True,
+        )
     for system in systems:
         for snr in snrs:
             for scene in scenes:
@@ -111,22 +125,42 @@ def main(argv=None):
                     t0 = time.perf_counter()
                     res = tc.reconstruct(p.system, g, m, **opts)
                     sec = time.perf_counter() - t0
-                    row = {"system": system, "scene": scene, "snr_db": snr, "method": m, "seconds": sec,
-                           "iterations": res.iterations, "cube": list(p.system.cube_shape), "options": opts,
-                           **studies.score(p, res.cube)}
+                    row = {
+                        "system": system,
+                        "scene": scene,
+                        "snr_db": snr,
+                        "method": m,
+                        "seconds": sec,
+                        "iterations": res.iterations,
+                        "cube": list(p.system.cube_shape),
+                        "options": opts,
+                        **studies.score(p, res.cube),
+                    }
                     runs.append(row)
-                    print(f"{system:10s} {scene:12s} {snr:4.0f} dB {m:7s} PSNR {row['psnr']:6.2f} SSIM {row['ssim']:.3f} "
-                          f"SAM {row['sam']:5.2f} {sec:7.2f} s", flush=True)
-                    # Every run is saved as it finishes, so a long benchmark that is interrupted keeps what it measured.
+                    print(
+                        f"{system:10s} {scene:12s} {snr:4.0f} dB {m:7s} PSNR {row['psnr']:6.2f} "
+                        f"SSIM {row['ssim']:.3f} "
+                        f"SAM {row['sam']:5.2f} {sec:7.2f} s",
+                        flush=True,
+                    )
+                    # Every run is saved as it finishes, so a long benchmark that is interrupted
+                    # keeps what it measured.
                     partial.write_text(json.dumps({"memory": mem, "runs": runs}, indent=1))
     table = summarise(runs, systems, snrs, methods)
-    header = (f"Machine: {platform.processor() or platform.machine()}, {platform.python_version()}, "
-              f"NumPy {np.__version__}; tensor_cosdi {tc.__version__}; float32; seed {args.seed}; "
-              f"scenes: {', '.join(scenes)}; mask: {'tsa_mask256.mat, 2 px/band' if mask is not None else 'seeded'}.\n")
+    header = (
+        f"Machine: {platform.processor() or platform.machine()}, {platform.python_version()}, "
+        f"NumPy {np.__version__}; tensor_cosdi {tc.__version__}; float32; seed {args.seed}; "
+        f"scenes: {', '.join(scenes)}; mask: "
+        f"{'tsa_mask256.mat, 2 px/band' if mask is not None else 'seeded'}.\n"
+    )
     if mem:
-        header += (f"\nMemory: one OTD reconstruction (SD-CASSI {args.size}×{args.size}×{args.bands} float32) peaks at "
-                   f"{mem['peak_traced_bytes'] / 2**20:.0f} MiB of NumPy allocations = {mem['peak_cubes']:.1f} cube sizes "
-                   f"(process RSS grew {mem['rss_growth_kib'] / 1024:.0f} MiB).\n")
+        header += (
+            f"\nMemory: one OTD reconstruction (SD-CASSI {args.size}×{args.size}×{args.bands} "
+            f"float32) peaks at "
+            f"{mem['peak_traced_bytes'] / 2**20:.0f} MiB of NumPy allocations = "
+            f"{mem['peak_cubes']:.1f} cube sizes "
+            f"(process RSS grew {mem['rss_growth_kib'] / 1024:.0f} MiB).\n"
+        )
     (out / f"{args.name}.md").write_text(header + "\n" + table + "\n")
     (out / f"{args.name}.json").write_text(json.dumps({"memory": mem, "runs": runs}, indent=1))
     partial.unlink(missing_ok=True)
@@ -135,24 +169,39 @@ def main(argv=None):
 
 
 def summarise(runs, systems, snrs, methods):
-    lines = ["| system | cube | SNR | method | PSNR dB | SSIM | SAM ° | median s |", "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| system | cube | SNR | method | PSNR dB | SSIM | SAM ° | median s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for system in systems:
         for snr in snrs:
             for m in methods:
-                rs = [r for r in runs if r["system"] == system and r["snr_db"] == snr and r["method"] == m]
+                rs = [
+                    r
+                    for r in runs
+                    if r["system"] == system and r["snr_db"] == snr and r["method"] == m
+                ]
                 if not rs:
                     continue
                 cube = "×".join(map(str, rs[0]["cube"]))
                 lines.append(
-                    f"| {system} | {cube} | {snr:g} dB | {m} | {np.mean([r['psnr'] for r in rs]):.2f} | "
-                    f"{np.mean([r['ssim'] for r in rs]):.3f} | {np.mean([r['sam'] for r in rs]):.2f} | "
+                    f"| {system} | {cube} | {snr:g} dB | {m} | "
+                    f"{np.mean([r['psnr'] for r in rs]):.2f} | "
+                    f"{np.mean([r['ssim'] for r in rs]):.3f} | "
+                    f"{np.mean([r['sam'] for r in rs]):.2f} | "
                     f"{np.median([r['seconds'] for r in rs]):.2f} |"
                 )
-    sd = {m: [r["seconds"] for r in runs if r["system"] == "sd_cassi" and r["method"] == m] for m in methods}
+    sd = {
+        m: [r["seconds"] for r in runs if r["system"] == "sd_cassi" and r["method"] == m]
+        for m in methods
+    }
     if sd.get("otd") and sd.get("gap_tv"):
         lines.append("")
-        lines.append(f"SD-CASSI: OTD median {np.median(sd['otd']):.2f} s, GAP-TV median {np.median(sd['gap_tv']):.2f} s, "
-                     f"ratio {np.median(sd['gap_tv']) / np.median(sd['otd']):.1f}× (same run).")
+        lines.append(
+            f"SD-CASSI: OTD median {np.median(sd['otd']):.2f} s, GAP-TV median "
+            f"{np.median(sd['gap_tv']):.2f} s, "
+            f"ratio {np.median(sd['gap_tv']) / np.median(sd['otd']):.1f}× (same run)."
+        )
     return "\n".join(lines)
 
 

@@ -1,4 +1,5 @@
-"""The thesis' design findings, reproduced in spirit (issue: optics, depth and the thesis' algorithms).
+"""The thesis' design findings, reproduced in spirit (issue: optics, depth and the thesis'
+algorithms).
 
 1. CASSI-VSI (Sec. 3.3): the combined error of Eq. 49 over the beam-splitting
    ratio αT ∈ {0.1 … 1.0} (best expected near 0.7), and VSI (αT = 0.7) against
@@ -13,7 +14,8 @@
    unwrapping assumed for both, so only the reconstruction is compared);
    depth PSNR uses the true height's range.
 
-    python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--out benchmarks/results]
+    python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--out
+    benchmarks/results]
 
 Writes ``thesis_findings.md`` / ``.json``; asserts nothing.
 """
@@ -36,8 +38,12 @@ SCENES = ("chelsea", "coffee", "astronaut")
 
 
 def _scores(truth, est):
-    return {"psnr": metrics.psnr(truth, est), "ssim": metrics.ssim(truth, est), "rmse": metrics.rmse(truth, est),
-            "sam": metrics.sam(truth, est)}
+    return {
+        "psnr": metrics.psnr(truth, est),
+        "ssim": metrics.ssim(truth, est),
+        "rmse": metrics.rmse(truth, est),
+        "sam": metrics.sam(truth, est),
+    }
 
 
 def vsi_study(args, log):
@@ -49,34 +55,63 @@ def vsi_study(args, log):
         cube = scenes.photo(scene, (args.size, args.size), wl)
         sd = systems.SDCASSI(code, n_bands=args.bands, shifts=1, wavelengths=wl)
         clean_sd = sd.forward(cube)
-        sigma = np.sqrt(np.mean(clean_sd**2) / 10 ** (args.snr / 10))  # equal light: one absolute noise level
+        sigma = np.sqrt(
+            np.mean(clean_sd**2) / 10 ** (args.snr / 10)
+        )  # equal light: one absolute noise level
         noise = np.random.default_rng(args.seed + 1).standard_normal(clean_sd.shape) * sigma
         res = tc.reconstruct(sd, clean_sd + noise, args.method)
-        rows.append({"scene": scene, "system": "sd_cassi", "alpha_t": None, **_scores(cube, res.cube)})
+        rows.append(
+            {"scene": scene, "system": "sd_cassi", "alpha_t": None, **_scores(cube, res.cube)}
+        )
         for a in alphas:
-            vsi = systems.CASSIVSI(code, n_bands=args.bands, alpha_t=float(a), shifts=1, wavelengths=wl)
+            vsi = systems.CASSIVSI(
+                code, n_bands=args.bands, alpha_t=float(a), shifts=1, wavelengths=wl
+            )
             g = vsi.forward(cube) + noise
             res = tc.reconstruct(vsi, g, args.method)
-            rows.append({"scene": scene, "system": "cassi_vsi", "alpha_t": float(a), **_scores(cube, res.cube)})
+            rows.append(
+                {
+                    "scene": scene,
+                    "system": "cassi_vsi",
+                    "alpha_t": float(a),
+                    **_scores(cube, res.cube),
+                }
+            )
             log(f"VSI {scene:10s} αT={a:.1f} PSNR {rows[-1]['psnr']:.2f}")
     vs = [r for r in rows if r["system"] == "cassi_vsi"]
-    arr = {k: np.array([[r[k] for r in vs if r["scene"] == s] for s in SCENES]) for k in ("psnr", "ssim", "rmse", "sam")}
+    arr = {
+        k: np.array([[r[k] for r in vs if r["scene"] == s] for s in SCENES])
+        for k in ("psnr", "ssim", "rmse", "sam")
+    }
     comb = metrics.combined_error(arr["psnr"], arr["ssim"], arr["rmse"], arr["sam"])
-    lines = ["| αT | " + " | ".join(f"{a:.1f}" for a in alphas) + " |", "|---" * (len(alphas) + 1) + "|",
-             "| mean PSNR dB | " + " | ".join(f"{v:.2f}" for v in arr["psnr"].mean(0)) + " |",
-             "| combined error % (Eq. 49) | " + " | ".join(f"{v:.1f}" for v in comb) + " |"]
+    lines = [
+        "| αT | " + " | ".join(f"{a:.1f}" for a in alphas) + " |",
+        "|---" * (len(alphas) + 1) + "|",
+        "| mean PSNR dB | " + " | ".join(f"{v:.2f}" for v in arr["psnr"].mean(0)) + " |",
+        "| combined error % (Eq. 49) | " + " | ".join(f"{v:.1f}" for v in comb) + " |",
+    ]
     sd_rows = [r for r in rows if r["system"] == "sd_cassi"]
     v07 = [r for r in vs if r["alpha_t"] == 0.7]
     summary = {
-        "best_alpha_t": float(alphas[int(np.argmin(comb))]), "combined": comb.tolist(),
-        "sd_cassi": {k: float(np.mean([r[k] for r in sd_rows])) for k in ("psnr", "ssim", "rmse", "sam")},
-        "vsi_0.7": {k: float(np.mean([r[k] for r in v07])) for k in ("psnr", "ssim", "rmse", "sam")},
+        "best_alpha_t": float(alphas[int(np.argmin(comb))]),
+        "combined": comb.tolist(),
+        "sd_cassi": {
+            k: float(np.mean([r[k] for r in sd_rows])) for k in ("psnr", "ssim", "rmse", "sam")
+        },
+        "vsi_0.7": {
+            k: float(np.mean([r[k] for r in v07])) for k in ("psnr", "ssim", "rmse", "sam")
+        },
     }
     lines.append("")
-    lines.append("Equal light, same code, same noise: SD-CASSI PSNR {psnr:.2f} dB / SSIM {ssim:.3f} / RMSE {rmse:.4f} / "
-                 "SAM {sam:.1f}°".format(**summary["sd_cassi"]))
-    lines.append("CASSI-VSI αT = 0.7: PSNR {psnr:.2f} dB / SSIM {ssim:.3f} / RMSE {rmse:.4f} / SAM {sam:.1f}°".format(
-        **summary["vsi_0.7"]))
+    lines.append(
+        "Equal light, same code, same noise: SD-CASSI PSNR {psnr:.2f} dB / SSIM {ssim:.3f} / RMSE "
+        "{rmse:.4f} / "
+        "SAM {sam:.1f}°".format(**summary["sd_cassi"])
+    )
+    lines.append(
+        "CASSI-VSI αT = 0.7: PSNR {psnr:.2f} dB / SSIM {ssim:.3f} / RMSE {rmse:.4f} / SAM "
+        "{sam:.1f}°".format(**summary["vsi_0.7"])
+    )
     return "\n".join(lines), {"rows": rows, **summary}
 
 
@@ -99,14 +134,26 @@ def dfa_study(args, log):
             t0 = time.perf_counter()
             res = tc.reconstruct(dfa, g, "dfa")
             acc = float(np.mean(np.asarray(res.depth) == planes))
-            rows.append({"scene": scene, "variant": name, "depth_accuracy": acc, "seconds": time.perf_counter() - t0,
-                         **_scores(cube.reshape(args.size, args.size, -1), np.asarray(res.cube).reshape(args.size, args.size, -1))})
+            rows.append(
+                {
+                    "scene": scene,
+                    "variant": name,
+                    "depth_accuracy": acc,
+                    "seconds": time.perf_counter() - t0,
+                    **_scores(
+                        cube.reshape(args.size, args.size, -1),
+                        np.asarray(res.cube).reshape(args.size, args.size, -1),
+                    ),
+                }
+            )
             log(f"DFA {scene:10s} {name:36s} depth acc {acc:.3f} PSNR {rows[-1]['psnr']:.2f}")
     lines = ["| PSFs | depth-plane accuracy | PSNR dB (4-D cube) | SSIM |", "|---|---|---|---|"]
     for name in variants:
         rs = [r for r in rows if r["variant"] == name]
-        lines.append(f"| {name} | {np.mean([r['depth_accuracy'] for r in rs]):.3f} | "
-                     f"{np.mean([r['psnr'] for r in rs]):.2f} | {np.mean([r['ssim'] for r in rs]):.3f} |")
+        lines.append(
+            f"| {name} | {np.mean([r['depth_accuracy'] for r in rs]):.3f} | "
+            f"{np.mean([r['psnr'] for r in rs]):.2f} | {np.mean([r['ssim'] for r in rs]):.3f} |"
+        )
     return "\n".join(lines), {"rows": rows}
 
 
@@ -115,7 +162,9 @@ def cs2li_study(args, log):
     K = 4
     rows = []
     for scene in SCENES:
-        sl = scenes.structured_light((args.size, args.size), wl, frequencies=(4.0,), photo_name=scene, rng=args.seed)
+        sl = scenes.structured_light(
+            (args.size, args.size), wl, frequencies=(4.0,), photo_name=scene, rng=args.seed
+        )
         cube = np.asarray(systems.fringe_cube(sl.reflectance, sl.phase, n_steps=K, amplitude=0.5))
         code = tc.codes.random_binary((args.size, args.size + args.bands - 1), rng=args.seed)
         cs = systems.CS2LI(code, n_bands=args.bands, n_patterns=K, shifts=1, wavelengths=wl)
@@ -135,17 +184,29 @@ def cs2li_study(args, log):
             phi = depth.wrapped_phase(est.sum(axis=2))
             h = sl.height + depth.wrap(phi - sl.phase[..., 0]) / sl.phase_per_height
             rmse_h = float(np.sqrt(np.mean((h - sl.height) ** 2)))
-            rows.append({"scene": scene, "method": name, "height_rmse": rmse_h,
-                         "depth_psnr": float(20 * np.log10(hmax / rmse_h)),
-                         "phase_mae": float(np.abs(depth.wrap(phi - sl.phase[..., 0])).mean()),
-                         "cube_psnr": metrics.psnr(cube.reshape(args.size, args.size, -1), est.reshape(args.size, args.size, -1)),
-                         "seconds": time.perf_counter() - t0})
+            rows.append(
+                {
+                    "scene": scene,
+                    "method": name,
+                    "height_rmse": rmse_h,
+                    "depth_psnr": float(20 * np.log10(hmax / rmse_h)),
+                    "phase_mae": float(np.abs(depth.wrap(phi - sl.phase[..., 0])).mean()),
+                    "cube_psnr": metrics.psnr(
+                        cube.reshape(args.size, args.size, -1),
+                        est.reshape(args.size, args.size, -1),
+                    ),
+                    "seconds": time.perf_counter() - t0,
+                }
+            )
             log(f"CS2LI {scene:10s} {name:32s} depth PSNR {rows[-1]['depth_psnr']:.2f}")
     lines = ["| method | depth PSNR dB | phase MAE rad | cube PSNR dB |", "|---|---|---|---|"]
     for name in ("CS2LI + OTD", "CS2LI + PnP-ADMM", "SL + SD-CASSI (OTD per pattern)"):
         rs = [r for r in rows if r["method"] == name]
-        lines.append(f"| {name} | {np.mean([r['depth_psnr'] for r in rs]):.2f} | "
-                     f"{np.mean([r['phase_mae'] for r in rs]):.3f} | {np.mean([r['cube_psnr'] for r in rs]):.2f} |")
+        lines.append(
+            f"| {name} | {np.mean([r['depth_psnr'] for r in rs]):.2f} | "
+            f"{np.mean([r['phase_mae'] for r in rs]):.3f} | "
+            f"{np.mean([r['cube_psnr'] for r in rs]):.2f} |"
+        )
     return "\n".join(lines), {"rows": rows}
 
 
@@ -155,17 +216,25 @@ def main(argv=None):
     ap.add_argument("--bands", type=int, default=16)
     ap.add_argument("--snr", type=float, default=30.0)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--method", default="otd", help="reconstruction of the VSI study (otd or avsi, …)")
+    ap.add_argument(
+        "--method", default="otd", help="reconstruction of the VSI study (otd or avsi, …)"
+    )
     ap.add_argument("--studies", default="vsi,dfa,cs2li")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    funcs = {"vsi": ("CASSI-VSI: beam-splitting ratio and equal-light comparison (Sec. 3.3)", vsi_study),
-             "dfa": ("CASSDI-DFA: astigmatism vs pure defocus (Sec. 4.3)", dfa_study),
-             "cs2li": ("CS2LI vs structured light + SD-CASSI (Sec. 6.3)", cs2li_study)}
-    text = [f"Machine: {platform.machine()}, Python {platform.python_version()}, tensor_cosdi {tc.__version__}; "
-            f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seed {args.seed}, scenes {', '.join(SCENES)}.\n"]
+    funcs = {
+        "vsi": ("CASSI-VSI: beam-splitting ratio and equal-light comparison (Sec. 3.3)", vsi_study),
+        "dfa": ("CASSDI-DFA: astigmatism vs pure defocus (Sec. 4.3)", dfa_study),
+        "cs2li": ("CS2LI vs structured light + SD-CASSI (Sec. 6.3)", cs2li_study),
+    }
+    text = [
+        f"Machine: {platform.machine()}, Python {platform.python_version()}, tensor_cosdi "
+        f"{tc.__version__}; "
+        f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seed {args.seed}, scenes "
+        f"{', '.join(SCENES)}.\n"
+    ]
     data = {}
     for key in args.studies.split(","):
         title, fn = funcs[key]

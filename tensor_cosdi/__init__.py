@@ -6,7 +6,22 @@ docs for the systems and the operator protocol.
 
 from importlib.metadata import PackageNotFoundError, version
 
-from . import bases, codes, colour, depth, io, metrics, noise, operators, optics, scenes, solvers, studies, systems, testing
+from . import (
+    bases,
+    codes,
+    colour,
+    depth,
+    io,
+    metrics,
+    noise,
+    operators,
+    optics,
+    scenes,
+    solvers,
+    studies,
+    systems,
+    testing,
+)
 from .operators import TensorOperator
 from .solvers import Result, reconstruct
 
@@ -15,4 +30,23 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0+unknown"
 
-__all__ = ["optics", "depth", "io", "operators", "systems", "codes", "colour", "bases", "testing", "metrics", "noise", "scenes", "studies", "TensorOperator", "reconstruct", "Result", "solvers", "__version__"]
+__all__ = [
+    "optics",
+    "depth",
+    "io",
+    "operators",
+    "systems",
+    "codes",
+    "colour",
+    "bases",
+    "testing",
+    "metrics",
+    "noise",
+    "scenes",
+    "studies",
+    "TensorOperator",
+    "reconstruct",
+    "Result",
+    "solvers",
+    "__version__",
+]

@@ -70,7 +70,8 @@ class Registry(Mapping):
             )
         if name in self._items and not replace:
             raise ValueError(
-                f"a {self.kind} named {name!r} is already registered; pass replace=True to replace it"
+                f"a {self.kind} named {name!r} is already registered; pass replace=True to replace "
+                f"it"
             )
         self._items[name] = entry
         if builtin:

@@ -51,7 +51,11 @@ def _size(n) -> int:
 def is_orthonormal(psi, *, atol: float = 1e-10) -> bool:
     """True when ``psi`` is square with ``ΨᵀΨ = I`` within ``atol``."""
     m = np.asarray(B.to_numpy(psi), dtype=np.float64)
-    return bool(m.ndim == 2 and m.shape[0] == m.shape[1] and np.abs(m.T @ m - np.eye(m.shape[0])).max() <= atol)
+    return bool(
+        m.ndim == 2
+        and m.shape[0] == m.shape[1]
+        and np.abs(m.T @ m - np.eye(m.shape[0])).max() <= atol
+    )
 
 
 def _polish(m: np.ndarray) -> np.ndarray:
@@ -120,18 +124,25 @@ def wavelet(n: int, name: str = "sym8", *, level: int | None = None) -> np.ndarr
     elif isinstance(level, bool) or not isinstance(level, numbers.Integral) or level < 0:
         raise ValueError(f"level must be an integer ≥ 0, got {level!r}")
     if n % 2**level:
-        raise ValueError(f"a periodised {level}-level transform needs n divisible by {2**level}, got n = {n}")
+        raise ValueError(
+            f"a periodised {level}-level transform needs n divisible by {2**level}, got n = {n}"
+        )
     if level == 0:
         return np.eye(n)
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # deep levels on short signals: boundary wrap-around is intended
-        cols = [np.concatenate(pywt.wavedec(e, w, mode="periodization", level=level)) for e in np.eye(n)]
+        warnings.simplefilter(
+            "ignore"
+        )  # deep levels on short signals: boundary wrap-around is intended
+        cols = [
+            np.concatenate(pywt.wavedec(e, w, mode="periodization", level=level)) for e in np.eye(n)
+        ]
     analysis = np.stack(cols, axis=1)  # coefficients = analysis @ x
     return _polish(analysis.T)
 
 
 def svd_basis(matrix) -> np.ndarray:
-    """Complete orthonormal basis of left singular vectors of ``matrix`` (``m × k``), strongest first.
+    """Complete orthonormal basis of left singular vectors of ``matrix`` (``m × k``), strongest
+    first.
 
     Learned spatial bases of SPEC §5 step 2: ``Ψ1, Ψ2`` from the panchromatic
     image ``Z`` are ``svd_basis(Z)`` and ``svd_basis(Z.T)``.  Computed from the
@@ -181,7 +192,8 @@ def _memory_view(x):
 
 
 class ModeTransform:
-    """An orthonormal ``n × n`` transform along one axis: ``analysis`` applies ``Ψᵀ``, ``synthesis`` ``Ψ``.
+    """An orthonormal ``n × n`` transform along one axis: ``analysis`` applies ``Ψᵀ``, ``synthesis``
+    ``Ψ``.
 
     Subclasses implement ``_analysis(x, axis)`` / ``_synthesis(x, axis)`` on
     C-contiguous NumPy arrays (returning C-contiguous arrays of the same
@@ -206,7 +218,12 @@ class ModeTransform:
 
     def _typed(self, m, dtype):
         cache = self.__dict__.setdefault("_typed_cache", {})
-        key = (id(m) if m is not self.matrix else "m", m.shape, np.dtype(dtype).str, m is self.matrix)
+        key = (
+            id(m) if m is not self.matrix else "m",
+            m.shape,
+            np.dtype(dtype).str,
+            m is self.matrix,
+        )
         hit = cache.get(key)
         if hit is None:
             hit = cache[key] = np.ascontiguousarray(m, dtype=dtype)
@@ -217,9 +234,10 @@ class ModeTransform:
 
 
 def _dense_along(x: np.ndarray, m: np.ndarray, axis: int) -> np.ndarray:
-    """``y = x ×_axis m`` (``y[…, i, …] = Σ_j m[i, j] x[…, j, …]``) as one (batched) GEMM, C order kept."""
+    """``y = x ×_axis m`` (``y[…, i, …] = Σ_j m[i, j] x[…, j, …]``) as one (batched) GEMM, C order
+    kept."""
     n = x.shape[axis]
-    pre, post = int(np.prod(x.shape[:axis])), int(np.prod(x.shape[axis + 1:]))
+    pre, post = int(np.prod(x.shape[:axis])), int(np.prod(x.shape[axis + 1 :]))
     if post == 1:
         y = x.reshape(pre, n) @ m.T
     elif pre == 1:
@@ -256,7 +274,8 @@ class Dense(ModeTransform):
 
 
 class DCT(ModeTransform):
-    """Orthonormal DCT-II along an axis by ``scipy.fft`` (``O(n log n)``; :func:`dct` is its matrix)."""
+    """Orthonormal DCT-II along an axis by ``scipy.fft`` (``O(n log n)``; :func:`dct` is its
+    matrix)."""
 
     kind = "dct"
 
@@ -272,7 +291,8 @@ class DCT(ModeTransform):
 
 
 class Wavelet(ModeTransform):
-    """Periodised orthogonal DWT along an axis (PyWavelets builds it; :func:`wavelet` is its matrix).
+    """Periodised orthogonal DWT along an axis (PyWavelets builds it; :func:`wavelet` is its
+    matrix).
 
     Applied as one GEMM with the dense matrix, not by ``pywt.wavedec`` along
     the axis: measured on a 28-band float32 cube (2 cores, OpenBLAS), the
@@ -297,7 +317,8 @@ class Wavelet(ModeTransform):
 
 
 def as_transform(n: int, spec) -> ModeTransform:
-    """A :class:`ModeTransform` from a transform, a matrix, or a name ``"dct"``, ``"identity"``, a wavelet."""
+    """A :class:`ModeTransform` from a transform, a matrix, or a name ``"dct"``, ``"identity"``, a
+    wavelet."""
     if isinstance(spec, ModeTransform):
         if spec.n != n:
             raise ValueError(f"transform of size {spec.n} given for a mode of size {n}")
@@ -350,10 +371,14 @@ class KroneckerBasis:
             if not isinstance(m, (ModeTransform, str)):
                 m = np.asarray(B.to_numpy(m), dtype=np.float64)
                 if m.shape != (n, n):
-                    raise ValueError(f"basis of mode {mode} must be {n} × {n} (square), got {m.shape}")
+                    raise ValueError(
+                        f"basis of mode {mode} must be {n} × {n} (square), got {m.shape}"
+                    )
                 if not is_orthonormal(m):
                     err = np.abs(m.T @ m - np.eye(n)).max()
-                    raise ValueError(f"basis of mode {mode} is not orthonormal: max |ΨᵀΨ − I| = {err:.2e}")
+                    raise ValueError(
+                        f"basis of mode {mode} is not orthonormal: max |ΨᵀΨ − I| = {err:.2e}"
+                    )
             trans[mode] = as_transform(n, m)
         self.transforms = trans
         self._op = None

@@ -41,147 +41,14 @@ import numpy as np
 
 __all__ = ["main", "build_parser"]
 
-def _demo_cases():
-    """``(system, scene, options)`` of every registered system with a ``demo_scene`` (registry order)."""
-    from .systems import REGISTRY
 
-    return tuple((name, cls.demo_scene, dict(cls.demo_options)) for name, cls in REGISTRY.items() if cls.demo_scene)
-
-
-DEMO_METHODS = ("otd", "gap_tv")
+from .demo import demo_cases, run_demo  # noqa: E402  (the demo sub-command)
 
 
 def __getattr__(name):
     if name == "DEMO_CASES":  # built from the registry on first use
-        return _demo_cases()
+        return demo_cases()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def _to_uint8(img: np.ndarray, lo=None, hi=None) -> np.ndarray:
-    img = np.asarray(img, dtype=np.float64)
-    lo = img.min() if lo is None else lo
-    hi = img.max() if hi is None else hi
-    scaled = np.zeros_like(img) if hi <= lo else np.clip((img - lo) / (hi - lo), 0.0, 1.0)
-    return (255 * scaled).round().astype(np.uint8)
-
-
-def _measurement_image(g: np.ndarray) -> np.ndarray:
-    g = np.asarray(g, dtype=np.float64)
-    if g.ndim == 3:  # frames / snapshots side by side
-        g = np.concatenate(list(np.moveaxis(g, -1, 0)), axis=1)
-    return _to_uint8(g)
-
-
-def _has_depth(system: str) -> bool:
-    from .systems import REGISTRY
-
-    return REGISTRY[system].has_depth
-
-
-def _demo_files(out: Path, cases) -> list[Path]:
-    files = []
-    for system, _, _ in cases:
-        parts = ("measurement", "truth", *DEMO_METHODS, "error_otd") + (("depth",) if _has_depth(system) else ())
-        files += [out / f"{system}_{part}.png" for part in parts]
-    return files
-
-
-def _depth_text(scores: dict) -> str:
-    if "planes_right" in scores:
-        return f"{scores['planes_right']:.0%} planes"
-    if "disparity_mae" in scores:
-        return f"{scores['disparity_mae']:.2f} px"
-    if "phase_mae" in scores:
-        return f"{scores['phase_mae']:.2f} rad"
-    return "-"
-
-
-def _depth_image(truth, est, is_phase: bool) -> np.ndarray:
-    """Truth | estimate side by side on one scale (wrapped phase: [−π, π])."""
-    t = np.asarray(truth, dtype=np.float64)
-    e = np.asarray(est, dtype=np.float64)
-    if is_phase:
-        from .depth import wrap
-
-        t, e, lo, hi = wrap(t[..., 0]), e[..., 0], -np.pi, np.pi
-    else:
-        lo, hi = float(min(t.min(), e.min())), float(max(t.max(), e.max()))
-    gap = np.full((t.shape[0], 2), lo)
-    return _to_uint8(np.concatenate([t, gap, e], axis=1), lo, hi)
-
-
-def run_demo(args) -> int:
-    from skimage import io
-    from tqdm import tqdm
-
-    from .colour import to_srgb
-    from .studies import compare, make_problem, score_depth, spectral_view
-
-    if args.size % 4:
-        raise ValueError(f"--size must be a multiple of 4 (the light field has 4×4 views), got {args.size}")
-    out = Path(args.out)
-    cases = _demo_cases()
-    targets = _demo_files(out, cases)
-    existing = [str(t) for t in targets if t.exists()]
-    if existing and not args.force:  # refuse before computing or writing anything
-        raise FileExistsError(f"{len(existing)} demo file(s) exist, e.g. {existing[0]}; pass --force to overwrite")
-    print(
-        f"tensor_cosdi demo — {args.size}×{args.size} scenes, {args.bands} bands 450–650 nm, "
-        f"SNR {args.snr_db:g} dB, seed {args.seed}; methods: {', '.join(DEMO_METHODS)}"
-    )
-    rows = []
-    images = {}
-    t_all = time.perf_counter()
-    bar = tqdm(total=len(cases) * len(DEMO_METHODS), desc="reconstructing", disable=args.quiet)
-    for system, scene, extra in cases:
-        problem = make_problem(system, scene, shape=(args.size, args.size), n_bands=args.bands,
-                               snr_db=args.snr_db, rng=args.seed, **extra)
-        results = []
-        for method in DEMO_METHODS:
-            results += compare(problem, [method])
-            bar.update(1)
-        for r in results:
-            r["depth"] = score_depth(problem, r["result"].depth) if problem.system.depth_kind else {}
-        rows += [(system, scene, r) for r in results]
-        if problem.system.depth_kind:
-            is_phase = "phase" in problem.extras
-            truth_depth = problem.extras["phase"] if is_phase else problem.depth
-            images[f"{system}_depth.png"] = _depth_image(truth_depth, results[0]["result"].depth, is_phase)
-        wl = problem.wavelengths
-        truth = spectral_view(problem, problem.cube)
-        peak = float(truth.max())
-        images[f"{system}_measurement.png"] = _measurement_image(problem.measurement)
-        images[f"{system}_truth.png"] = _to_uint8(to_srgb(truth / peak, wl), 0.0, 1.0)
-        for r in results:
-            est = spectral_view(problem, r["result"].cube)
-            images[f"{system}_{r['method']}.png"] = _to_uint8(to_srgb(np.clip(est / peak, 0, None), wl), 0.0, 1.0)
-        otd = spectral_view(problem, results[0]["result"].cube)
-        err = np.sqrt(np.mean((otd - truth) ** 2, axis=2))
-        images[f"{system}_error_otd.png"] = _to_uint8(err, 0.0, 0.25 * peak)
-    bar.close()
-    out.mkdir(parents=True, exist_ok=True)
-    for name, img in images.items():
-        io.imsave(str(out / name), img, check_contrast=False)
-
-    head = (f"{'system':12s} {'scene':13s} {'cube':>16s} {'method':>7s} {'PSNR dB':>8s} {'SSIM':>6s} {'SAM °':>6s} "
-            f"{'seconds':>8s}  {'depth error':>11s}")
-    print(head)
-    print("-" * len(head))
-    shapes = {}
-    for system, scene, r in rows:
-        shape = shapes.setdefault(system, "×".join(map(str, r["result"].cube.shape)))
-        print(
-            f"{system:12s} {scene:13s} {shape:>16s} {r['method']:>7s} {r['psnr']:8.2f} {r['ssim']:6.3f} "
-            f"{r['sam']:6.2f} {r['seconds']:8.2f}  {_depth_text(r['depth']):>11s}"
-        )
-    print(
-        "PSNR/SSIM per band (extra axes folded into bands), data range = the truth's peak; SAM in degrees. "
-        "Depth error (Result.depth): DFA depth planes right, C3SLFI disparity error (px per view), "
-        f"CS2LI/Mu-CoSDI wrapped fringe-phase error. Total {time.perf_counter() - t_all:.1f} s."
-    )
-    print(f"figures written to {out.resolve()} (measurement, truth, otd, gap_tv, error_otd per system; "
-          "depth: truth | OTD)")
-    return 0
 
 
 def _option_value(text: str):
@@ -205,13 +72,20 @@ def run_plan(args) -> int:
         plan = AcquisitionPlan.patterns(args.count, suffix=args.suffix)
     else:
         if not args.zernike:
-            raise ValueError("focal-sweep needs --zernike J:A[,J:A…] per step, e.g. --zernike 4:-1,6:0.9 --zernike 4:0,6:0.9")
+            raise ValueError(
+                "focal-sweep needs --zernike J:A[,J:A…] per step, e.g. --zernike 4:-1,6:0.9 "
+                "--zernike 4:0,6:0.9"
+            )
         steps = []
         for spec in args.zernike:
             try:
-                steps.append({int(j): float(a) for j, a in (item.split(":") for item in spec.split(","))})
+                steps.append(
+                    {int(j): float(a) for j, a in (item.split(":") for item in spec.split(","))}
+                )
             except ValueError:
-                raise ValueError(f"--zernike {spec!r}: expected J:A pairs separated by commas, e.g. 4:0.5,6:0.9") from None
+                raise ValueError(
+                    f"--zernike {spec!r}: expected J:A pairs separated by commas, e.g. 4:0.5,6:0.9"
+                ) from None
         if args.count != len(steps):
             raise ValueError(f"count {args.count} does not match the {len(steps)} --zernike steps")
         plan = AcquisitionPlan.focal_sweep(steps, suffix=args.suffix)
@@ -225,7 +99,9 @@ def run_acquire(args) -> int:
 
     plan = AcquisitionPlan.load(args.plan)
     camera = FolderCamera(args.frames_dir, timeout=args.frame_timeout)
-    with SerialDevice(args.port, baudrate=args.baudrate, timeout=args.timeout, retries=args.retries) as dev:
+    with SerialDevice(
+        args.port, baudrate=args.baudrate, timeout=args.timeout, retries=args.retries
+    ) as dev:
         acq = Acquisition(plan, dev, args.log, camera)
         before = len(plan.steps) - len(acq.remaining())
         try:
@@ -233,7 +109,10 @@ def run_acquire(args) -> int:
         except DeviceError as e:
             print(f"tensor-cosdi acquire: device error: {e}", file=sys.stderr)
             return 3
-    print(f"{len(written)} frame(s) acquired ({before} already in {args.log}); {len(plan.steps)} of {len(plan.steps)} done")
+    print(
+        f"{len(written)} frame(s) acquired ({before} already in {args.log}); {len(plan.steps)} of "
+        f"{len(plan.steps)} done"
+    )
     return 0
 
 
@@ -250,10 +129,22 @@ def run_reconstruct(args) -> int:
     defaults = _method_defaults(args.method)  # an unknown method fails before any file is read
     cal = load_bundle(args.calibration)
     if cal.system is None:
-        raise ValueError(f"{args.calibration}: the calibration bundle holds no system; save one with save_bundle(system=…)")
-    refs = {Path(x).resolve() for x in (args.dark, args.flat) if x}  # a dark/flat kept beside the frames is not a frame
-    sources = [p for src in args.frames for p in frame_paths(src, pattern=args.pattern) if p.resolve() not in refs]
-    frames = load_frames(sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning)
+        raise ValueError(
+            f"{args.calibration}: the calibration bundle holds no system; save one with "
+            f"save_bundle(system=…)"
+        )
+    refs = {
+        Path(x).resolve() for x in (args.dark, args.flat) if x
+    }  # a dark/flat kept beside the frames is not a frame
+    sources = [
+        p
+        for src in args.frames
+        for p in frame_paths(src, pattern=args.pattern)
+        if p.resolve() not in refs
+    ]
+    frames = load_frames(
+        sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning
+    )
     g = frames_to_measurement(cal.system, frames)
     options = dict(args.option or [])
     if "progress" in defaults:
@@ -262,17 +153,39 @@ def run_reconstruct(args) -> int:
     res = reconstruct(cal.system, g, args.method, **options)
     seconds = time.perf_counter() - t0
     extra = {}
-    if "white" in cal.calibration and cal.calibration["white"].shape == tuple(cal.system.cube_shape):
-        extra["reflectance"] = reflectance(res.cube, cal.calibration["white"], cal.calibration.get("dark", 0.0))
+    if "white" in cal.calibration and cal.calibration["white"].shape == tuple(
+        cal.system.cube_shape
+    ):
+        extra["reflectance"] = reflectance(
+            res.cube, cal.calibration["white"], cal.calibration.get("dark", 0.0)
+        )
     depth = res.depth
     files = [*sources, Path(args.calibration)] + [Path(p) for p in (args.dark, args.flat) if p]
-    save_bundle(out, system=cal.system, measurement=g, cube=res.cube,
-                depth=None if depth is None else np.asarray(depth), calibration=cal.calibration, arrays=extra,
-                sources=files, overwrite=args.force,
-                metadata={"method": args.method, "options": {k: v for k, v in res.options.items() if _jsonable(v)},
-                          "seconds": seconds, "iterations": res.iterations, "roi": args.roi, "binning": args.binning})
-    print(f"{type(cal.system).__name__} {tuple(cal.system.cube_shape)} reconstructed with {args.method} in "
-          f"{seconds:.1f} s ({res.iterations} iterations, residual {res.history['residual'][-1]:.3g}); written to {out}")
+    save_bundle(
+        out,
+        system=cal.system,
+        measurement=g,
+        cube=res.cube,
+        depth=None if depth is None else np.asarray(depth),
+        calibration=cal.calibration,
+        arrays=extra,
+        sources=files,
+        overwrite=args.force,
+        metadata={
+            "method": args.method,
+            "options": {k: v for k, v in res.options.items() if _jsonable(v)},
+            "seconds": seconds,
+            "iterations": res.iterations,
+            "roi": args.roi,
+            "binning": args.binning,
+        },
+    )
+    print(
+        f"{type(cal.system).__name__} {tuple(cal.system.cube_shape)} reconstructed with "
+        f"{args.method} in "
+        f"{seconds:.1f} s ({res.iterations} iterations, residual "
+        f"{res.history['residual'][-1]:.3g}); written to {out}"
+    )
     return 0
 
 
@@ -298,11 +211,21 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
-        "demo", help="simulate and reconstruct the five imagers (and SD-CASSI) on seeded real-data scenes"
+        "demo",
+        help="simulate and reconstruct the five imagers (and SD-CASSI) on seeded real-data scenes",
     )
-    demo.add_argument("--size", type=_positive_int, default=64, help="rows and columns, a multiple of 4 (default 64)")
-    demo.add_argument("--bands", type=_positive_int, default=28, help="spectral bands, 450–650 nm (default 28)")
-    demo.add_argument("--snr-db", type=float, default=30.0, help="measurement SNR in dB (default 30)")
+    demo.add_argument(
+        "--size",
+        type=_positive_int,
+        default=64,
+        help="rows and columns, a multiple of 4 (default 64)",
+    )
+    demo.add_argument(
+        "--bands", type=_positive_int, default=28, help="spectral bands, 450–650 nm (default 28)"
+    )
+    demo.add_argument(
+        "--snr-db", type=float, default=30.0, help="measurement SNR in dB (default 30)"
+    )
     demo.add_argument("--seed", type=int, default=0, help="seed of codes and noise (default 0)")
     demo.add_argument("--out", default="tensor-cosdi-demo", help="output folder for PNG files")
     demo.add_argument("--force", action="store_true", help="overwrite existing PNG files")
@@ -313,34 +236,70 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("kind", choices=("snapshots", "patterns", "focal-sweep"))
     plan.add_argument("count", type=_positive_int, help="number of frames")
     plan.add_argument("out", help="plan file to write")
-    plan.add_argument("--zernike", action="append", help="focal-sweep: J:A[,J:A…] Zernike waves per step (repeat)")
+    plan.add_argument(
+        "--zernike", action="append", help="focal-sweep: J:A[,J:A…] Zernike waves per step (repeat)"
+    )
     plan.add_argument("--suffix", default=".tif", help="frame file suffix (default .tif)")
     plan.add_argument("--force", action="store_true", help="overwrite an existing plan file")
     plan.set_defaults(func=run_plan)
 
     acq = sub.add_parser("acquire", help="run an acquisition plan against a serial trigger device")
     acq.add_argument("plan", help="plan file (tensor-cosdi plan …)")
-    acq.add_argument("--port", required=True, help="serial port or pyserial URL (/dev/ttyACM0, socket://…, loop://)")
-    acq.add_argument("--frames-dir", required=True, help="folder the camera software writes frames into")
-    acq.add_argument("--log", required=True, help="frame log (JSON lines); an existing log for this plan is resumed")
+    acq.add_argument(
+        "--port",
+        required=True,
+        help="serial port or pyserial URL (/dev/ttyACM0, socket://…, loop://)",
+    )
+    acq.add_argument(
+        "--frames-dir", required=True, help="folder the camera software writes frames into"
+    )
+    acq.add_argument(
+        "--log",
+        required=True,
+        help="frame log (JSON lines); an existing log for this plan is resumed",
+    )
     acq.add_argument("--baudrate", type=_positive_int, default=115200)
-    acq.add_argument("--timeout", type=float, default=1.0, help="seconds to wait for each acknowledgement")
-    acq.add_argument("--retries", type=int, default=2, help="re-sends after a timeout or garbage reply")
-    acq.add_argument("--frame-timeout", type=float, default=10.0, help="seconds to wait for each frame file")
+    acq.add_argument(
+        "--timeout", type=float, default=1.0, help="seconds to wait for each acknowledgement"
+    )
+    acq.add_argument(
+        "--retries", type=int, default=2, help="re-sends after a timeout or garbage reply"
+    )
+    acq.add_argument(
+        "--frame-timeout", type=float, default=10.0, help="seconds to wait for each frame file"
+    )
     acq.add_argument("--quiet", action="store_true", help="no progress bar")
     acq.set_defaults(func=run_acquire)
 
-    rec = sub.add_parser("reconstruct", help="capture files + calibration bundle → reconstruction bundle")
+    rec = sub.add_parser(
+        "reconstruct", help="capture files + calibration bundle → reconstruction bundle"
+    )
     rec.add_argument("calibration", help="bundle holding the system (tensor_cosdi.io.save_bundle)")
-    rec.add_argument("frames", nargs="+", help="frame files or a folder, in the system's frame order")
+    rec.add_argument(
+        "frames", nargs="+", help="frame files or a folder, in the system's frame order"
+    )
     rec.add_argument("--out", required=True, help="reconstruction bundle to write (.npz)")
     rec.add_argument("--method", default="otd", help="reconstruction method (default otd)")
-    rec.add_argument("--option", action="append", type=_option_value, help="method option key=value (repeat)")
-    rec.add_argument("--pattern", default="*", help="glob for frame files inside a folder (default: all frame files)")
+    rec.add_argument(
+        "--option", action="append", type=_option_value, help="method option key=value (repeat)"
+    )
+    rec.add_argument(
+        "--pattern",
+        default="*",
+        help="glob for frame files inside a folder (default: all frame files)",
+    )
     rec.add_argument("--dark", help="dark frame file")
     rec.add_argument("--flat", help="flat/white frame file")
-    rec.add_argument("--roi", type=int, nargs=4, metavar=("ROW0", "ROW1", "COL0", "COL1"), help="region of interest")
-    rec.add_argument("--binning", type=_positive_int, default=1, help="sum BINNING×BINNING pixel blocks")
+    rec.add_argument(
+        "--roi",
+        type=int,
+        nargs=4,
+        metavar=("ROW0", "ROW1", "COL0", "COL1"),
+        help="region of interest",
+    )
+    rec.add_argument(
+        "--binning", type=_positive_int, default=1, help="sum BINNING×BINNING pixel blocks"
+    )
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
     rec.set_defaults(func=run_reconstruct)

@@ -18,7 +18,9 @@ def _colour():
     return colour
 
 
-def to_srgb(cube, wavelengths, *, band_axis: int = 2, illuminant: str = "D65", white_balance: bool = True):
+def to_srgb(
+    cube, wavelengths, *, band_axis: int = 2, illuminant: str = "D65", white_balance: bool = True
+):
     """sRGB preview of a reflectance cube: CIE 1931 2° observer under ``illuminant``.
 
     ``XYZ = Σ_l R_l S(λ_l) x̄ȳz̄(λ_l) Δλ_l`` with the colour-matching
@@ -61,7 +63,9 @@ def to_srgb(cube, wavelengths, *, band_axis: int = 2, illuminant: str = "D65", w
     if illuminant not in colour.SDS_ILLUMINANTS:
         raise ValueError(f"unknown illuminant {illuminant!r}; e.g. 'D65', 'A', 'D50'")
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    xyz_bar = np.stack([np.interp(wl, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)], axis=1)
+    xyz_bar = np.stack(
+        [np.interp(wl, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)], axis=1
+    )
     ill = colour.SDS_ILLUMINANTS[illuminant]
     S = np.interp(wl, ill.wavelengths, ill.values)
     dl = np.gradient(wl) if wl.size > 1 else np.ones(1)
@@ -113,19 +117,23 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
         raise ValueError("rgb contains NaN or inf")
     if x.min() < 0 or x.max() > 1:
         raise ValueError(
-            f"rgb must lie in [0, 1] (divide uint8 images by 255), got values in [{x.min():g}, {x.max():g}]"
+            f"rgb must lie in [0, 1] (divide uint8 images by 255), got values in [{x.min():g}, "
+            f"{x.max():g}]"
         )
     wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
     if wl.size == 0 or not np.isfinite(wl).all() or wl.min() < 380 or wl.max() > 780:
         raise ValueError(f"wavelengths must be finite nm within 380–780, got {wl.tolist()}")
     linear = colour.cctf_decoding(x, function="sRGB") if encoded else x
     basis = colour.recovery.MSDS_BASIS_FUNCTIONS_sRGB_MALLETT2019
-    b = np.stack([np.interp(wl, basis.wavelengths, basis.values[:, i]) for i in range(3)])  # (3, Nλ)
+    b = np.stack(
+        [np.interp(wl, basis.wavelengths, basis.values[:, i]) for i in range(3)]
+    )  # (3, Nλ)
     return np.asarray(linear, dtype=np.float64) @ b
 
 
 def reflectance(cube, white, dark=0.0):
-    """Reflectance from a radiance cube and a white reference (thesis Eq. 171): ``(X − dark) / (W − dark)``.
+    """Reflectance from a radiance cube and a white reference (thesis Eq. 171): ``(X − dark) / (W −
+    dark)``.
 
     Parameters
     ----------

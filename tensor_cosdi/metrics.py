@@ -61,7 +61,8 @@ def _pair(image_true, image_test, data_range=None):
 
 
 def _bands_last_as_images(x: np.ndarray, band_axis: int) -> np.ndarray:
-    """``(…, Nλ)`` cube → stack of 2-D band images ``(n, Nx, Ny)`` (extra axes become more images)."""
+    """``(…, Nλ)`` cube → stack of 2-D band images ``(n, Nx, Ny)`` (extra axes become more
+    images)."""
     if x.ndim == 2:
         return x[None]
     x = np.moveaxis(x, band_axis, -1)
@@ -69,7 +70,9 @@ def _bands_last_as_images(x: np.ndarray, band_axis: int) -> np.ndarray:
     return x.reshape((-1,) + x.shape[-2:])
 
 
-def ssim(image_true, image_test, *, data_range=None, band_axis: int = 2, win_size: int = 7) -> float:
+def ssim(
+    image_true, image_test, *, data_range=None, band_axis: int = 2, win_size: int = 7
+) -> float:
     """Structural similarity per band (scikit-image, Gaussian-free 7×7 window), averaged.
 
     Images smaller than the window use the largest odd window that fits.
@@ -152,7 +155,9 @@ def combined_error(psnr_values, ssim_values, rmse_values, sam_values) -> np.ndar
     >>> combined_error([[30, 20]], [[0.9, 0.45]], [[0.1, 0.2]], [[5, 10]]).round(2).tolist()
     [0.0, 70.83]
     """
-    arrays = [np.asarray(a, dtype=np.float64) for a in (psnr_values, ssim_values, rmse_values, sam_values)]
+    arrays = [
+        np.asarray(a, dtype=np.float64) for a in (psnr_values, ssim_values, rmse_values, sam_values)
+    ]
     shape = arrays[0].shape
     if len(shape) != 2 or any(a.shape != shape for a in arrays):
         raise ValueError(
@@ -165,6 +170,8 @@ def combined_error(psnr_values, ssim_values, rmse_values, sam_values) -> np.ndar
     for a, best in zip(arrays, (np.max, np.max, np.min, np.min)):
         ref = best(a, axis=1, keepdims=True)
         if (ref == 0).any():
-            raise ValueError("combined_error: a scene's best value is 0, so its relative error is undefined")
+            raise ValueError(
+                "combined_error: a scene's best value is 0, so its relative error is undefined"
+            )
         terms.append(np.abs(ref - a) / np.abs(ref))
     return 100.0 * np.sum(terms, axis=(0, 1)) / (4 * shape[0])

@@ -75,7 +75,9 @@ def _import_colour():
     return colour
 
 
-def colorchecker(shape=(64, 96), wavelengths=None, *, chart: str = "ColorChecker N Ohta", dtype="float64"):
+def colorchecker(
+    shape=(64, 96), wavelengths=None, *, chart: str = "ColorChecker N Ohta", dtype="float64"
+):
     """The 24-patch ColorChecker as a spectral cube of measured reflectances.
 
     Parameters
@@ -127,7 +129,9 @@ def _fit(image: np.ndarray, shape) -> np.ndarray:
         ww = max(1, round(h * ny / nx))
         left = (w - ww) // 2
         image = image[:, left : left + ww]
-    return resize(image, (nx, ny) + image.shape[2:], order=1, anti_aliasing=True, preserve_range=True)
+    return resize(
+        image, (nx, ny) + image.shape[2:], order=1, anti_aliasing=True, preserve_range=True
+    )
 
 
 def photo(name: str = "chelsea", shape=(64, 64), wavelengths=None, *, dtype="float64"):
@@ -232,7 +236,8 @@ def depth_planes(depth, n_planes: int, *, near_is_large: bool = True) -> np.ndar
 
 
 def depth_layers(cube, planes, n_planes: int):
-    """A spectral-depth cube ``(Nx, Ny, Nλ, Nz)``: each pixel's spectrum sits in its depth plane only.
+    """A spectral-depth cube ``(Nx, Ny, Nλ, Nz)``: each pixel's spectrum sits in its depth plane
+    only.
 
     This is the cube ``F`` that :class:`~tensor_cosdi.systems.CASSDIDFA` senses
     (SPEC §3.2); summing it over ``z`` gives ``cube`` back.
@@ -250,7 +255,10 @@ def depth_layers(cube, planes, n_planes: int):
     if c.ndim != 3 or p.shape != c.shape[:2]:
         raise ValueError(f"need cube (Nx, Ny, Nλ) and planes (Nx, Ny); got {c.shape} and {p.shape}")
     if not np.issubdtype(p.dtype, np.integer) or p.min() < 0 or p.max() >= n_planes:
-        raise ValueError(f"planes must be integers in [0, {n_planes - 1}], got {p.dtype} in [{p.min()}, {p.max()}]")
+        raise ValueError(
+            f"planes must be integers in [0, {n_planes - 1}], got {p.dtype} in [{p.min()}, "
+            f"{p.max()}]"
+        )
     onehot = (p[..., None] == np.arange(n_planes)).astype(c.dtype)  # (Nx, Ny, Nz)
     return c[..., None] * onehot[:, :, None, :]
 
@@ -298,7 +306,9 @@ def light_field(cube, disparity, views=(5, 5)):
         for v in range(V):
             coords = [xx + (u - U // 2) * d, yy + (v - V // 2) * d]
             for band in range(c.shape[2]):
-                out[:, :, band, u, v] = ndimage.map_coordinates(c[:, :, band], coords, order=1, mode="nearest")
+                out[:, :, band, u, v] = ndimage.map_coordinates(
+                    c[:, :, band], coords, order=1, mode="nearest"
+                )
     return out
 
 
@@ -368,7 +378,9 @@ def structured_light(
     for _ in range(n_bumps):
         cx, cy = gen.uniform(0.2, 0.8, 2)
         width = gen.uniform(0.1, 0.25)
-        height += gen.uniform(0.5, 1.0) * np.exp(-((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * width**2))
+        height += gen.uniform(0.5, 1.0) * np.exp(
+            -((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * width**2)
+        )
     ref = 2 * np.pi * np.arange(ny)[None, :] / ny
     phase = np.stack([f * ref + phase_per_height * (f / freqs[0]) * height for f in freqs], axis=-1)
     phase = np.broadcast_to(phase, (nx, ny, len(freqs))).copy()
@@ -378,13 +390,17 @@ def structured_light(
 
 # ---- the scene registry ---------------------------------------------------------------
 SCENES = Registry("scene")
-"""``name → builder(shape, wavelengths) -> (Nx, Ny, Nλ) reflectance``: what ``example_problem`` accepts."""
+"""``name → builder(shape, wavelengths) -> (Nx, Ny, Nλ) reflectance``: what ``example_problem``
+accepts."""
 
 
 def register_scene(name: str, builder, *, replace: bool = False) -> None:
-    """Make ``builder(shape, wavelengths)`` (an ``(Nx, Ny, Nλ)`` reflectance in [0, 1]) a named scene."""
+    """Make ``builder(shape, wavelengths)`` (an ``(Nx, Ny, Nλ)`` reflectance in [0, 1]) a named
+    scene."""
     if not callable(builder):
-        raise ValueError(f"a scene builder must be callable (shape, wavelengths) -> cube, got {builder!r}")
+        raise ValueError(
+            f"a scene builder must be callable (shape, wavelengths) -> cube, got {builder!r}"
+        )
     SCENES.register(name, builder, replace=replace)
 
 

@@ -1,4 +1,5 @@
-"""Simulation studies: a seeded (system, scene, measurement) problem for every imager, and comparisons.
+"""Simulation studies: a seeded (system, scene, measurement) problem for every imager, and
+comparisons.
 
 :func:`make_problem` builds what the demo, the benchmarks and the quality
 tests share: one of the five imagers (or a CASSI baseline) with seeded codes,
@@ -9,16 +10,27 @@ a scene of :mod:`tensor_cosdi.scenes` shaped for it, and a noisy measurement.
 from __future__ import annotations
 
 import time
+
 import numpy as np
 
 from . import metrics, scenes
 from . import systems as S
 from .systems import Problem
 
-__all__ = ["SYSTEMS", "SCENES", "Problem", "make_problem", "compare", "score", "score_depth", "spectral_view"]
+__all__ = [
+    "SYSTEMS",
+    "SCENES",
+    "Problem",
+    "make_problem",
+    "compare",
+    "score",
+    "score_depth",
+    "spectral_view",
+]
 
 SYSTEMS = S.REGISTRY
-"""The systems :func:`make_problem` accepts: :data:`tensor_cosdi.systems.REGISTRY` (a read-only mapping)."""
+"""The systems :func:`make_problem` accepts: :data:`tensor_cosdi.systems.REGISTRY` (a read-only
+mapping)."""
 
 SCENES = scenes.SCENES
 """The scenes :func:`make_problem` accepts: :data:`tensor_cosdi.scenes.SCENES`."""
@@ -73,14 +85,18 @@ def make_problem(
     ((16, 16, 8), (16, 23))
     """
     if system in _RENAMED:
-        raise ValueError(f"the system {system!r} is now called {_RENAMED[system]!r} (systems.REGISTRY)")
+        raise ValueError(
+            f"the system {system!r} is now called {_RENAMED[system]!r} (systems.REGISTRY)"
+        )
     cls = SYSTEMS[system]
-    return cls.example_problem(scene, shape=shape, n_bands=n_bands, snr_db=snr_db, rng=rng, shifts=shifts,
-                               **options)
+    return cls.example_problem(
+        scene, shape=shape, n_bands=n_bands, snr_db=snr_db, rng=rng, shifts=shifts, **options
+    )
 
 
 def score(problem: Problem, cube) -> dict:
-    """PSNR, SSIM (data range = the truth's peak), SAM (degrees) and RMSE of ``cube`` against the truth.
+    """PSNR, SSIM (data range = the truth's peak), SAM (degrees) and RMSE of ``cube`` against the
+    truth.
 
     Cubes with more than three axes fold the extra axes (depth, pattern)
     into the band axis for PSNR/SSIM/RMSE and into pixels for SAM.
@@ -103,17 +119,21 @@ def score(problem: Problem, cube) -> dict:
 
 
 def score_depth(problem: Problem, depth) -> dict:
-    """How well a result's depth channel (``Result.depth``) matches the problem's truth; ``{}`` if neither has one.
+    """How well a result's depth channel (``Result.depth``) matches the problem's truth; ``{}`` if
+    neither has one.
 
     * depth planes (CASSDI-DFA): ``"planes_right"``, the fraction of pixels on the right plane;
     * disparity (C3SLFI): ``"disparity_mae"``, mean absolute error (px per view step);
-    * fringe phase (CS2LI / Mu-CoSDI): ``"phase_mae"``, mean absolute wrapped-phase error (rad) of the
+    * fringe phase (CS2LI / Mu-CoSDI): ``"phase_mae"``, mean absolute wrapped-phase error (rad) of
+    the
       first frequency.
     """
     return problem.system.score_depth(depth, problem)
 
 
-def compare(problem: Problem, methods=("otd", "gap_tv"), options=None, *, progress: bool = False) -> list[dict]:
+def compare(
+    problem: Problem, methods=("otd", "gap_tv"), options=None, *, progress: bool = False
+) -> list[dict]:
     """Run ``methods`` on ``problem``; one row per method with its scores and seconds.
 
     ``options`` maps a method name to its keyword options.
@@ -129,8 +149,16 @@ def compare(problem: Problem, methods=("otd", "gap_tv"), options=None, *, progre
         t0 = time.perf_counter()
         res = reconstruct(problem.system, problem.measurement, m, **opts)
         seconds = time.perf_counter() - t0
-        rows.append({"problem": problem.name, "method": m, **score(problem, res.cube), "seconds": seconds,
-                     "iterations": res.iterations, "result": res})
+        rows.append(
+            {
+                "problem": problem.name,
+                "method": m,
+                **score(problem, res.cube),
+                "seconds": seconds,
+                "iterations": res.iterations,
+                "result": res,
+            }
+        )
     return rows
 
 
@@ -141,7 +169,8 @@ def _defaults(method):
 
 
 def spectral_view(problem: Problem, cube) -> np.ndarray:
-    """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube of ``problem.system`` (for sRGB previews).
+    """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube of ``problem.system`` (for sRGB
+    previews).
 
     C3SLFI: the centre view of the light field; CASSDI-DFA: the sum over
     depth planes (all-in-focus); CS2LI / Mu-CoSDI: the mean over the phase

@@ -105,7 +105,8 @@ def _builtin():
     r(
         "mode_product_all",
         lambda g: ModeProduct(
-            (3, 4, 5), [g.standard_normal((2, 3)), g.standard_normal((4, 4)), g.standard_normal((6, 5))]
+            (3, 4, 5),
+            [g.standard_normal((2, 3)), g.standard_normal((4, 4)), g.standard_normal((6, 5))],
         ),
     )
     r("blur", lambda g: Blur((6, 7, 2), g.random((3, 3, 2))))
@@ -116,8 +117,10 @@ def _builtin():
     r("lightfield_tiled", lambda g: LightFieldLayout((3, 2, 2, 2, 3), "tiled"))
     r(
         "lightfield_tiled_to_interleaved",
-        lambda g: LightFieldLayout((2, 3, 2, 3, 2), "tiled")
-        @ LightFieldLayout((2, 3, 2, 3, 2), "interleaved").T,
+        lambda g: (
+            LightFieldLayout((2, 3, 2, 3, 2), "tiled")
+            @ LightFieldLayout((2, 3, 2, 3, 2), "interleaved").T
+        ),
     )
     r("sd_cassi", lambda g: _sd_cassi(g))
     r("sd_cassi_step2", lambda g: _sd_cassi(g, (5, 6, 4), 2))
@@ -172,10 +175,10 @@ def _builtin():
     r("c3slfi", c3slfi)
     r(
         "c3slfi_3d",
-        lambda g: Stack(
-            [SumAxis((4, 6, 3), 2) @ Code(g.random((4, 6, 3)), (4, 6, 3)) for _ in range(3)]
-        )
-        @ LightFieldLayout((2, 3, 3, 2, 2), "interleaved"),
+        lambda g: (
+            Stack([SumAxis((4, 6, 3), 2) @ Code(g.random((4, 6, 3)), (4, 6, 3)) for _ in range(3)])
+            @ LightFieldLayout((2, 3, 3, 2, 2), "interleaved")
+        ),
     )
     r("scaled_difference", lambda g: 2.0 * _sd_cassi(g) - 0.5 * _sd_cassi(g))
     _systems()
@@ -187,13 +190,25 @@ def _systems():
 
     r = register
     r("system_sdcassi", lambda g: S.SDCASSI.example((5, 6, 4), rng=g).operator)
-    r("system_sdcassi_shots", lambda g: S.SDCASSI.example((4, 5, 3), rng=g, shots=3, shifts=2).operator)
-    r("system_ddcassi", lambda g: S.DDCASSI.example((5, 6, 4), rng=g, shifts=[0, 0.5, 1, 2.5]).operator)
+    r(
+        "system_sdcassi_shots",
+        lambda g: S.SDCASSI.example((4, 5, 3), rng=g, shots=3, shifts=2).operator,
+    )
+    r(
+        "system_ddcassi",
+        lambda g: S.DDCASSI.example((5, 6, 4), rng=g, shifts=[0, 0.5, 1, 2.5]).operator,
+    )
     r("system_dual_camera", lambda g: S.DualCameraCASSI.example((4, 5, 3), rng=g).operator)
     r("system_cassi_vsi", lambda g: S.CASSIVSI.example((4, 6, 4), rng=g, beta=2).operator)
     r("system_cassdi_dfa", lambda g: S.CASSDIDFA.example((4, 5, 3, 2), rng=g).operator)
-    r("system_cassdi_dfa_psf", lambda g: S.CASSDIDFA.example((5, 5, 2, 2), rng=g, psf_size=3).operator)
-    r("system_c3slfi_3d", lambda g: S.C3SLFI.example((4, 6, 5), rng=g, n_snapshots=3, views=(2, 3)).operator)
+    r(
+        "system_cassdi_dfa_psf",
+        lambda g: S.CASSDIDFA.example((5, 5, 2, 2), rng=g, psf_size=3).operator,
+    )
+    r(
+        "system_c3slfi_3d",
+        lambda g: S.C3SLFI.example((4, 6, 5), rng=g, n_snapshots=3, views=(2, 3)).operator,
+    )
     r("system_c3slfi_5d", lambda g: S.C3SLFI.example((2, 3, 4, 2, 2), rng=g).operator)
     r(
         "system_c3slfi_separable",

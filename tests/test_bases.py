@@ -8,7 +8,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tensor_cosdi import _backend as B
-from tensor_cosdi.bases import KroneckerBasis, dct, identity, is_orthonormal, svd_basis, tucker_bases, wavelet
+from tensor_cosdi.bases import (
+    KroneckerBasis,
+    dct,
+    identity,
+    is_orthonormal,
+    svd_basis,
+    tucker_bases,
+    wavelet,
+)
 
 
 @given(n=st.integers(1, 70))
@@ -19,7 +27,9 @@ def test_dct_is_orthonormal_and_is_scipys(n):
     np.testing.assert_allclose(psi.T @ x, scipy.fft.dct(x, norm="ortho"), atol=1e-12)
 
 
-@pytest.mark.parametrize("n, name", [(256, "sym8"), (64, "sym8"), (48, "db4"), (28, "haar"), (28, "sym8"), (7, "sym8")])
+@pytest.mark.parametrize(
+    "n, name", [(256, "sym8"), (64, "sym8"), (48, "db4"), (28, "haar"), (28, "sym8"), (7, "sym8")]
+)
 def test_wavelet_is_orthonormal_and_is_pywts(n, name):
     psi = wavelet(n, name)
     assert np.abs(psi.T @ psi - np.eye(n)).max() < 1e-14
@@ -32,7 +42,9 @@ def test_wavelet_is_orthonormal_and_is_pywts(n, name):
 
 
 def test_wavelet_levels_and_errors():
-    assert np.array_equal(wavelet(28), np.eye(28))  # Symlet-8 has no boundary-free level on 28 samples
+    assert np.array_equal(
+        wavelet(28), np.eye(28)
+    )  # Symlet-8 has no boundary-free level on 28 samples
     assert not np.array_equal(wavelet(256), np.eye(256))
     assert is_orthonormal(wavelet(32, level=5))
     with pytest.raises(ValueError, match="divisible by 8"):
@@ -81,7 +93,10 @@ def test_kronecker_basis_round_trip_on_backends(backend):
     tol = 1e-12 if dtype == "float64" else 1e-5
     np.testing.assert_allclose(B.to_numpy(basis.synthesis(theta)), B.to_numpy(F), atol=tol)
     # orthonormal: energy is preserved
-    assert abs(float(np.sum(B.to_numpy(theta) ** 2)) / float(np.sum(B.to_numpy(F) ** 2)) - 1) < tol * 10
+    assert (
+        abs(float(np.sum(B.to_numpy(theta) ** 2)) / float(np.sum(B.to_numpy(F) ** 2)) - 1)
+        < tol * 10
+    )
     # mode 1 untouched, mode 2 is the DCT
     ref = scipy.fft.dct(np.asarray(B.to_numpy(F), dtype=np.float64), norm="ortho", axis=2)
     ref = np.einsum("ij,jkl->ikl", wavelet(16, "db2").T, ref)

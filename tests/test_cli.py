@@ -10,8 +10,12 @@ ARGS = ["demo", "--size", "16", "--bands", "6", "--quiet"]
 
 
 def _rows(text):
-    return re.findall(r"^(\w+)\s+(\w+)\s+([\d×]+)\s+(otd|gap_tv)\s+(-?\d+\.\d+)\s+(\d\.\d+)\s+(\d+\.\d+)\s+"
-                      r"(\d+\.\d+)\s+(\d+% planes|\d+\.\d+ px|\d+\.\d+ rad|-)$", text, flags=re.M)
+    return re.findall(
+        r"^(\w+)\s+(\w+)\s+([\d×]+)\s+(otd|gap_tv)\s+(-?\d+\.\d+)\s+(\d\.\d+)\s+(\d+\.\d+)\s+"
+        r"(\d+\.\d+)\s+(\d+% planes|\d+\.\d+ px|\d+\.\d+ rad|-)$",
+        text,
+        flags=re.M,
+    )
 
 
 def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
@@ -19,14 +23,20 @@ def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
     assert main(ARGS + ["--out", str(out)]) == 0
     text = capsys.readouterr().out
     rows = _rows(text)
-    assert [(r[0], r[3]) for r in rows] == [(c[0], m) for c in DEMO_CASES for m in ("otd", "gap_tv")]
+    assert [(r[0], r[3]) for r in rows] == [
+        (c[0], m) for c in DEMO_CASES for m in ("otd", "gap_tv")
+    ]
     assert {r[0] for r in rows} >= {"cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
     assert all(float(r[4]) > 10 and 0 < float(r[5]) <= 1 for r in rows), rows
     # every depth-capable imager reports its depth error, the spectral ones none
     assert {r[0] for r in rows if r[8] != "-"} == {"cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
     names = sorted(p.name for p in out.iterdir())
     assert len(names) == 5 * len(DEMO_CASES) + 4
-    assert "c3slfi_truth.png" in names and "cs2li_error_otd.png" in names and "cassdi_dfa_depth.png" in names
+    assert (
+        "c3slfi_truth.png" in names
+        and "cs2li_error_otd.png" in names
+        and "cassdi_dfa_depth.png" in names
+    )
     assert str(out.resolve()) in text
 
 

@@ -30,7 +30,13 @@ def test_passbands_partition_the_bands(n_bands, n_filters):
     assert all(idx[f][-1] < idx[f + 1][0] for f in range(n_filters - 1))  # ordered by wavelength
 
 
-@given(K=st.integers(2, 5), extra=st.integers(0, 4), n_bands=st.integers(5, 12), five=st.booleans(), seed=st.integers(0, 999))
+@given(
+    K=st.integers(2, 5),
+    extra=st.integers(0, 4),
+    n_bands=st.integers(5, 12),
+    five=st.booleans(),
+    seed=st.integers(0, 999),
+)
 def test_complementary_codes(K, extra, n_bands, five, seed):
     n_filters = min(K + extra, n_bands)
     shape = (3, 4, n_bands, 2, 2) if five else (5, 4, n_bands)

@@ -26,9 +26,9 @@ def test_colorchecker_patches_have_their_hues():
     assert white.min() > 0.85 and black.max() < 0.3
 
 
-
 def test_chromatic_patches_match_colour_sciences_rendering():
-    """Our 450–650 nm preview vs colour-science's full-spectrum sRGB of the same 18 chromatic patches.
+    """Our 450–650 nm preview vs colour-science's full-spectrum sRGB of the same 18 chromatic
+    patches.
 
     Hue within 20° on every patch except "blue flower" (its violet lies below
     450 nm, outside the cube: 37°), median within 10° (measured: 4.8°); a
@@ -44,7 +44,9 @@ def test_chromatic_patches_match_colour_sciences_rendering():
 
         chart = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
         names = list(chart)
-        refs = [np.clip(colour.XYZ_to_sRGB(colour.sd_to_XYZ(chart[n]) / 100), 0, 1) for n in names[:18]]
+        refs = [
+            np.clip(colour.XYZ_to_sRGB(colour.sd_to_XYZ(chart[n]) / 100), 0, 1) for n in names[:18]
+        ]
     diffs = []
     for i, (name, ref) in enumerate(zip(names[:18], refs)):
         d = abs(rgb_to_hsv(rgb[i])[0] - rgb_to_hsv(ref)[0])

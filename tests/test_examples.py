@@ -49,7 +49,9 @@ def _frames_to_cube(ns):
 
 def _sdcassi_forward(ns):
     assert ns["g"].shape == (64, 150)
-    assert metrics.psnr(ns["cube"], np.clip(ns["estimate"], 0, None), data_range=1.0) > 10  # prints 11.34
+    assert (
+        metrics.psnr(ns["cube"], np.clip(ns["estimate"], 0, None), data_range=1.0) > 10
+    )  # prints 11.34
 
 
 def _dfa_psfs(ns):
@@ -66,7 +68,9 @@ def _otd_vs_baselines(ns):
     m = _by_method(ns["rows"])
     assert m["otd"]["psnr"] > m["gap_tv"]["psnr"] + 2 > m["lsq"]["psnr"] + 2  # 24.5 / 19.8 / 11.7
     score = ns["tc"].studies.score
-    assert score(ns["lf"], ns["otd3"])["psnr"] > score(ns["lf"], ns["wdct3"])["psnr"] + 1  # 29.7 vs 26.2 dB
+    assert (
+        score(ns["lf"], ns["otd3"])["psnr"] > score(ns["lf"], ns["wdct3"])["psnr"] + 1
+    )  # 29.7 vs 26.2 dB
 
 
 def _thesis_algorithms(ns):
@@ -91,7 +95,10 @@ def _cassi_baselines(ns):
 
 
 def _cassi_vsi(ns):
-    assert np.abs(ns["g"] - (0.7 * ns["dispersed"] + 0.3 * ns["grayscale"])).max() < 0.1 * np.abs(ns["g"]).max()
+    assert (
+        np.abs(ns["g"] - (0.7 * ns["dispersed"] + 0.3 * ns["grayscale"])).max()
+        < 0.1 * np.abs(ns["g"]).max()
+    )
 
 
 def _cs2li(ns):
@@ -99,7 +106,11 @@ def _cs2li(ns):
 
 
 def _mu_cosdi(ns):
-    assert ns["g_lf"].shape == (64, 96) and ns["g_sl"].shape == (64, 96, 4) and ns["g_mono"].shape == (64, 96)
+    assert (
+        ns["g_lf"].shape == (64, 96)
+        and ns["g_sl"].shape == (64, 96, 4)
+        and ns["g_mono"].shape == (64, 96)
+    )
 
 
 CHECKS = {

@@ -25,7 +25,9 @@ def test_ssim_is_per_band_average():
     assert ssim(t, t) == 1.0
     assert ssim(t, e) < 0.99
     # band axis elsewhere and extra axes (a 4-D cube: every (λ, z) image counts)
-    assert ssim(np.moveaxis(t, 2, 0), np.moveaxis(e, 2, 0), band_axis=0, data_range=1.0) == pytest.approx(ref)
+    assert ssim(
+        np.moveaxis(t, 2, 0), np.moveaxis(e, 2, 0), band_axis=0, data_range=1.0
+    ) == pytest.approx(ref)
     four = np.stack([t, t], axis=3)
     assert ssim(four, np.stack([e, e], axis=3), data_range=1.0) == pytest.approx(ref)
     assert 0 < ssim(t[:5, :5], e[:5, :5], data_range=1.0) < 1  # window shrinks to 5
@@ -63,11 +65,15 @@ def test_combined_error_picks_the_best_setting():
     assert p.shape == (4,) and p.argmin() == 2 and p[2] == 0.0
     # Eq. 49 by hand for setting 0
     by_hand = (
-        np.abs(psnrs.max(1) - psnrs[:, 0]) / psnrs.max(1)
-        + np.abs(ssims.max(1) - ssims[:, 0]) / ssims.max(1)
-        + np.abs(rmses.min(1) - rmses[:, 0]) / rmses.min(1)
-        + np.abs(sams.min(1) - sams[:, 0]) / sams.min(1)
-    ).sum() * 100 / 20
+        (
+            np.abs(psnrs.max(1) - psnrs[:, 0]) / psnrs.max(1)
+            + np.abs(ssims.max(1) - ssims[:, 0]) / ssims.max(1)
+            + np.abs(rmses.min(1) - rmses[:, 0]) / rmses.min(1)
+            + np.abs(sams.min(1) - sams[:, 0]) / sams.min(1)
+        ).sum()
+        * 100
+        / 20
+    )
     assert p[0] == pytest.approx(by_hand)
     with pytest.raises(ValueError, match="one shape"):
         combined_error(psnrs, ssims, rmses, sams[:, :3])

@@ -28,13 +28,20 @@ print(f"mean |error| on textured pixels: {np.abs(est - d)[tex].mean():.3f} px")
 
 # %%
 # From compressed measurements: C3SLFI, 4 complementary snapshots, 4×4 views, OTD
-p = tc.studies.make_problem("c3slfi", "chelsea", shape=(64, 64), n_bands=8, snr_db=30, max_disparity=1.0)
+p = tc.studies.make_problem(
+    "c3slfi", "chelsea", shape=(64, 64), n_bands=8, snr_db=30, max_disparity=1.0
+)
 res = tc.reconstruct(p.system, p.measurement, "otd")
-print(f"C3SLFI + OTD: disparity |error| {np.abs(res.depth - p.depth).mean():.3f} px on {res.depth.shape} views")
+print(
+    f"C3SLFI + OTD: disparity |error| {np.abs(res.depth - p.depth).mean():.3f} px on "
+    f"{res.depth.shape} views"
+)
 
 fig, axes = plt.subplots(1, 4, figsize=(8, 2.2))
-for ax, (title, im) in zip(axes, [("true", d), ("from 5×5 views", est), ("C3SLFI truth", p.depth),
-                                  ("C3SLFI + OTD", res.depth)]):
+for ax, (title, im) in zip(
+    axes,
+    [("true", d), ("from 5×5 views", est), ("C3SLFI truth", p.depth), ("C3SLFI + OTD", res.depth)],
+):
     ax.imshow(im, vmin=-1, vmax=1, cmap="coolwarm")
     ax.set_title(title, fontsize=8)
     ax.axis("off")

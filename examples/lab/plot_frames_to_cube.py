@@ -32,15 +32,24 @@ work = Path(tempfile.mkdtemp())
 n, nl = 64, 16
 wl = tc.scenes.default_wavelengths(nl)
 mask_file = data / "masks" / "tsa_mask256.mat"
-true_code = io.read_frame(mask_file, key="mask")[96:160, 96:160] if mask_file.exists() else \
-    tc.codes.random_binary((n, n), rng=0)
+true_code = (
+    io.read_frame(mask_file, key="mask")[96:160, 96:160]
+    if mask_file.exists()
+    else tc.codes.random_binary((n, n), rng=0)
+)
 true_system = tc.systems.SDCASSI(true_code, n_bands=nl, shifts=2, wavelengths=wl)
 
 # %%
 # 1. Monochromator frames: band l lights the code alone; camera dark level 100 counts
 rng = np.random.default_rng(0)
 dark = 100 + rng.normal(0, 1, true_system.measurement_shape)
-mono = np.stack([np.asarray(true_system.forward(np.ones((n, n, nl)) * np.eye(nl)[l])) * 2000 for l in range(nl)], -1)
+mono = np.stack(
+    [
+        np.asarray(true_system.forward(np.ones((n, n, nl)) * np.eye(nl)[l])) * 2000
+        for l in range(nl)
+    ],
+    -1,
+)
 mono = mono + dark[..., None]
 shifts = io.shifts_from_line_frames(mono, dark=dark)
 code, per_band = io.code_from_monochromator(mono, shifts=shifts, dark=dark, ny=n)
@@ -50,8 +59,12 @@ print(f"code error vs the true mask: {np.abs(code - true_code).mean():.4f} (mean
 # %%
 # 2. The calibrated system in a bundle (never overwritten without overwrite=True)
 system = tc.systems.SDCASSI(code, n_bands=nl, shifts=shifts, wavelengths=wl)
-cal = io.save_bundle(work / "calibration.npz", system=system, calibration={"dark": dark},
-                     metadata={"camera": "simulated", "prism_to_sensor_mm": 30})
+cal = io.save_bundle(
+    work / "calibration.npz",
+    system=system,
+    calibration={"dark": dark},
+    metadata={"camera": "simulated", "prism_to_sensor_mm": 30},
+)
 
 # %%
 # 3. Raw captures of a scene: 2000 counts full scale, a ±10 % pixel gain, the dark level, read noise
@@ -69,11 +82,19 @@ frames = io.load_frames([work / "capture_000.tif"], dark=work / "dark.tif", flat
 bundle = io.load_bundle(cal)
 g = io.frames_to_measurement(bundle.system, frames)
 res = tc.reconstruct(bundle.system, g, "otd")
-out = io.save_bundle(work / "result.npz", system=bundle.system, measurement=g, cube=res.cube,
-                     sources=[work / "capture_000.tif", work / "dark.tif", work / "flat.tif", cal])
+out = io.save_bundle(
+    work / "result.npz",
+    system=bundle.system,
+    measurement=g,
+    cube=res.cube,
+    sources=[work / "capture_000.tif", work / "dark.tif", work / "flat.tif", cal],
+)
 cube = res.cube / 2000 * np.mean(gain)  # back to reflectance units (the flat keeps the mean gain)
-print(f"PSNR {tc.metrics.psnr(scene, cube):.2f} dB, SAM {tc.metrics.sam(scene, cube):.1f}°; saved {out.name} with "
-      f"{len(io.load_bundle(out).provenance)} source hashes")
+print(
+    f"PSNR {tc.metrics.psnr(scene, cube):.2f} dB, SAM {tc.metrics.sam(scene, cube):.1f}°; saved "
+    f"{out.name} with "
+    f"{len(io.load_bundle(out).provenance)} source hashes"
+)
 
 fig, axes = plt.subplots(1, 3, figsize=(7, 2.4))
 axes[0].imshow(raw, cmap="gray")
@@ -94,9 +115,11 @@ if lf_dir.exists():
     dark_lf = io.read_frame(lf_dir / "DarkFrame_GUVExperim1.tif")
     raw_lf = io.read_frame(lf_dir / "Lightfield_GUVExperim1.tif").astype(float) - dark_lf
     grid = io.calibrate_lenslet_grid(white, dark=dark_lf)
-    print(f"lenslet pitch {grid.pitch:.3f} px (100 µm / 6.5 µm = 15.385), rotation "
-          f"{np.rad2deg(grid.rotation):.3f}°, {len(grid.residuals)} discs, residual RMS "
-          f"{np.sqrt(np.mean(grid.residuals ** 2)):.2f} px")
+    print(
+        f"lenslet pitch {grid.pitch:.3f} px (100 µm / 6.5 µm = 15.385), rotation "
+        f"{np.rad2deg(grid.rotation):.3f}°, {len(grid.residuals)} discs, residual RMS "
+        f"{np.sqrt(np.mean(grid.residuals**2)):.2f} px"
+    )
     views = grid.views(raw_lf)
     fig, axes = plt.subplots(1, 3, figsize=(7, 2.4))
     axes[0].imshow(white, cmap="gray")

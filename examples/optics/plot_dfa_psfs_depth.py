@@ -23,7 +23,9 @@ for row, zern in enumerate([None, {6: 0.9}]):
     for k, z in enumerate(depths):
         h = optics.psf(550, z, lens=lens, zernike=zern, size=15)
         axes[row, k].imshow(h, cmap="magma")
-        axes[row, k].set_title(f"{'defocus' if zern is None else 'Z6 + defocus'}, {z:.0f} mm", fontsize=7)
+        axes[row, k].set_title(
+            f"{'defocus' if zern is None else 'Z6 + defocus'}, {z:.0f} mm", fontsize=7
+        )
         axes[row, k].axis("off")
 fig.tight_layout()
 
@@ -35,11 +37,15 @@ _, disp = scenes.motorcycle((n, n), [550.0])
 planes = scenes.depth_planes(disp, 3)
 cube = scenes.depth_layers(scenes.photo("chelsea", (n, n), wl), planes, 3)
 psfs = optics.psf_stack(wl, depths, lens=lens, zernike={6: 0.9}, size=9)
-dfa = tc.systems.CASSDIDFA(tc.codes.depth_codes((n, n), 3, rng=0), n_bands=nl, psfs=psfs, wavelengths=wl)
+dfa = tc.systems.CASSDIDFA(
+    tc.codes.depth_codes((n, n), 3, rng=0), n_bands=nl, psfs=psfs, wavelengths=wl
+)
 g = dfa.simulate(cube, snr_db=30, rng=0)
 res = tc.reconstruct(dfa, g, "dfa")
-print(f"depth planes right: {np.mean(res.depth == planes):.1%}, "
-      f"PSNR {tc.metrics.psnr(cube.reshape(n, n, -1), np.asarray(res.cube).reshape(n, n, -1)):.2f} dB")
+print(
+    f"depth planes right: {np.mean(res.depth == planes):.1%}, "
+    f"PSNR {tc.metrics.psnr(cube.reshape(n, n, -1), np.asarray(res.cube).reshape(n, n, -1)):.2f} dB"
+)
 
 # %%
 fig, axes = plt.subplots(1, 3, figsize=(7, 2.5))

@@ -40,13 +40,17 @@ for x in (10, 30, 50):
 axes[2].set(xlabel="λ (nm)", ylabel="shift (px)", title="per-band shift")
 axes[2].legend(fontsize=7)
 fig.tight_layout()
-print(f"450-650 nm at 30 mm with 6 µm pixels: {prism.shifts([450, 650], 30, 6)[-1]:.1f} px "
-      "(the thesis measured about 50 px on its prototype)")
+print(
+    f"450-650 nm at 30 mm with 6 µm pixels: {prism.shifts([450, 650], 30, 6)[-1]:.1f} px "
+    "(the thesis measured about 50 px on its prototype)"
+)
 
 # %%
 # A system built from the prism instead of "one pixel per band"
 bands = tc.scenes.default_wavelengths(16)
 shifts = prism.shifts(bands, distance_mm=5, pixel_um=6)
-sd = tc.systems.SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=16, shifts=shifts, wavelengths=bands)
+sd = tc.systems.SDCASSI(
+    tc.codes.random_binary((32, 32), rng=0), n_bands=16, shifts=shifts, wavelengths=bands
+)
 print("shifts (px):", np.round(shifts, 2))
 print("measurement shape:", sd.measurement_shape)

@@ -20,7 +20,10 @@ from tensor_cosdi.studies import compare, make_problem, spectral_view
 problem = make_problem("cassi_vsi", "chelsea", shape=(48, 48), n_bands=16, snr_db=30, rng=0)
 rows = compare(problem, ["lsq", "wdct", "gap_tv", "otd"])
 for r in rows:
-    print(f"{r['method']:7s} PSNR {r['psnr']:5.2f} dB  SSIM {r['ssim']:.3f}  SAM {r['sam']:5.2f}°  {r['seconds']:.2f} s")
+    print(
+        f"{r['method']:7s} PSNR {r['psnr']:5.2f} dB  SSIM {r['ssim']:.3f}  SAM {r['sam']:5.2f}°  "
+        f"{r['seconds']:.2f} s"
+    )
 
 # %%
 # sRGB previews of the truth and of every reconstruction
@@ -45,10 +48,14 @@ fig.tight_layout()
 
 # %%
 # C3SLFI: OTD on the 3-D lenslet image (OTD-3D) and on the 5-D light field (OTD-5D)
-lf = make_problem("c3slfi", "colorchecker", shape=(48, 48), n_bands=12, views=(4, 4), snr_db=20, rng=0)
+lf = make_problem(
+    "c3slfi", "colorchecker", shape=(48, 48), n_bands=12, views=(4, 4), snr_db=20, rng=0
+)
 five = lf.system.as_5d()
 otd3 = tc.reconstruct(lf.system, lf.measurement, "otd", lam=0.3).cube
-otd5 = lf.system.to_3d(tc.reconstruct(five, lf.system.measurement_to_5d(lf.measurement), "otd", lam=0.3).cube)
+otd5 = lf.system.to_3d(
+    tc.reconstruct(five, lf.system.measurement_to_5d(lf.measurement), "otd", lam=0.3).cube
+)
 wdct3 = tc.reconstruct(lf.system, lf.measurement, "wdct", lam=0.3).cube
 for name, cube in [("OTD-3D", otd3), ("OTD-5D", otd5), ("WDCT-3D", wdct3)]:
     print(f"{name:8s} PSNR {tc.studies.score(lf, cube)['psnr']:.2f} dB")

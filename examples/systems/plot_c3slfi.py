@@ -22,7 +22,12 @@ from tensor_cosdi.systems import C3SLFI
 n1, n2, n3, n4, n5 = 32, 48, 16, 3, 3
 base = colorchecker((n1 + 4, n2 + 4), np.linspace(450, 650, n3))
 views = np.stack(
-    [np.stack([base[2 + u - 1 : 2 + u - 1 + n1, 2 + v - 1 : 2 + v - 1 + n2] for v in range(n5)], -1) for u in range(n4)],
+    [
+        np.stack(
+            [base[2 + u - 1 : 2 + u - 1 + n1, 2 + v - 1 : 2 + v - 1 + n2] for v in range(n5)], -1
+        )
+        for u in range(n4)
+    ],
     -2,
 )  # (N1, N2, N3, N4, N5): one pixel of disparity per view step
 five = C3SLFI(complementary_colour_codes(views.shape, 2, rng=0), layout="5d")
@@ -37,7 +42,9 @@ raw = three.measurement_to_3d(G)  # (N1·N4, N2·N5, K)
 pan = three.panchromatic(raw)  # Lemma 1: Σ_k G̃[..., k]
 fig, axes = plt.subplots(1, 3, figsize=(8, 2.2))
 for ax, img, title in zip(
-    axes, [raw[:, :, 0], raw[:, :, 1], pan], ["snapshot 1 (lenslet image)", "snapshot 2", "Σ_k: panchromatic"]
+    axes,
+    [raw[:, :, 0], raw[:, :, 1], pan],
+    ["snapshot 1 (lenslet image)", "snapshot 2", "Σ_k: panchromatic"],
 ):
     ax.imshow(img, cmap="gray")
     ax.set_title(title)

@@ -29,7 +29,10 @@ print(vsi, "\nA Aᵀ:", vsi.gram_dual())
 # The two arms separately (αT = 1 is plain SD-CASSI, αT = 0 the coded grayscale arm)
 dispersed = CASSIVSI(code, n_bands=nl, alpha_t=1.0).forward(cube)
 grayscale = CASSIVSI(code, n_bands=nl, alpha_t=0.0).forward(cube)
-print("max |A F − (0.7 A_T F + 0.3 A_R F)|:", np.abs(vsi.forward(cube) - (0.7 * dispersed + 0.3 * grayscale)).max())
+print(
+    "max |A F − (0.7 A_T F + 0.3 A_R F)|:",
+    np.abs(vsi.forward(cube) - (0.7 * dispersed + 0.3 * grayscale)).max(),
+)
 
 fig, axes = plt.subplots(2, 2, figsize=(8, 4.6))
 panels = [

@@ -21,7 +21,9 @@ wl = np.linspace(450, 650, nl)
 
 # light field: 2 × 2 views of a 32 × 48 scene, one pixel of disparity per view
 scene = colorchecker((34, 50), wl)
-views = np.stack([np.stack([scene[u : u + 32, v : v + 48] for v in range(2)], -1) for u in range(2)], -2)
+views = np.stack(
+    [np.stack([scene[u : u + 32, v : v + 48] for v in range(2)], -1) for u in range(2)], -2
+)
 lf = MuCoSDI(random_binary((64, 96 + nl - 1), rng=0), n_bands=nl, modality="lf", views=(2, 2))
 g_lf = lf.simulate(lf.from_views(views), 30.0, rng=1)
 
@@ -38,7 +40,9 @@ for s in (lf, sl, mono):
 
 # %%
 fig, axes = plt.subplots(1, 3, figsize=(8, 2.3))
-for ax, img, title in zip(axes, [g_lf, g_sl[:, :, 0], g_mono], ["LF (lenslet image)", "SL, pattern 0", "monocular"]):
+for ax, img, title in zip(
+    axes, [g_lf, g_sl[:, :, 0], g_mono], ["LF (lenslet image)", "SL, pattern 0", "monocular"]
+):
     ax.imshow(img, cmap="gray")
     ax.set_title(title)
     ax.set_axis_off()

@@ -9,9 +9,14 @@
 * :func:`depth_from_cube` — the depth channel of any system's reconstructed cube (``Result.depth``).
 """
 
-from .from_cube import depth_from_cube
 from .focus import depth_from_focus, focus_measure
-from .light_field import depth_from_disparity, disparity_cost_volume, disparity_from_views, textured_mask
+from .from_cube import depth_from_cube
+from .light_field import (
+    depth_from_disparity,
+    disparity_cost_volume,
+    disparity_from_views,
+    textured_mask,
+)
 from .structured_light import (
     calibrate_phase_to_height,
     decode_gray_code,
@@ -26,8 +31,21 @@ from .structured_light import (
 )
 
 __all__ = [
-    "wrapped_phase", "fringe_modulation", "heterodyne_unwrap", "temporal_unwrap", "decode_gray_code",
-    "unwrap_gray_code", "spatial_unwrap", "phase_to_height", "calibrate_phase_to_height", "wrap",
-    "disparity_from_views", "disparity_cost_volume", "depth_from_disparity", "textured_mask",
-    "depth_from_focus", "focus_measure", "depth_from_cube",
+    "wrapped_phase",
+    "fringe_modulation",
+    "heterodyne_unwrap",
+    "temporal_unwrap",
+    "decode_gray_code",
+    "unwrap_gray_code",
+    "spatial_unwrap",
+    "phase_to_height",
+    "calibrate_phase_to_height",
+    "wrap",
+    "disparity_from_views",
+    "disparity_cost_volume",
+    "depth_from_disparity",
+    "textured_mask",
+    "depth_from_focus",
+    "focus_measure",
+    "depth_from_cube",
 ]

@@ -31,7 +31,9 @@ def focus_measure(image, *, window: int = 5, sigma: float = 0.0):
     return ndimage.uniform_filter(out, size=window, mode="nearest")
 
 
-def depth_from_focus(stack, *, axis: int = -1, window: int = 5, sigma: float = 0.0, return_confidence: bool = False):
+def depth_from_focus(
+    stack, *, axis: int = -1, window: int = 5, sigma: float = 0.0, return_confidence: bool = False
+):
     """Fractional index of the sharpest plane per pixel of a focal stack.
 
     The focus measure (:func:`focus_measure`) of every plane, its maximum
@@ -67,7 +69,9 @@ def depth_from_focus(stack, *, axis: int = -1, window: int = 5, sigma: float = 0
     """
     x = np.moveaxis(np.asarray(stack, dtype=np.float64), axis, -1)
     if x.ndim not in (3, 4):
-        raise ValueError(f"stack must be (H, W, Nz) or (H, W, C, Nz) along axis={axis}, got {np.shape(stack)}")
+        raise ValueError(
+            f"stack must be (H, W, Nz) or (H, W, C, Nz) along axis={axis}, got {np.shape(stack)}"
+        )
     nz = x.shape[-1]
     if nz < 2:
         raise ValueError(f"a focal stack needs ≥ 2 planes, got {nz}")
@@ -85,7 +89,9 @@ def depth_from_focus(stack, *, axis: int = -1, window: int = 5, sigma: float = 0
             off = np.where(den < 0, 0.5 * (c0 - c2) / den, 0.0)
         est = est + np.where(k == kk, np.clip(off, -0.5, 0.5), 0.0)
     if return_confidence:
-        eps = 1e-9 * max(float(fm.max()), np.finfo(float).tiny)  # textureless pixels: ratio → 1, not 0/0
+        eps = 1e-9 * max(
+            float(fm.max()), np.finfo(float).tiny
+        )  # textureless pixels: ratio → 1, not 0/0
         conf = (fm.max(axis=0) + eps) / (fm.mean(axis=0) + eps)
         return est, conf
     return est

@@ -6,7 +6,8 @@ __all__ = ["depth_from_cube"]
 
 
 def depth_from_cube(system, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-    """Depth estimate from a cube of ``system``'s ``cube_shape``, or ``None`` for spectral-only systems.
+    """Depth estimate from a cube of ``system``'s ``cube_shape``, or ``None`` for spectral-only
+    systems.
 
     The system knows its depth channel (``system.depth_from_cube``, kind
     ``system.depth_kind``):

@@ -24,7 +24,9 @@ def _views(views):
     if L.ndim == 4:
         L = L[..., None]
     if L.ndim != 5:
-        raise ValueError(f"views must have shape (U, V, H, W) or (U, V, H, W, C), got {np.shape(views)}")
+        raise ValueError(
+            f"views must have shape (U, V, H, W) or (U, V, H, W, C), got {np.shape(views)}"
+        )
     if min(L.shape[:2]) < 1 or L.shape[0] * L.shape[1] < 2:
         raise ValueError(f"need at least two views, got a {L.shape[0]}×{L.shape[1]} grid")
     if not np.all(np.isfinite(L)):
@@ -32,7 +34,9 @@ def _views(views):
     return L
 
 
-def disparity_cost_volume(views, disparities, *, window: int = 5, order: int = 3, shiftable: bool = True):
+def disparity_cost_volume(
+    views, disparities, *, window: int = 5, order: int = 3, shiftable: bool = True
+):
     """Matching cost of every candidate disparity: ``(D, H, W)``.
 
     For each candidate ``d`` every view is warped onto the centre view
@@ -51,19 +55,26 @@ def disparity_cost_volume(views, disparities, *, window: int = 5, order: int = 3
     if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")
     centre = L[uc, vc]
-    yy, xx = np.meshgrid(np.arange(H, dtype=np.float64), np.arange(W, dtype=np.float64), indexing="ij")
+    yy, xx = np.meshgrid(
+        np.arange(H, dtype=np.float64), np.arange(W, dtype=np.float64), indexing="ij"
+    )
     cost = np.zeros((d.size, H, W))
     for u in range(U):
         for v in range(V):
             if u == uc and v == vc:
                 continue
             img = L[u, v]
-            coeffs = [ndimage.spline_filter(img[..., c], order=order) if order > 1 else img[..., c] for c in range(C)]
+            coeffs = [
+                ndimage.spline_filter(img[..., c], order=order) if order > 1 else img[..., c]
+                for c in range(C)
+            ]
             for i, di in enumerate(d):
                 coords = [yy - (u - uc) * di, xx - (v - vc) * di]
                 # I[u, v](y − (u − uc)d, x − (v − vc)d) should equal the centre view at (y, x)
                 for c in range(C):
-                    w = ndimage.map_coordinates(coeffs[c], coords, order=order, mode="nearest", prefilter=False)
+                    w = ndimage.map_coordinates(
+                        coeffs[c], coords, order=order, mode="nearest", prefilter=False
+                    )
                     cost[i] += (w - centre[..., c]) ** 2
     if window > 1:
         cost = ndimage.uniform_filter(cost, size=(1, window, window), mode="nearest")
@@ -72,8 +83,15 @@ def disparity_cost_volume(views, disparities, *, window: int = 5, order: int = 3
     return cost
 
 
-def disparity_from_views(views, *, max_disparity: float = 2.0, step: float = 0.1, window: int = 5,
-                         order: int = 3, shiftable: bool = True):
+def disparity_from_views(
+    views,
+    *,
+    max_disparity: float = 2.0,
+    step: float = 0.1,
+    window: int = 5,
+    order: int = 3,
+    shiftable: bool = True,
+):
     """Disparity (pixels per view step) of the centre view from a light field's views.
 
     A shift-and-compare cost volume (:func:`disparity_cost_volume`) over
@@ -132,7 +150,8 @@ def disparity_from_views(views, *, max_disparity: float = 2.0, step: float = 0.1
 
 
 def textured_mask(image, *, threshold: float = 0.05, sigma: float = 1.0):
-    """Pixels with enough texture for a disparity/focus estimate: gradient magnitude ≥ ``threshold``·max.
+    """Pixels with enough texture for a disparity/focus estimate: gradient magnitude ≥
+    ``threshold``·max.
 
     ``image`` (H, W) or (H, W, C) (channels averaged); Gaussian-smoothed
     gradient of scale ``sigma``.

@@ -1,4 +1,5 @@
-"""Depth from projected fringes: phase-shifting analysis, unwrapping, phase → height (SPEC §7, Eq. 19-25).
+"""Depth from projected fringes: phase-shifting analysis, unwrapping, phase → height (SPEC §7, Eq.
+19-25).
 
 Conventions (those of :mod:`tensor_cosdi.optics.fringes`): frame ``k`` of a
 ``K``-step sequence is ``I_k = a + b·cos(Φ + 2πk/K)``; a frequency ``ν`` has
@@ -12,8 +13,16 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "wrapped_phase", "fringe_modulation", "temporal_unwrap", "heterodyne_unwrap", "unwrap_gray_code",
-    "decode_gray_code", "spatial_unwrap", "phase_to_height", "calibrate_phase_to_height", "wrap",
+    "wrapped_phase",
+    "fringe_modulation",
+    "temporal_unwrap",
+    "heterodyne_unwrap",
+    "unwrap_gray_code",
+    "decode_gray_code",
+    "spatial_unwrap",
+    "phase_to_height",
+    "calibrate_phase_to_height",
+    "wrap",
 ]
 
 
@@ -99,7 +108,9 @@ def temporal_unwrap(wrapped, reference, ratio):
     w = np.asarray(wrapped, dtype=np.float64)
     r = np.asarray(reference, dtype=np.float64)
     if w.shape != r.shape:
-        raise ValueError(f"wrapped phase {w.shape} and reference {r.shape} must have the same shape")
+        raise ValueError(
+            f"wrapped phase {w.shape} and reference {r.shape} must have the same shape"
+        )
     if not (np.isfinite(ratio) and ratio > 0):
         raise ValueError(f"ratio must be a frequency ratio > 0, got {ratio!r}")
     order = np.round((ratio * r - w) / (2 * np.pi))
@@ -107,7 +118,8 @@ def temporal_unwrap(wrapped, reference, ratio):
 
 
 def heterodyne_unwrap(wrapped, frequencies):
-    """Absolute phase of the highest frequency from wrapped phases at several frequencies (Eq. 22-24).
+    """Absolute phase of the highest frequency from wrapped phases at several frequencies (Eq.
+    22-24).
 
     Multi-frequency temporal unwrapping.  Where the lowest frequency has at
     most one period across the field (``ν ≤ 1``) its phase is already
@@ -146,7 +158,10 @@ def heterodyne_unwrap(wrapped, frequencies):
     w = np.asarray(wrapped, dtype=np.float64)
     f = np.asarray(frequencies, dtype=np.float64).reshape(-1)
     if w.shape[-1:] != f.shape:
-        raise ValueError(f"wrapped has {w.shape[-1] if w.ndim else 0} phases on its last axis but {f.size} frequencies")
+        raise ValueError(
+            f"wrapped has {w.shape[-1] if w.ndim else 0} phases on its last axis but {f.size} "
+            f"frequencies"
+        )
     if not np.all(np.isfinite(f)) or np.any(f <= 0) or len(set(f.tolist())) != f.size:
         raise ValueError(f"frequencies must be distinct positive numbers, got {f.tolist()}")
     order = np.argsort(-f)
@@ -157,7 +172,8 @@ def _absolute(phases, freqs):
     """Absolute phase of freqs[0] (descending list)."""
     if freqs[-1] <= 1.0:
         # one period or less: already absolute.  Its values fill [0, 2πν) of the circle; the unused
-        # 2π(1 − ν) is split on both sides so noise at the field's edges (Φ ≈ 0) does not wrap to 2π.
+        # 2π(1 − ν) is split on both sides so noise at the field's edges (Φ ≈ 0) does not wrap to
+        # 2π.
         lo = -np.pi * (1.0 - freqs[-1])
         phi = np.mod(phases[-1] - lo, 2 * np.pi) + lo
         for i in range(len(freqs) - 2, -1, -1):
@@ -165,7 +181,8 @@ def _absolute(phases, freqs):
         return phi
     if len(freqs) == 1:
         raise ValueError(
-            f"cannot find the absolute phase: no frequency or heterodyne beat has ≤ 1 period (lowest: {freqs[0]:g}); "
+            "cannot find the absolute phase: no frequency or heterodyne beat has ≤ 1 period "
+            f"(lowest: {freqs[0]:g}); "
             "add a frequency, use a Gray code (unwrap_gray_code) or spatial_unwrap"
         )
     beats = [wrap(phases[i] - phases[i + 1]) for i in range(len(freqs) - 1)]
@@ -179,7 +196,8 @@ def _absolute(phases, freqs):
 
 
 def decode_gray_code(frames, threshold=0.5, *, axis: int = -1):
-    """Half-period labels ``h`` from captured Gray-code frames (most significant first along ``axis``).
+    """Half-period labels ``h`` from captured Gray-code frames (most significant first along
+    ``axis``).
 
     ``threshold`` is a number or a per-pixel map (e.g. the fringe offset
     ``a`` from :func:`fringe_modulation`, which adapts to reflectance).
@@ -240,7 +258,9 @@ def spatial_unwrap(wrapped, *, mask=None, reference=None):
         out = np.asarray(unwrap_phase(w), dtype=np.float64)
     if reference is not None:
         idx, value = reference
-        out = out + 2 * np.pi * np.round((float(value) - out[tuple(np.atleast_1d(idx))]) / (2 * np.pi))
+        out = out + 2 * np.pi * np.round(
+            (float(value) - out[tuple(np.atleast_1d(idx))]) / (2 * np.pi)
+        )
     return out
 
 
@@ -254,13 +274,17 @@ def phase_to_height(phase, reference_phase, *, phase_per_height: float):
     next to the camera/projector distance (the thesis' ~1 cm objects).
     """
     if not (np.isfinite(phase_per_height) and phase_per_height != 0):
-        raise ValueError(f"phase_per_height must be a finite non-zero number, got {phase_per_height!r}")
+        raise ValueError(
+            f"phase_per_height must be a finite non-zero number, got {phase_per_height!r}"
+        )
     p = np.asarray(phase, dtype=np.float64)
     r = np.asarray(reference_phase, dtype=np.float64)
     try:
         return (p - r) / phase_per_height
     except ValueError:
-        raise ValueError(f"phase {p.shape} and reference_phase {r.shape} do not broadcast") from None
+        raise ValueError(
+            f"phase {p.shape} and reference_phase {r.shape} do not broadcast"
+        ) from None
 
 
 def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) -> float:
@@ -272,7 +296,9 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
     P = np.asarray(phases, dtype=np.float64)
     h = np.asarray(heights, dtype=np.float64).reshape(-1)
     if P.ndim < 2 or P.shape[0] != h.size:
-        raise ValueError(f"phases must stack one map per height: got {P.shape} for {h.size} heights")
+        raise ValueError(
+            f"phases must stack one map per height: got {P.shape} for {h.size} heights"
+        )
     if not np.any(h != 0):
         raise ValueError("at least one calibration height must be non-zero")
     d = P - np.asarray(reference_phase, dtype=np.float64)
@@ -281,4 +307,3 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
         keep = ~np.broadcast_to(np.asarray(mask, dtype=bool), P.shape)
         d, H = d[keep], H[keep]
     return float(np.sum(d * H) / np.sum(H * H))
-

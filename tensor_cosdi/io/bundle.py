@@ -37,7 +37,14 @@ import numpy as np
 
 from .. import _backend as B
 
-__all__ = ["save_bundle", "load_bundle", "Bundle", "system_state", "system_from_state", "file_digest"]
+__all__ = [
+    "save_bundle",
+    "load_bundle",
+    "Bundle",
+    "system_state",
+    "system_from_state",
+    "file_digest",
+]
 
 FORMAT = "tensor_cosdi-bundle"
 FORMAT_VERSION = 1
@@ -67,16 +74,23 @@ def system_state(system) -> tuple[dict, dict]:
     """
     to_state = getattr(system, "to_state", None)
     if to_state is None or not getattr(system, "name", ""):
-        raise ValueError(f"cannot save a {type(system).__name__}: bundles know the systems of "
-                         "tensor_cosdi.systems.REGISTRY")
+        raise ValueError(
+            f"cannot save a {type(system).__name__}: bundles know the systems of "
+            "tensor_cosdi.systems.REGISTRY"
+        )
     state = to_state()
     arrays = state["arrays"]
-    return {"system": state["system"], "class": state["class"], "params": state["params"],
-            "arrays": sorted(arrays)}, arrays
+    return {
+        "system": state["system"],
+        "class": state["class"],
+        "params": state["params"],
+        "arrays": sorted(arrays),
+    }, arrays
 
 
 def system_from_state(desc: dict, arrays: dict):
-    """Rebuild a system saved by :func:`system_state` (bundles that name only the class included)."""
+    """Rebuild a system saved by :func:`system_state` (bundles that name only the class
+    included)."""
     from ..systems import System
 
     return System.from_state({**desc, "arrays": arrays})
@@ -116,12 +130,27 @@ class Bundle:
 
 def _check_name(name: str, what: str):
     if not isinstance(name, str) or not name or "/" in name or name.startswith("__"):
-        raise ValueError(f"{what} names must be non-empty strings without '/' or a leading '__', got {name!r}")
+        raise ValueError(
+            f"{what} names must be non-empty strings without '/' or a leading '__', got {name!r}"
+        )
 
 
-def save_bundle(path, *, system=None, measurement=None, cube=None, depth=None, calibration=None, arrays=None,
-                metadata=None, sources=(), kind: str | None = None, overwrite: bool = False) -> Path:
-    """Save a measurement / reconstruction / calibration with its system and provenance as one ``.npz`` file.
+def save_bundle(
+    path,
+    *,
+    system=None,
+    measurement=None,
+    cube=None,
+    depth=None,
+    calibration=None,
+    arrays=None,
+    metadata=None,
+    sources=(),
+    kind: str | None = None,
+    overwrite: bool = False,
+) -> Path:
+    """Save a measurement / reconstruction / calibration with its system and provenance as one
+    ``.npz`` file.
 
     Parameters
     ----------
@@ -169,9 +198,16 @@ def save_bundle(path, *, system=None, measurement=None, cube=None, depth=None, c
     if not p.parent.is_dir():
         raise FileNotFoundError(f"folder {p.parent} does not exist")
     store: dict[str, np.ndarray] = {}
-    doc = {"format": FORMAT, "format_version": FORMAT_VERSION,
-           "software": {"tensor_cosdi": __version__, "numpy": np.__version__, "python": platform.python_version()},
-           "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")}
+    doc = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "software": {
+            "tensor_cosdi": __version__,
+            "numpy": np.__version__,
+            "python": platform.python_version(),
+        },
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+    }
     if system is not None:
         desc, sys_arrays = system_state(system)
         doc["system"] = desc
@@ -183,21 +219,37 @@ def save_bundle(path, *, system=None, measurement=None, cube=None, depth=None, c
         for k, v in (mapping or {}).items():
             _check_name(k, group)
             store[f"{group}.{k}"] = _np(v)
-    if system is not None and measurement is not None and store["measurement"].shape != tuple(system.measurement_shape):
-        raise ValueError(f"measurement shape {store['measurement'].shape} does not match the system's "
-                         f"{tuple(system.measurement_shape)}")
+    if (
+        system is not None
+        and measurement is not None
+        and store["measurement"].shape != tuple(system.measurement_shape)
+    ):
+        raise ValueError(
+            f"measurement shape {store['measurement'].shape} does not match the system's "
+            f"{tuple(system.measurement_shape)}"
+        )
     if system is not None and cube is not None and store["cube"].shape != tuple(system.cube_shape):
-        raise ValueError(f"cube shape {store['cube'].shape} does not match the system's {tuple(system.cube_shape)}")
+        raise ValueError(
+            f"cube shape {store['cube'].shape} does not match the system's "
+            f"{tuple(system.cube_shape)}"
+        )
     for k, v in store.items():
         if v.dtype == object:
             raise ValueError(f"array {k!r} has dtype object; bundles store numeric arrays only")
     try:
         doc["metadata"] = json.loads(json.dumps(metadata or {}, allow_nan=False))
     except (TypeError, ValueError) as e:
-        raise ValueError(f"metadata must be JSON-serialisable (numbers, strings, lists, dicts): {e}") from None
+        raise ValueError(
+            f"metadata must be JSON-serialisable (numbers, strings, lists, dicts): {e}"
+        ) from None
     doc["provenance"] = [file_digest(s) for s in sources]
-    doc["kind"] = kind or ("reconstruction" if cube is not None else "measurement" if measurement is not None
-                           else "calibration")
+    doc["kind"] = kind or (
+        "reconstruction"
+        if cube is not None
+        else "measurement"
+        if measurement is not None
+        else "calibration"
+    )
     doc["arrays"] = sorted(store)
     store["__bundle__"] = np.array(json.dumps(doc))
     fd, tmp = tempfile.mkstemp(suffix=".npz", dir=p.parent, prefix=f".{p.name}.")
@@ -213,7 +265,9 @@ def save_bundle(path, *, system=None, measurement=None, cube=None, depth=None, c
             os.unlink(tmp)
     except FileExistsError:
         os.unlink(tmp)
-        raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it") from None
+        raise FileExistsError(
+            f"{p} exists; pass overwrite=True (CLI: --force) to replace it"
+        ) from None
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
@@ -232,17 +286,30 @@ def load_bundle(path) -> Bundle:
     except Exception as e:
         raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
     if "__bundle__" not in data:
-        raise ValueError(f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle")
+        raise ValueError(
+            f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"
+        )
     doc = json.loads(str(data.pop("__bundle__")))
     if doc.get("format") != FORMAT:
         raise ValueError(f"{p}: unknown format {doc.get('format')!r}")
     if doc.get("format_version", 0) > FORMAT_VERSION:
-        raise ValueError(f"{p}: bundle format {doc['format_version']} is newer than this tensor_cosdi reads "
-                         f"({FORMAT_VERSION}); upgrade tensor_cosdi")
+        raise ValueError(
+            f"{p}: bundle format {doc['format_version']} is newer than this tensor_cosdi reads "
+            f"({FORMAT_VERSION}); upgrade tensor_cosdi"
+        )
     system = None
     if "system" in doc:
-        sys_arrays = {k[len("system."):]: v for k, v in data.items() if k.startswith("system.")}
+        sys_arrays = {k[len("system.") :]: v for k, v in data.items() if k.startswith("system.")}
         system = system_from_state(doc["system"], sys_arrays)
-    group = lambda g: {k[len(g) + 1:]: v for k, v in data.items() if k.startswith(g + ".")}  # noqa: E731
-    return Bundle(system, data.get("measurement"), data.get("cube"), data.get("depth"), group("calibration"),
-                  group("extra"), doc.get("metadata", {}), doc.get("provenance", []), doc)
+    group = lambda g: {k[len(g) + 1 :]: v for k, v in data.items() if k.startswith(g + ".")}  # noqa: E731
+    return Bundle(
+        system,
+        data.get("measurement"),
+        data.get("cube"),
+        data.get("depth"),
+        group("calibration"),
+        group("extra"),
+        doc.get("metadata", {}),
+        doc.get("provenance", []),
+        doc,
+    )

@@ -21,14 +21,17 @@ __all__ = ["shifts_from_line_frames", "code_from_monochromator"]
 def _stack(frames, what):
     a = np.asarray(frames, dtype=np.float64)
     if a.ndim != 3 or a.shape[2] < 1:
-        raise ValueError(f"{what} must be a (H, W, Nλ) stack, one frame per band, got shape {a.shape}")
+        raise ValueError(
+            f"{what} must be a (H, W, Nλ) stack, one frame per band, got shape {a.shape}"
+        )
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{what} contain NaN or inf")
     return a
 
 
 def shifts_from_line_frames(frames, *, dark=None, upsample: int = 20, max_rows_shift: float = 0.5):
-    """Per-band column shifts (px, first band 0) from calibration frames of one target under each band.
+    """Per-band column shifts (px, first band 0) from calibration frames of one target under each
+    band.
 
     Phase correlation (``skimage.registration.phase_cross_correlation``,
     ``1/upsample`` px precision) of every frame against the first.  The
@@ -45,16 +48,21 @@ def shifts_from_line_frames(frames, *, dark=None, upsample: int = 20, max_rows_s
     out = np.zeros(a.shape[2])
     for l in range(1, a.shape[2]):
         shift, _, _ = phase_cross_correlation(ref, a[..., l], upsample_factor=upsample)
-        # phase_cross_correlation returns the shift that registers a[..., l] onto ref: the negative displacement
+        # phase_cross_correlation returns the shift that registers a[..., l] onto ref: the negative
+        # displacement
         dy, dx = -shift
         if abs(dy) > max_rows_shift:
-            raise ValueError(f"band {l} is displaced {dy:.2f} px along the rows; dispersion must run along the "
-                             "columns (rotate the camera or the prism)")
+            raise ValueError(
+                f"band {l} is displaced {dy:.2f} px along the rows; dispersion must run along the "
+                "columns (rotate the camera or the prism)"
+            )
         out[l] = dx
     if np.any(np.diff(out) < -1.0 / upsample):
         bad = int(np.nonzero(np.diff(out) < -1.0 / upsample)[0][0]) + 1
-        raise ValueError(f"measured shifts are not non-decreasing (band {bad}: {out[bad]:.2f} px after "
-                         f"{out[bad - 1]:.2f}); frames out of band order? shifts = {np.round(out, 2).tolist()}")
+        raise ValueError(
+            f"measured shifts are not non-decreasing (band {bad}: {out[bad]:.2f} px after "
+            f"{out[bad - 1]:.2f}); frames out of band order? shifts = {np.round(out, 2).tolist()}"
+        )
     return np.maximum.accumulate(np.maximum(out, 0.0))
 
 
@@ -100,17 +108,23 @@ def code_from_monochromator(frames, *, shifts, ny: int | None = None, dark=None,
         if dark is not None:
             o = o - d[..., None]
         if np.any(o <= 0):
-            raise ValueError("open (white) frames have pixels at or below the dark level; cannot normalise")
+            raise ValueError(
+                "open (white) frames have pixels at or below the dark level; cannot normalise"
+            )
         a = a / o
     else:
         scale = np.percentile(a, 99, axis=(0, 1))
         if np.any(scale <= 0):
-            raise ValueError("a band's frame is dark everywhere (99th percentile ≤ 0): wrong band or no light")
+            raise ValueError(
+                "a band's frame is dark everywhere (99th percentile ≤ 0): wrong band or no light"
+            )
         a = a / scale
     w = a.shape[1]
     ny = w - int(np.ceil(s.max())) if ny is None else int(ny)
     if ny < 1 or ny + np.ceil(s.max()) > w:
-        raise ValueError(f"code width {ny} plus the largest shift {s.max():.2f} exceeds the frame width {w}")
+        raise ValueError(
+            f"code width {ny} plus the largest shift {s.max():.2f} exceeds the frame width {w}"
+        )
     per_band = np.empty((a.shape[0], ny, a.shape[2]))
     for l in range(a.shape[2]):
         back = ndimage.shift(a[..., l], (0.0, -s[l]), order=1, mode="constant")

@@ -1,4 +1,5 @@
-"""Capture files → float frames: read, dark/flat correction, region of interest, binning (issue: lab adapter).
+"""Capture files → float frames: read, dark/flat correction, region of interest, binning (issue: lab
+adapter).
 
 Readers by extension: ``.tif``/``.tiff`` (tifffile), ``.png``/``.jpg``/``.jpeg``/``.bmp``
 (imageio), ``.npy``/``.npz`` (NumPy) and ``.mat`` (SciPy).  A frame is one 2-D
@@ -13,7 +14,15 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["read_frame", "write_frames", "load_frames", "bin_frame", "crop", "frame_paths", "FRAME_SUFFIXES"]
+__all__ = [
+    "read_frame",
+    "write_frames",
+    "load_frames",
+    "bin_frame",
+    "crop",
+    "frame_paths",
+    "FRAME_SUFFIXES",
+]
 
 FRAME_SUFFIXES = (".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".npy", ".npz", ".mat")
 
@@ -25,7 +34,9 @@ def _single_array(mapping: dict, path, key):
         return mapping[key]
     names = [k for k in mapping if not k.startswith("__")]
     if len(names) != 1:
-        raise ValueError(f"{path}: holds {len(names)} arrays {sorted(names)}; pass key= to pick one")
+        raise ValueError(
+            f"{path}: holds {len(names)} arrays {sorted(names)}; pass key= to pick one"
+        )
     return mapping[names[0]]
 
 
@@ -53,7 +64,9 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
         raise FileNotFoundError(f"frame file not found: {p}")
     suffix = p.suffix.lower()
     if suffix not in FRAME_SUFFIXES:
-        raise ValueError(f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}")
+        raise ValueError(
+            f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}"
+        )
     try:
         if suffix in (".tif", ".tiff"):
             import tifffile
@@ -77,9 +90,16 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
     if isinstance(a, dict):
         a = _single_array(a, p, key)
     a = np.asarray(a)
-    if a.ndim == 3 and a.shape[-1] in (3, 4) and suffix in (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"):
+    if (
+        a.ndim == 3
+        and a.shape[-1] in (3, 4)
+        and suffix in (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+    ):
         if channel is None:
-            raise ValueError(f"{p}: colour image {a.shape}; a frame must be monochrome — pass channel= to pick one")
+            raise ValueError(
+                f"{p}: colour image {a.shape}; a frame must be monochrome — pass channel= to pick "
+                f"one"
+            )
         a = a[..., channel]
     if a.ndim != 2:
         raise ValueError(f"{p}: expected a 2-D frame, got an array of shape {a.shape}")
@@ -91,7 +111,8 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
 
 
 def crop(frame, roi):
-    """``frame[r0:r1, c0:c1]`` for ``roi = (r0, r1, c0, c1)``; out-of-frame ROIs are errors, not clipped."""
+    """``frame[r0:r1, c0:c1]`` for ``roi = (r0, r1, c0, c1)``; out-of-frame ROIs are errors, not
+    clipped."""
     a = np.asarray(frame)
     try:
         r0, r1, c0, c1 = (int(v) for v in roi)
@@ -116,7 +137,10 @@ def bin_frame(frame, binning: int):
         return a
     h, w = a.shape[:2]
     if h % binning or w % binning:
-        raise ValueError(f"a {h}×{w} frame cannot be binned {binning}×{binning}: crop it to a multiple first (roi=)")
+        raise ValueError(
+            f"a {h}×{w} frame cannot be binned {binning}×{binning}: crop it to a multiple first "
+            f"(roi=)"
+        )
     return a.reshape(h // binning, binning, w // binning, binning, *a.shape[2:]).sum(axis=(1, 3))
 
 
@@ -132,10 +156,14 @@ def frame_paths(source, *, pattern: str = "*") -> list[Path]:
     """
     if isinstance(source, (str, Path)) and Path(source).is_dir():
         folder = Path(source)
-        paths = sorted((p for p in folder.glob(pattern) if p.is_file() and p.suffix.lower() in FRAME_SUFFIXES),
-                       key=_natural_key)
+        paths = sorted(
+            (p for p in folder.glob(pattern) if p.is_file() and p.suffix.lower() in FRAME_SUFFIXES),
+            key=_natural_key,
+        )
         if not paths:
-            raise ValueError(f"{folder}: no frame files ({', '.join(FRAME_SUFFIXES)}) matching {pattern!r}")
+            raise ValueError(
+                f"{folder}: no frame files ({', '.join(FRAME_SUFFIXES)}) matching {pattern!r}"
+            )
         numbered = [re.fullmatch(r"(.*?)(\d+)", p.stem) for p in paths]
         if all(numbered) and len({m.group(1) for m in numbered}) == 1:
             idx = [int(m.group(2)) for m in numbered]
@@ -143,8 +171,10 @@ def frame_paths(source, *, pattern: str = "*") -> list[Path]:
             if missing:
                 width = len(numbered[0].group(2))
                 names = [f"{numbered[0].group(1)}{i:0{width}d}" for i in missing[:10]]
-                raise ValueError(f"{folder}: frame sequence has gaps — missing {names}"
-                                 + (f" and {len(missing) - 10} more" if len(missing) > 10 else ""))
+                raise ValueError(
+                    f"{folder}: frame sequence has gaps — missing {names}"
+                    + (f" and {len(missing) - 10} more" if len(missing) > 10 else "")
+                )
         return paths
     if isinstance(source, (str, Path)):
         return [Path(source)]
@@ -154,8 +184,17 @@ def frame_paths(source, *, pattern: str = "*") -> list[Path]:
     return paths
 
 
-def load_frames(paths_or_folder, *, dark=None, flat=None, roi=None, binning: int = 1, expected: int | None = None,
-                key: str | None = None, pattern: str = "*") -> np.ndarray:
+def load_frames(
+    paths_or_folder,
+    *,
+    dark=None,
+    flat=None,
+    roi=None,
+    binning: int = 1,
+    expected: int | None = None,
+    key: str | None = None,
+    pattern: str = "*",
+) -> np.ndarray:
     """Load, correct and stack frames: ``(H, W, N)`` float64, in file order.
 
     ``F = (raw − dark) / gain`` with ``gain = (flat − dark) / mean(flat − dark)``
@@ -209,20 +248,29 @@ def load_frames(paths_or_folder, *, dark=None, flat=None, roi=None, binning: int
             raise ValueError(f"{p}: frame shape {a.shape} differs from {shape} of {paths[0].name}")
         if dark_a is not None:
             if dark_a.shape != a.shape:
-                raise ValueError(f"dark frame {dark_name}: shape {dark_a.shape} does not match {p} {a.shape}")
+                raise ValueError(
+                    f"dark frame {dark_name}: shape {dark_a.shape} does not match {p} {a.shape}"
+                )
             if dark_a.mean() >= a.mean():
-                raise ValueError(f"{p}: its mean {a.mean():.4g} is not above the dark frame's {dark_a.mean():.4g} "
-                                 f"({dark_name}) — swapped files, or a frame without light?")
+                raise ValueError(
+                    f"{p}: its mean {a.mean():.4g} is not above the dark frame's "
+                    f"{dark_a.mean():.4g} "
+                    f"({dark_name}) — swapped files, or a frame without light?"
+                )
             a = a - dark_a
         frames.append(a)
     if flat_a is not None:
         if flat_a.shape != shape:
-            raise ValueError(f"flat frame {flat_name}: shape {flat_a.shape} does not match the frames' {shape}")
+            raise ValueError(
+                f"flat frame {flat_name}: shape {flat_a.shape} does not match the frames' {shape}"
+            )
         gain = flat_a - (dark_a if dark_a is not None else 0.0)
         if np.any(gain <= 0):
             bad = np.argwhere(gain <= 0)[0]
-            raise ValueError(f"flat frame {flat_name}: {int((gain <= 0).sum())} pixel(s) ≤ the dark level "
-                             f"(first at row {bad[0]}, column {bad[1]}); cannot divide by it")
+            raise ValueError(
+                f"flat frame {flat_name}: {int((gain <= 0).sum())} pixel(s) ≤ the dark level "
+                f"(first at row {bad[0]}, column {bad[1]}); cannot divide by it"
+            )
         gain = gain / gain.mean()
         frames = [f / gain for f in frames]
     out = []
@@ -233,8 +281,11 @@ def load_frames(paths_or_folder, *, dark=None, flat=None, roi=None, binning: int
     return np.stack(out, axis=-1)
 
 
-def write_frames(frames, folder, *, prefix: str = "frame_", suffix: str = ".tif", overwrite: bool = False) -> list[Path]:
-    """Write a ``(H, W, N)`` stack as numbered files ``prefix000suffix …`` (the reverse of :func:`load_frames`).
+def write_frames(
+    frames, folder, *, prefix: str = "frame_", suffix: str = ".tif", overwrite: bool = False
+) -> list[Path]:
+    """Write a ``(H, W, N)`` stack as numbered files ``prefix000suffix …`` (the reverse of
+    :func:`load_frames`).
 
     ``.tif`` keeps the array's dtype (float32/64, uint16 …) exactly; ``.npy``
     likewise; ``.png`` needs integer pixels.  Existing files are an error
@@ -251,7 +302,9 @@ def write_frames(frames, folder, *, prefix: str = "frame_", suffix: str = ".tif"
     paths = [folder / f"{prefix}{i:0{width}d}{suffix}" for i in range(a.shape[2])]
     clash = [p.name for p in paths if p.exists()]
     if clash and not overwrite:
-        raise FileExistsError(f"{folder}: {clash[:5]} exist; pass overwrite=True (CLI: --force) to replace them")
+        raise FileExistsError(
+            f"{folder}: {clash[:5]} exist; pass overwrite=True (CLI: --force) to replace them"
+        )
     if suffix.lower() in (".tif", ".tiff"):
         import tifffile
 
@@ -262,7 +315,9 @@ def write_frames(frames, folder, *, prefix: str = "frame_", suffix: str = ".tif"
             np.save(p, a[..., i])
     elif suffix.lower() == ".png":
         if not np.issubdtype(a.dtype, np.integer):
-            raise ValueError(f"PNG frames need integer pixels (uint8/uint16), got {a.dtype}; use .tif for floats")
+            raise ValueError(
+                f"PNG frames need integer pixels (uint8/uint16), got {a.dtype}; use .tif for floats"
+            )
         import imageio.v3 as iio
 
         for i, p in enumerate(paths):

@@ -1,21 +1,21 @@
 """Sensor frames ↔ measurement tensors, per system (the documented frame order of a capture).
 
-=====================================  =========================  ==========================================
-system                                 frames (each ``(H, W)``)   measurement
-=====================================  =========================  ==========================================
-SDCASSI / DDCASSI, one shot            1                          ``(Nx, Ny + S)`` / ``(Nx, Ny)``
-SDCASSI / DDCASSI, ``K`` shots         ``K``, shot order          ``(…, K)``
-DualCameraCASSI                        2: CASSI frame, then the   ``(Nx, Ny + S, 2)``, the panchromatic
-                                       ``(Nx, Ny)`` panchromatic  frame zero-padded on the right
-CASSIVSI, CASSDIDFA                    1                          ``(Nx, Ny + S)``
-Mu-CoSDI ``"lf"`` / ``"monocular"``    1                          ``(H, W)``
-CS2LI, Mu-CoSDI ``"sl"``               ``Nt``, pattern order      ``(Nx, Ny, Nt)`` (frequency-major, as
-                                       (frequency-major)          :func:`~tensor_cosdi.systems.fringe_cube`)
-C3SLFI                                 ``K`` raw lenslet frames   3-D: ``(Ñ1, Ñ2, K)``; 5-D:
-                                       (snapshot order) in the    ``(N1, N2, K, N4, N5)`` (views cut by the
-                                       system's ``raw_layout``    lenslet layout, Eq. 78/85)
-=====================================  =========================  ==========================================
+* SD-CASSI / DD-CASSI, one shot: 1 frame → ``(Nx, Ny + S)`` / ``(Nx, Ny)``;
+  ``K`` shots: ``K`` frames in shot order → ``(…, K)``.
+* Dual-camera CASSI: 2 frames, the CASSI frame then the ``(Nx, Ny)``
+  panchromatic one → ``(Nx, Ny + S, 2)``, the panchromatic frame zero-padded
+  on the right.
+* CASSI-VSI, CASSDI-DFA: 1 frame → ``(Nx, Ny + S)``.
+* Mu-CoSDI ``"lf"`` / ``"monocular"``: 1 frame → ``(H, W)``.
+* CS2LI, Mu-CoSDI ``"sl"``: ``Nt`` frames in pattern order (frequency-major,
+  as :func:`~tensor_cosdi.systems.fringe_cube`) → ``(Nx, Ny, Nt)``.
+* C3SLFI: ``K`` raw lenslet frames (snapshot order) in the system's
+  ``raw_layout`` → 3-D ``(Ñ1, Ñ2, K)``; 5-D ``(N1, N2, K, N4, N5)`` (views cut
+  by the lenslet layout, Eq. 78/85).
 
+Each system implements its own order (``frames_to_measurement`` /
+``measurement_to_frames`` / ``frame_count`` of
+:class:`~tensor_cosdi.systems.System`); these functions call it.
 Both directions are exact (pure reshapes/permutations), so frames →
 measurement → frames is the identity.
 """
@@ -42,7 +42,8 @@ def frames_to_measurement(system, frames):
 
 
 def measurement_to_frames(system, measurement) -> np.ndarray:
-    """``system``'s measurement → the ``(H, W, N)`` stack of sensor frames (the inverse of :func:`frames_to_measurement`)."""
+    """``system``'s measurement → the ``(H, W, N)`` stack of sensor frames (the inverse of
+    :func:`frames_to_measurement`)."""
     return system.measurement_to_frames(measurement)
 
 
@@ -51,9 +52,11 @@ def dual_camera_frames(cassi_frame, pan_frame) -> np.ndarray:
     c = np.asarray(cassi_frame, dtype=np.float64)
     p = np.asarray(pan_frame, dtype=np.float64)
     if c.ndim != 2 or p.ndim != 2 or p.shape[0] != c.shape[0] or p.shape[1] > c.shape[1]:
-        raise ValueError(f"need a CASSI frame (Nx, Ny + S) and a panchromatic frame (Nx, Ny); got {c.shape}, {p.shape}")
+        raise ValueError(
+            f"need a CASSI frame (Nx, Ny + S) and a panchromatic frame (Nx, Ny); got {c.shape}, "
+            f"{p.shape}"
+        )
     out = np.zeros(c.shape + (2,))
     out[..., 0] = c
     out[:, : p.shape[1], 1] = p
     return out
-

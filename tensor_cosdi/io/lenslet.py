@@ -1,4 +1,5 @@
-"""Lenslet-grid calibration from a flat ("radiometry") frame, and cutting views (issue: lab adapter).
+"""Lenslet-grid calibration from a flat ("radiometry") frame, and cutting views (issue: lab
+adapter).
 
 Behind a microlens array every lenslet draws a bright disc on the sensor; on a
 uniformly lit (flat) frame the disc centres form a lattice
@@ -69,20 +70,27 @@ class LensletGrid:
         return np.asarray(self.offset) + i * a + j * b
 
     def lenslet_range(self, margin: float | None = None):
-        """Index ranges ``(i0, i1), (j0, j1)`` of the lenslets fully inside the frame (``margin`` px, default pitch/2)."""
+        """Index ranges ``(i0, i1), (j0, j1)`` of the lenslets fully inside the frame (``margin``
+        px, default pitch/2)."""
         m = self.pitch / 2 if margin is None else margin
         h, w = self.shape
         ii = np.arange(-int(h / self.pitch) - 2, int(h / self.pitch) + 3)
         jj = np.arange(-int(w / self.pitch) - 2, int(w / self.pitch) + 3)
         I, J = np.meshgrid(ii, jj, indexing="ij")
         c = self.centre(I, J)
-        inside = (c[..., 0] >= m) & (c[..., 0] <= h - 1 - m) & (c[..., 1] >= m) & (c[..., 1] <= w - 1 - m)
+        inside = (
+            (c[..., 0] >= m)
+            & (c[..., 0] <= h - 1 - m)
+            & (c[..., 1] >= m)
+            & (c[..., 1] <= w - 1 - m)
+        )
         rows = np.nonzero(inside.any(axis=1))[0]
         cols = np.nonzero(inside.any(axis=0))[0]
         if rows.size == 0 or cols.size == 0:
             raise ValueError("no lenslet lies fully inside the frame with this margin")
         r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
-        # shrink the index box, dropping the border row/column with most lenslets outside, until all are inside
+        # shrink the index box, dropping the border row/column with most lenslets outside, until all
+        # are inside
         while r1 > r0 and c1 > c0 and not inside[r0:r1, c0:c1].all():
             box = inside[r0:r1, c0:c1]
             losses = [(~box[0]).sum(), (~box[-1]).sum(), (~box[:, 0]).sum(), (~box[:, -1]).sum()]
@@ -109,12 +117,17 @@ class LensletGrid:
         """
         x = np.asarray(raw, dtype=np.float64)
         if x.shape != tuple(self.shape):
-            raise ValueError(f"raw frame shape {x.shape} differs from the calibration frame's {tuple(self.shape)}")
+            raise ValueError(
+                f"raw frame shape {x.shape} differs from the calibration frame's "
+                f"{tuple(self.shape)}"
+            )
         n = int(np.floor(self.pitch)) if n_views is None else int(n_views)
         if n % 2 == 0:
             n -= 1
         if n < 1 or n > self.pitch + 1e-9:
-            raise ValueError(f"n_views must be between 1 and the pitch ({self.pitch:.2f} px), got {n_views!r}")
+            raise ValueError(
+                f"n_views must be between 1 and the pitch ({self.pitch:.2f} px), got {n_views!r}"
+            )
         (i0, i1), (j0, j1) = self.lenslet_range(margin=(n // 2) + 1)
         I, J = np.meshgrid(np.arange(i0, i1), np.arange(j0, j1), indexing="ij")
         c = self.centre(I, J)
@@ -123,11 +136,16 @@ class LensletGrid:
         for u in range(n):
             for v in range(n):
                 p = c + (u - n // 2) * ua + (v - n // 2) * ub
-                out[u, v] = ndimage.map_coordinates(x, [p[..., 0], p[..., 1]], order=order, mode="nearest")
+                out[u, v] = ndimage.map_coordinates(
+                    x, [p[..., 0], p[..., 1]], order=order, mode="nearest"
+                )
         return out
 
-    def rectified(self, raw, n_views: int | None = None, *, layout: str = "interleaved", order: int = 1) -> np.ndarray:
-        """A raw lenslet frame resampled onto an integer grid: ``(Ni·U, Nj·V)`` for C3SLFI / Mu-CoSDI ``"lf"``.
+    def rectified(
+        self, raw, n_views: int | None = None, *, layout: str = "interleaved", order: int = 1
+    ) -> np.ndarray:
+        """A raw lenslet frame resampled onto an integer grid: ``(Ni·U, Nj·V)`` for C3SLFI /
+        Mu-CoSDI ``"lf"``.
 
         ``"interleaved"`` (Eq. 85): pixel ``(i·U + u, j·V + v)`` is view
         ``(u, v)`` of lenslet ``(i, j)``; ``"tiled"`` (Eq. 78): pixel
@@ -154,11 +172,14 @@ def _coarse_lattice(img, pitch_range):
     FY, FX = np.meshgrid(fy, fx, indexing="ij")
     rad = np.hypot(FY, FX)
     lo, hi = 1.0 / pitch_range[1], 1.0 / pitch_range[0]
-    band = (rad >= lo) & (rad <= hi) & (FX > 0) & (np.abs(FY) <= FX)  # one of the two lattice directions
+    band = (
+        (rad >= lo) & (rad <= hi) & (FX > 0) & (np.abs(FY) <= FX)
+    )  # one of the two lattice directions
     if not band.any():
         raise ValueError(f"pitch_range {pitch_range} px has no frequencies on a {h}×{w} frame")
     k = np.argmax(np.where(band, F, -1))
     r, c = np.unravel_index(k, F.shape)
+
     # parabolic refinement along both axes
     def refine(v0, vm, vp):
         d = vm - 2 * v0 + vp
@@ -169,12 +190,15 @@ def _coarse_lattice(img, pitch_range):
     f_y = fy[r] + dy / h
     f_x = fx[c] + dx / w
     pitch = 1.0 / np.hypot(f_y, f_x)
-    # the column-direction lattice vector b = p(−sin θ, cos θ) gives the wave vector (f_y, f_x) ∝ (−sin θ, cos θ)
+    # the column-direction lattice vector b = p(−sin θ, cos θ) gives the wave vector (f_y, f_x) ∝
+    # (−sin θ, cos θ)
     rotation = np.arctan2(-f_y, f_x)
     return pitch, rotation
 
 
-def calibrate_lenslet_grid(white_frame, *, dark=None, pitch_range=(4.0, 64.0), min_peak: float = 0.2) -> LensletGrid:
+def calibrate_lenslet_grid(
+    white_frame, *, dark=None, pitch_range=(4.0, 64.0), min_peak: float = 0.2
+) -> LensletGrid:
     """Fit the lenslet lattice (pitch, offset, rotation) to a flat/white ("radiometry") frame.
 
     Parameters
@@ -213,14 +237,17 @@ def calibrate_lenslet_grid(white_frame, *, dark=None, pitch_range=(4.0, 64.0), m
     if dark is not None:
         d = np.asarray(dark, dtype=np.float64)
         if d.shape != img.shape:
-            raise ValueError(f"dark frame shape {d.shape} differs from the white frame's {img.shape}")
+            raise ValueError(
+                f"dark frame shape {d.shape} differs from the white frame's {img.shape}"
+            )
         if d.mean() >= img.mean():
             raise ValueError("the dark frame is as bright as the white frame: swapped files?")
         img = img - d
     pitch0, rot0 = _coarse_lattice(img, pitch_range)
     if not pitch_range[0] <= pitch0 <= pitch_range[1]:
         raise ValueError(f"no lenslet lattice found in pitch_range {pitch_range}")
-    # disc centroids: local maxima of the smoothed frame, one per lenslet, refined by weighted centroids
+    # disc centroids: local maxima of the smoothed frame, one per lenslet, refined by weighted
+    # centroids
     smooth = ndimage.gaussian_filter(img, pitch0 / 6)
     size = max(3, int(round(pitch0 * 0.7)))
     peaks = (smooth == ndimage.maximum_filter(smooth, size=size)) & (smooth > 0)
@@ -233,7 +260,9 @@ def calibrate_lenslet_grid(white_frame, *, dark=None, pitch_range=(4.0, 64.0), m
     inside = (pr >= half) & (pr < h - half) & (pc >= half) & (pc < w - half)
     pr, pc = pr[inside], pc[inside]
     if pr.size < 4:
-        raise ValueError(f"found only {pr.size} lenslet discs inside the frame; need ≥ 4 to fit a lattice")
+        raise ValueError(
+            f"found only {pr.size} lenslet discs inside the frame; need ≥ 4 to fit a lattice"
+        )
     yy, xx = np.mgrid[-half : half + 1, -half : half + 1]
     cent = np.empty((pr.size, 2))
     for n, (r, c) in enumerate(zip(pr, pc)):
@@ -252,7 +281,14 @@ def calibrate_lenslet_grid(white_frame, *, dark=None, pitch_range=(4.0, 64.0), m
     offset, a, b = coef[0], coef[1], coef[2]
     pitch = float((np.linalg.norm(a) + np.linalg.norm(b)) / 2)
     rotation = float((np.arctan2(a[1], a[0]) + np.arctan2(-b[0], b[1])) / 2)
-    grid = LensletGrid(pitch, (float(offset[0]), float(offset[1])), rotation, img.shape, cent, ij.astype(int),
-                       np.zeros(len(ij)))
+    grid = LensletGrid(
+        pitch,
+        (float(offset[0]), float(offset[1])),
+        rotation,
+        img.shape,
+        cent,
+        ij.astype(int),
+        np.zeros(len(ij)),
+    )
     res = np.hypot(*(cent - grid.centre(ij[:, 0], ij[:, 1])).T)
     return LensletGrid(pitch, grid.offset, rotation, img.shape, cent, ij.astype(int), res)

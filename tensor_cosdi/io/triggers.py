@@ -35,13 +35,18 @@ import datetime as _dt
 import hashlib
 import json
 import os
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = [
-    "Step", "AcquisitionPlan", "SerialDevice", "DeviceError", "Acquisition", "FolderCamera", "FakeTriggerDevice",
+    "Step",
+    "AcquisitionPlan",
+    "SerialDevice",
+    "DeviceError",
+    "Acquisition",
+    "FolderCamera",
+    "FakeTriggerDevice",
     "read_log",
 ]
 
@@ -61,12 +66,14 @@ def _port_errors():
 
 
 class DeviceError(RuntimeError):
-    """The trigger device did not do what was asked (timeout after retries, ERR reply, lost port)."""
+    """The trigger device did not do what was asked (timeout after retries, ERR reply, lost
+    port)."""
 
 
 @dataclass(frozen=True)
 class Step:
-    """One frame of an acquisition: the commands to send before triggering, and where the frame lands.
+    """One frame of an acquisition: the commands to send before triggering, and where the frame
+    lands.
 
     ``index`` names the frame's place in the measurement tensor, e.g.
     ``{"k": 2}`` (C3SLFI snapshot), ``{"t": 5}`` (structured-light pattern),
@@ -86,7 +93,9 @@ def _check_command(c):
         raise ValueError(f"a command is one non-empty line of text, got {c!r}")
     verb = c.split()[0]
     if verb not in ("PING", "DMD", "DM", "PROJ", "TRIG"):
-        raise ValueError(f"unknown command verb {verb!r} in {c!r}; the protocol knows PING, DMD, DM, PROJ, TRIG")
+        raise ValueError(
+            f"unknown command verb {verb!r} in {c!r}; the protocol knows PING, DMD, DM, PROJ, TRIG"
+        )
     return c.strip()
 
 
@@ -125,17 +134,22 @@ class AcquisitionPlan:
     def snapshots(cls, n_snapshots: int, *, suffix: str = ".tif") -> "AcquisitionPlan":
         """``K`` snapshots, DMD code ``k`` for snapshot ``k`` (multi-shot CASSI, C3SLFI)."""
         names = cls._frames(n_snapshots, suffix)
-        return cls(tuple(Step({"k": k}, (f"DMD {k}",), names[k]) for k in range(n_snapshots)), "snapshots")
+        return cls(
+            tuple(Step({"k": k}, (f"DMD {k}",), names[k]) for k in range(n_snapshots)), "snapshots"
+        )
 
     @classmethod
     def patterns(cls, n_patterns: int, *, suffix: str = ".tif") -> "AcquisitionPlan":
         """``Nt`` projector patterns, frequency-major (CS2LI, Mu-CoSDI ``"sl"``)."""
         names = cls._frames(n_patterns, suffix)
-        return cls(tuple(Step({"t": t}, (f"PROJ {t}",), names[t]) for t in range(n_patterns)), "patterns")
+        return cls(
+            tuple(Step({"t": t}, (f"PROJ {t}",), names[t]) for t in range(n_patterns)), "patterns"
+        )
 
     @classmethod
     def focal_sweep(cls, zernike_steps, *, suffix: str = ".tif") -> "AcquisitionPlan":
-        """One frame per focal step ``z``: DMD code ``z`` and the mirror's Zernike coefficients (CASSDI-DFA calibration)."""
+        """One frame per focal step ``z``: DMD code ``z`` and the mirror's Zernike coefficients
+        (CASSDI-DFA calibration)."""
         steps = []
         names = cls._frames(len(zernike_steps), suffix)
         for z, coeffs in enumerate(zernike_steps):
@@ -144,13 +158,17 @@ class AcquisitionPlan:
         return cls(tuple(steps), "focal_sweep")
 
     def fingerprint(self) -> str:
-        return hashlib.sha256(json.dumps([s.to_dict() for s in self.steps], sort_keys=True).encode()).hexdigest()
+        return hashlib.sha256(
+            json.dumps([s.to_dict() for s in self.steps], sort_keys=True).encode()
+        ).hexdigest()
 
     def save(self, path, *, overwrite: bool = False) -> Path:
         p = Path(path)
         if p.exists() and not overwrite:
             raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
-        p.write_text(json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1))
+        p.write_text(
+            json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1)
+        )
         return p
 
     @classmethod
@@ -158,8 +176,10 @@ class AcquisitionPlan:
         p = Path(path)
         try:
             doc = json.loads(p.read_text())
-            return cls(tuple(Step(s["index"], tuple(s["commands"]), s["frame"]) for s in doc["steps"]),
-                       doc.get("name", p.stem))
+            return cls(
+                tuple(Step(s["index"], tuple(s["commands"]), s["frame"]) for s in doc["steps"]),
+                doc.get("name", p.stem),
+            )
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ValueError(f"{p}: not an acquisition plan ({type(e).__name__}: {e})") from e
 
@@ -188,7 +208,11 @@ class SerialDevice:
             raise ValueError(f"retries must be an integer ≥ 0, got {retries!r}")
         self.timeout, self.retries = float(timeout), retries
         try:
-            self.port = serial.serial_for_url(port, baudrate=baudrate, timeout=0.05) if isinstance(port, str) else port
+            self.port = (
+                serial.serial_for_url(port, baudrate=baudrate, timeout=0.05)
+                if isinstance(port, str)
+                else port
+            )
         except serial.SerialException as e:
             raise DeviceError(f"cannot open serial port {port!r}: {e}") from e
         self.log: list[str] = []  # every line sent and received, for diagnostics
@@ -219,7 +243,8 @@ class SerialDevice:
         return None
 
     def command(self, line: str) -> str:
-        """Send one command and return the device's ``OK`` line; raise :class:`DeviceError` otherwise."""
+        """Send one command and return the device's ``OK`` line; raise :class:`DeviceError`
+        otherwise."""
         line = _check_command(line)
         verb = line.split()[0]
         expected = f"OK {line}" if verb == "TRIG" else f"OK {verb}"
@@ -236,7 +261,9 @@ class SerialDevice:
             while True:
                 reply = self._readline(deadline)
                 if reply is None:
-                    problems.append(f"attempt {attempt + 1}: no acknowledgement within {self.timeout:g} s")
+                    problems.append(
+                        f"attempt {attempt + 1}: no acknowledgement within {self.timeout:g} s"
+                    )
                     break
                 self.log.append(f"< {reply}")
                 if reply == line or not reply:
@@ -247,8 +274,10 @@ class SerialDevice:
                     raise DeviceError(f"device refused {line!r}: {reply}")
                 problems.append(f"attempt {attempt + 1}: garbage reply {reply!r}")
                 break
-        raise DeviceError(f"no valid acknowledgement for {line!r} after {self.retries + 1} attempt(s): "
-                          + "; ".join(problems))
+        raise DeviceError(
+            f"no valid acknowledgement for {line!r} after {self.retries + 1} attempt(s): "
+            + "; ".join(problems)
+        )
 
 
 class FolderCamera:
@@ -322,8 +351,10 @@ class Acquisition:
         header, entries = read_log(self.log_path)
         fp = self.plan.fingerprint()
         if header is not None and header["plan"] != fp:
-            raise ValueError(f"{self.log_path} belongs to another acquisition plan (fingerprint "
-                             f"{header['plan'][:12]}… ≠ {fp[:12]}…); use a new log file")
+            raise ValueError(
+                f"{self.log_path} belongs to another acquisition plan (fingerprint "
+                f"{header['plan'][:12]}… ≠ {fp[:12]}…); use a new log file"
+            )
         if self.log_path.exists():  # drop an unfinished last line before appending
             text = self.log_path.read_text()
             keep = text[: text.rfind("\n") + 1] if "\n" in text else ""
@@ -331,8 +362,15 @@ class Acquisition:
                 self.log_path.write_text(keep)
         f = open(self.log_path, "a")
         if header is None:
-            self._write(f, {"plan": fp, "name": self.plan.name, "steps": len(self.plan.steps),
-                            "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")})
+            self._write(
+                f,
+                {
+                    "plan": fp,
+                    "name": self.plan.name,
+                    "steps": len(self.plan.steps),
+                    "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+                },
+            )
         return f, {e["step"] for e in entries}
 
     @staticmethod
@@ -365,10 +403,18 @@ class Acquisition:
                     self.device.command(f"TRIG {i}")
                     path = Path(self.capture(step))
                 except DeviceError as e:
-                    raise DeviceError(f"step {i} ({step.index}, {step.frame}): {e}. The log {self.log_path} holds "
-                                      f"{len(done) + len(written)} finished frame(s); run again to resume") from e
-                entry = {"step": i, "index": dict(step.index), "frame": str(path), "sha256": file_digest(path)["sha256"],
-                         "time": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds")}
+                    raise DeviceError(
+                        f"step {i} ({step.index}, {step.frame}): {e}. The log {self.log_path} "
+                        "holds "
+                        f"{len(done) + len(written)} finished frame(s); run again to resume"
+                    ) from e
+                entry = {
+                    "step": i,
+                    "index": dict(step.index),
+                    "frame": str(path),
+                    "sha256": file_digest(path)["sha256"],
+                    "time": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="milliseconds"),
+                }
                 self._write(f, entry)
                 written.append(entry)
         finally:
@@ -376,115 +422,4 @@ class Acquisition:
         return written
 
 
-class FakeTriggerDevice:
-    """A simulated trigger microcontroller on a pseudo-terminal, for tests and dry runs (POSIX only).
-
-    ``port`` is the device path to open with :class:`SerialDevice`.  The
-    behaviour is scripted per command line (exact text, e.g. ``"TRIG 2"``,
-    or a verb such as ``"PROJ"``):
-
-    * ``delays`` — seconds to wait before answering;
-    * ``late_once`` — answer only after this many seconds the *first* time
-      (a retry then succeeds);
-    * ``silent`` — never answer;
-    * ``garbage_once`` — answer garbage the first time;
-    * ``echo`` — echo every line first.
-
-    ``fired`` lists the frames actually triggered (a repeated ``TRIG n`` is
-    acknowledged without firing again); ``on_trigger(n)``, if given, is
-    called when frame ``n`` fires (e.g. to write a simulated camera frame);
-    ``disconnect()`` pulls the plug.
-    """
-
-    def __init__(self, *, delays=None, late_once=None, silent=(), garbage_once=(), echo: bool = False,
-                 on_trigger=None):
-        if os.name != "posix":
-            raise OSError("FakeTriggerDevice needs POSIX pseudo-terminals (Linux, macOS)")
-        import tty
-
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        self.port = os.ttyname(self.slave)
-        self.delays = dict(delays or {})
-        self.late_once = dict(late_once or {})
-        self.silent = set(silent)
-        self.garbage_once = set(garbage_once)
-        self.echo = echo
-        self.on_trigger = on_trigger
-        self.fired: list[int] = []
-        self.received: list[str] = []
-        self._seen: set[str] = set()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._serve, daemon=True)
-        self._thread.start()
-
-    def _match(self, mapping, line):
-        verb = line.split()[0]
-        if isinstance(mapping, dict):
-            return mapping.get(line, mapping.get(verb))
-        return line in mapping or verb in mapping
-
-    def _serve(self):
-        buf = b""
-        while not self._stop.is_set():
-            try:
-                chunk = os.read(self.master, 1024)
-            except OSError:
-                return
-            if not chunk:
-                return
-            buf += chunk
-            while b"\n" in buf:
-                raw, buf = buf.split(b"\n", 1)
-                line = raw.decode("ascii", errors="replace").strip()
-                if line:
-                    self._answer(line)
-
-    def _send(self, text):
-        try:
-            os.write(self.master, (text + "\n").encode("ascii"))
-        except OSError:
-            pass
-
-    def _answer(self, line):
-        self.received.append(line)
-        first = line not in self._seen
-        self._seen.add(line)
-        if self.echo:
-            self._send(line)
-        if self._match(self.silent, line):
-            return
-        delay = self._match(self.delays, line) or 0.0
-        if first and self._match(self.late_once, line) is not None:
-            delay = max(delay, self._match(self.late_once, line))
-        if delay:
-            time.sleep(delay)
-        if first and self._match(self.garbage_once, line):
-            self._send("#$%?!")
-            return
-        verb, *args = line.split()
-        if verb == "TRIG":
-            n = int(args[0]) if args and args[0].isdigit() else None
-            if n is None:
-                self._send("ERR TRIG needs a frame number")
-                return
-            if not self.fired or self.fired[-1] != n:
-                self.fired.append(n)
-                if self.on_trigger is not None:
-                    self.on_trigger(n)
-            self._send(f"OK TRIG {n}")
-        elif verb in ("PING", "DMD", "DM", "PROJ"):
-            self._send(f"OK {verb}")
-        else:
-            self._send(f"ERR {verb} unknown command")
-
-    def disconnect(self):
-        """Close the device end: the host's next read or write fails."""
-        self._stop.set()
-        for fd in (self.master, self.slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-
-    close = disconnect
+from .fake_device import FakeTriggerDevice  # noqa: E402  (re-exported: tests and examples use it)

@@ -5,13 +5,13 @@ primitives; each has an exact adjoint and an explicit sparse matrix for tests.
 """
 
 from ._base import TensorOperator, unvec, validate_shape, vec, vec_index
-from .combinators import Adjoint, Composition, Identity, OperatorSum, Scaled, Stack, weighted_sum
-from .routing import Routing
 from .blur import Blur
 from .codes import Code
+from .combinators import Adjoint, Composition, Identity, OperatorSum, Scaled, Stack, weighted_sum
 from .integrate import Replicate, SumAxis
 from .layout import LAYOUTS, LightFieldLayout, Pad, Transpose
 from .modes import ModeProduct
+from .routing import Routing
 from .shear import Shear, parse_shifts, shear_bands, unshear_bands
 from .woodbury import Diagonal, PixelBlocks, RowBanded, conjugate_gradient
 

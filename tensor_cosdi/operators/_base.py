@@ -120,11 +120,15 @@ class TensorOperator:
     # ---- public application -------------------------------------------------
     def forward(self, x):
         """Apply the operator: tensor of ``input_shape`` → tensor of ``output_shape``."""
-        return self._checked_apply(x, self.input_shape, self.output_shape, self._forward, "forward", "input")
+        return self._checked_apply(
+            x, self.input_shape, self.output_shape, self._forward, "forward", "input"
+        )
 
     def adjoint(self, y):
         """Apply the adjoint: tensor of ``output_shape`` → tensor of ``input_shape``."""
-        return self._checked_apply(y, self.output_shape, self.input_shape, self._adjoint, "adjoint", "output")
+        return self._checked_apply(
+            y, self.output_shape, self.input_shape, self._adjoint, "adjoint", "output"
+        )
 
     __call__ = forward
 

@@ -3,7 +3,8 @@
 When band ``l`` is shifted by ``s·l`` pixels (an integer step ``s ≥ 0``, the
 usual prism model), the shear is a *stride*.  Hold the cube with the band
 axis slowest and the shifted axis next — memory order ``(λ, y, x)`` for an
-``(x, y, λ)`` SD-CASSI cube, i.e. Fortran order.  Then every band is one contiguous slab and lands on one contiguous block
+``(x, y, λ)`` SD-CASSI cube, i.e. Fortran order.  Then every band is one contiguous slab and lands
+on one contiguous block
 of the measurement: the forward is two ufunc calls per band on whole slabs
 into a measurement that stays in cache, and the adjoint one multiply of a
 zero-copy strided view of the measurement (band ``l`` reads from ``s·l``
@@ -60,7 +61,7 @@ def shear_sum_forward(x: np.ndarray, weights, band_axis: int, shift_axis: int, s
     out = np.zeros((width,) + xm.shape[2:], dtype=x.dtype)
     tmp = np.empty(xm.shape[1:], dtype=x.dtype) if weights is not None else None
     for l in range(L):
-        target = out[step * l: step * l + n]
+        target = out[step * l : step * l + n]
         if weights is None:
             np.add(target, xm[l], out=target)
         else:
@@ -69,12 +70,14 @@ def shear_sum_forward(x: np.ndarray, weights, band_axis: int, shift_axis: int, s
     return np.moveaxis(out, 0, shift_axis - (shift_axis > band_axis))
 
 
-def shear_sum_adjoint(y: np.ndarray, weights, band_axis: int, shift_axis: int, step: int, n_bands: int,
-                      n: int) -> np.ndarray:
+def shear_sum_adjoint(
+    y: np.ndarray, weights, band_axis: int, shift_axis: int, step: int, n_bands: int, n: int
+) -> np.ndarray:
     """``x[l, c, …] = w · y[c + step·l, …]``, returned in the fast layout (band, shift, rest)."""
     ym = np.ascontiguousarray(np.moveaxis(y, shift_axis - (shift_axis > band_axis), 0))
-    view = as_strided(ym, (n_bands, n) + ym.shape[1:], (step * ym.strides[0],) + ym.strides,
-                      writeable=False)
+    view = as_strided(
+        ym, (n_bands, n) + ym.shape[1:], (step * ym.strides[0],) + ym.strides, writeable=False
+    )
     if weights is None:
         out = view.copy()
     else:

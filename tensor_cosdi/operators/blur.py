@@ -119,9 +119,7 @@ class Blur(TensorOperator):
         grids = np.indices(shape)
         kern = np.broadcast_to(
             self.kernel,
-            tuple(
-                self.kernel.shape[a] if a in self.axes else shape[a] for a in range(len(shape))
-            ),
+            tuple(self.kernel.shape[a] if a in self.axes else shape[a] for a in range(len(shape))),
         )
         a0, a1 = self.axes
         c0, c1 = self.centre

@@ -1,4 +1,5 @@
-"""Combinators of the operator protocol: identity, adjoint view, scaling, composition, sum, stack."""
+"""Combinators of the operator protocol: identity, adjoint view, scaling, composition, sum,
+stack."""
 
 from __future__ import annotations
 
@@ -289,9 +290,7 @@ class Stack(TensorOperator):
         from .woodbury import Pattern
 
         routes = [o._routing() for o in self.operators]
-        if all(r is not None and r.single for r in routes) and len(
-            {r.key for r in routes}
-        ) == 1:
+        if all(r is not None and r.single for r in routes) and len({r.key for r in routes}) == 1:
             return Pattern("blocks", self.axis)
         return None
 

@@ -50,7 +50,11 @@ class SumAxis(TensorOperator):
         nd = len(self.input_shape)
         axis_map = tuple(None if a == self.axis else a - (a > self.axis) for a in range(nd))
         return Routing(
-            ("sum", self.input_shape, self.axis), axis_map, ((0, 0),) * (nd - 1), (0,) * (nd - 1), True
+            ("sum", self.input_shape, self.axis),
+            axis_map,
+            ((0, 0),) * (nd - 1),
+            (0,) * (nd - 1),
+            True,
         )
 
     def _to_matrix(self):
@@ -187,11 +191,20 @@ class _CodedShearSum(TensorOperator):
     def _adjoint(self, y):
         nb = self.input_shape[self.sum_axis]
         if isinstance(y, np.ndarray) and self._step is not None:
-            return shear_sum_adjoint(y, self._w_moved(y), self.sum_axis, self.shift_axis, self._step, nb,
-                                     self.input_shape[self.shift_axis])
+            return shear_sum_adjoint(
+                y,
+                self._w_moved(y),
+                self.sum_axis,
+                self.shift_axis,
+                self._step,
+                nb,
+                self.input_shape[self.shift_axis],
+            )
         rest = self.input_shape[: self.sum_axis] + self.input_shape[self.sum_axis + 1 :]
-        out = B.zeros_like_shape((nb,) + rest, y) if not isinstance(y, np.ndarray) else np.empty(
-            (nb,) + rest, dtype=y.dtype
+        out = (
+            B.zeros_like_shape((nb,) + rest, y)
+            if not isinstance(y, np.ndarray)
+            else np.empty((nb,) + rest, dtype=y.dtype)
         )
         for l in range(nb):
             yl = y[self._oslice(l)]

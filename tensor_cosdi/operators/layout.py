@@ -18,7 +18,9 @@ LAYOUTS = ("interleaved", "tiled")
 
 def _permutation_matrix(rows_for_input: np.ndarray, shape_out, n_in) -> sp.csr_matrix:
     cols = np.arange(n_in)
-    return sp.csr_matrix((np.ones(n_in), (rows_for_input, cols)), shape=(int(np.prod(shape_out)), n_in))
+    return sp.csr_matrix(
+        (np.ones(n_in), (rows_for_input, cols)), shape=(int(np.prod(shape_out)), n_in)
+    )
 
 
 class Transpose(TensorOperator):
@@ -47,7 +49,9 @@ class Transpose(TensorOperator):
     def _routing(self):
         nd = len(self.axes)
         axis_map = tuple(self.axes.index(a) for a in range(nd))
-        return Routing(("transpose", self.input_shape, self.axes), axis_map, ((0, 0),) * nd, (0,) * nd)
+        return Routing(
+            ("transpose", self.input_shape, self.axes), axis_map, ((0, 0),) * nd, (0,) * nd
+        )
 
     def _to_matrix(self):
         out_idx = vec_index(self.output_shape)

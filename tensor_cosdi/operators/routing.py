@@ -59,7 +59,9 @@ class Routing:
             s1, s2 = self.spread[m], outer.spread[o]
             spread.append(None if s1 is None or s2 is None else s1 + s2)
         return Routing(
-            (outer.key, self.key), axis_map, tuple(disp), tuple(spread), self.single and outer.single
+            (outer.key, self.key),
+            axis_map,
+            tuple(disp),
+            tuple(spread),
+            self.single and outer.single,
         )
-
-

@@ -133,7 +133,9 @@ class Shear(TensorOperator):
         spread = [0] * nd
         disp[self.axis] = (int(self._floor.min()), int(self._floor.max()))
         spread[self.axis] = 0 if self.integer else 1
-        return Routing(self._key("shear"), tuple(range(nd)), tuple(disp), tuple(spread), self.integer)
+        return Routing(
+            self._key("shear"), tuple(range(nd)), tuple(disp), tuple(spread), self.integer
+        )
 
     def _adjoint_routing(self):
         if not self.integer:

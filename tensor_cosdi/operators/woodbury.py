@@ -53,6 +53,7 @@ SELF_CHECK_RTOL = 1e-6
 class StructureError(ValueError):
     """The structure derived for ``A Aᵀ`` does not reproduce ``A(Aᵀ v)``: a mis-routed operator."""
 
+
 #: Widest band (one side) that is probed and factored; wider couplings use CG.
 MAX_BANDWIDTH = 512
 #: Largest per-pixel block that is probed and inverted; larger ones use CG.
@@ -152,7 +153,9 @@ def check_structure(op, structure, *, rtol: float = SELF_CHECK_RTOL, seed: int =
     v = np.random.default_rng(seed).standard_normal(op.output_shape)
     exact = _apply_gram(op, v)
     got = np.asarray(B.to_numpy(structure.matvec(B.as_tensor(v, "float64"))), dtype=np.float64)
-    err = float(np.linalg.norm(got - exact)) / max(float(np.linalg.norm(exact)), np.finfo(float).tiny)
+    err = float(np.linalg.norm(got - exact)) / max(
+        float(np.linalg.norm(exact)), np.finfo(float).tiny
+    )
     if not err <= rtol:
         raise StructureError(
             f"the {structure!r} derived for A Aᵀ of {op!r} does not reproduce A(Aᵀ v): relative "
@@ -233,9 +236,7 @@ class Diagonal(_Structure):
         self.d = np.asarray(d, dtype=np.float64)
 
     def solve(self, b, mu):
-        denom = self._cached(
-            ("den", mu) + B.context_key(b), lambda: B.tensor_like(self.d + mu, b)
-        )
+        denom = self._cached(("den", mu) + B.context_key(b), lambda: B.tensor_like(self.d + mu, b))
         return b / denom
 
     def matvec(self, b):
@@ -275,7 +276,9 @@ class PixelBlocks(_Structure):
         return np.linalg.solve(M, eye)
 
     def solve(self, b, mu):
-        inv = self._cached(("inv", mu) + B.context_key(b), lambda: B.tensor_like(self._inverse(mu), b))
+        inv = self._cached(
+            ("inv", mu) + B.context_key(b), lambda: B.tensor_like(self._inverse(mu), b)
+        )
         bm = tl.moveaxis(b, self.axis, -1)
         x = tl.sum(inv * bm[..., None, :], axis=-1)
         return tl.moveaxis(x, -1, self.axis)
@@ -418,4 +421,3 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
                 stacklevel=2,
             )
     return x
-

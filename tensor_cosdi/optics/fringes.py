@@ -1,4 +1,5 @@
-"""Projected patterns for structured light: phase-shifted fringes and Gray codes (SPEC §7, Eq. 21/25/136).
+"""Projected patterns for structured light: phase-shifted fringes and Gray codes (SPEC §7, Eq.
+21/25/136).
 
 Phase convention (the one :func:`tensor_cosdi.depth.wrapped_phase` inverts):
 frame ``k`` of a ``K``-step sequence is ``I_k = a + b·cos(Φ + 2πk/K)``, with
@@ -15,12 +16,20 @@ import numbers
 
 import numpy as np
 
-__all__ = ["projector_phase", "phase_shift_patterns", "gray_code_patterns", "gray_code_bits", "gray_to_binary"]
+__all__ = [
+    "projector_phase",
+    "phase_shift_patterns",
+    "gray_code_patterns",
+    "gray_code_bits",
+    "gray_to_binary",
+]
 
 
 def _steps(n_steps):
     if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
-        raise ValueError(f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}")
+        raise ValueError(
+            f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}"
+        )
     return int(n_steps)
 
 
@@ -60,7 +69,9 @@ def projector_phase(shape, frequencies, *, axis: int = 1) -> np.ndarray:
     return np.broadcast_to(ramp, (h, w))[..., None] * f
 
 
-def phase_shift_patterns(phase, n_steps: int = 4, *, offset: float = 0.5, amplitude: float = 0.5) -> np.ndarray:
+def phase_shift_patterns(
+    phase, n_steps: int = 4, *, offset: float = 0.5, amplitude: float = 0.5
+) -> np.ndarray:
     """``K``-step phase-shifted fringes ``a + b·cos(Φ + 2πk/K)`` for each phase map.
 
     Parameters
@@ -83,7 +94,10 @@ def phase_shift_patterns(phase, n_steps: int = 4, *, offset: float = 0.5, amplit
     """
     K = _steps(n_steps)
     if not (np.isfinite(offset) and np.isfinite(amplitude) and 0 <= amplitude <= offset):
-        raise ValueError(f"need 0 ≤ amplitude ≤ offset (light is ≥ 0), got offset={offset!r}, amplitude={amplitude!r}")
+        raise ValueError(
+            f"need 0 ≤ amplitude ≤ offset (light is ≥ 0), got offset={offset!r}, "
+            f"amplitude={amplitude!r}"
+        )
     p = np.asarray(phase, dtype=np.float64)
     if p.ndim == 2:
         p = p[..., None]
@@ -103,7 +117,9 @@ def gray_code_bits(n_periods: float) -> int:
     return max(1, int(np.ceil(np.log2(2 * n_periods))))
 
 
-def gray_code_patterns(phase, n_bits: int | None = None, *, n_periods: float | None = None) -> np.ndarray:
+def gray_code_patterns(
+    phase, n_bits: int | None = None, *, n_periods: float | None = None
+) -> np.ndarray:
     """Binary Gray-code frames that label each half fringe period: ``h = ⌊Φ/π⌋``.
 
     Real rigs pair phase shifting with Gray codes to find the fringe order.
@@ -140,11 +156,16 @@ def gray_code_patterns(phase, n_bits: int | None = None, *, n_periods: float | N
         raise ValueError("phase must be finite and ≥ 0 (an absolute projector phase)")
     h = np.floor(p / np.pi).astype(np.int64)
     if n_bits is None:
-        n_bits = gray_code_bits(n_periods if n_periods is not None else max(p.max() / (2 * np.pi), 0.5))
+        n_bits = gray_code_bits(
+            n_periods if n_periods is not None else max(p.max() / (2 * np.pi), 0.5)
+        )
     if isinstance(n_bits, bool) or not isinstance(n_bits, numbers.Integral) or n_bits < 1:
         raise ValueError(f"n_bits must be a positive integer, got {n_bits!r}")
     if h.max() >= 2**n_bits:
-        raise ValueError(f"{n_bits} Gray-code bits label {2 ** n_bits} half periods, the phase needs {int(h.max()) + 1}")
+        raise ValueError(
+            f"{n_bits} Gray-code bits label {2**n_bits} half periods, the phase needs "
+            f"{int(h.max()) + 1}"
+        )
     g = h ^ (h >> 1)
     bits = [(g >> (n_bits - 1 - b)) & 1 for b in range(n_bits)]
     return np.stack(bits, axis=-1).astype(np.float64)

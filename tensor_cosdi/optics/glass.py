@@ -28,7 +28,10 @@ class Glass:
 
     def __post_init__(self):
         if len(self.B) != len(self.C) or not self.B:
-            raise ValueError(f"glass {self.name!r}: B and C must have the same non-zero length, got {self.B}, {self.C}")
+            raise ValueError(
+                f"glass {self.name!r}: B and C must have the same non-zero length, got {self.B}, "
+                f"{self.C}"
+            )
         if not all(np.isfinite(v) for v in (*self.B, *self.C)):
             raise ValueError(f"glass {self.name!r}: Sellmeier coefficients must be finite")
 
@@ -40,7 +43,10 @@ class Glass:
         l2 = (lam / 1000.0) ** 2
         n2 = 1.0 + sum(b * l2 / (l2 - c) for b, c in zip(self.B, self.C))
         if np.any(n2 <= 0):
-            raise ValueError(f"glass {self.name!r}: the Sellmeier model is invalid at {wavelength_nm!r} nm (n² ≤ 0)")
+            raise ValueError(
+                f"glass {self.name!r}: the Sellmeier model is invalid at {wavelength_nm!r} nm "
+                "(n² ≤ 0)"
+            )
         out = np.sqrt(n2)
         return float(out) if out.ndim == 0 else out
 
@@ -66,9 +72,15 @@ def register_glass(name: str, B, C) -> Glass:
 
 
 # Thesis Eq. 188 (first and third prisms) and Eq. 189 (middle prism); the Schott catalogue values.
-register_glass("N-SK2", (1.28189012, 0.257738258, 0.96818604), (0.0072719164, 0.0242823527, 110.377773))
-register_glass("SF4", (1.61957826, 0.339493189, 1.02566931), (0.0125502104, 0.0544559822, 117.652222))
-register_glass("N-BK7", (1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653))
+register_glass(
+    "N-SK2", (1.28189012, 0.257738258, 0.96818604), (0.0072719164, 0.0242823527, 110.377773)
+)
+register_glass(
+    "SF4", (1.61957826, 0.339493189, 1.02566931), (0.0125502104, 0.0544559822, 117.652222)
+)
+register_glass(
+    "N-BK7", (1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)
+)
 
 
 def _glass(glass) -> Glass:
@@ -77,8 +89,10 @@ def _glass(glass) -> Glass:
     try:
         return GLASSES[str(glass).upper()]
     except KeyError:
-        raise ValueError(f"unknown glass {glass!r}; known glasses: {sorted(g.name for g in GLASSES.values())} "
-                         "(add one with register_glass)") from None
+        raise ValueError(
+            f"unknown glass {glass!r}; known glasses: {sorted(g.name for g in GLASSES.values())} "
+            "(add one with register_glass)"
+        ) from None
 
 
 def refractive_index(glass, wavelength_nm):

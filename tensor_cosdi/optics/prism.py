@@ -1,4 +1,5 @@
-"""The double Amici prism: ray trace, deviation, design and the dispersion shear (SPEC §8, thesis App. B)."""
+"""The double Amici prism: ray trace, deviation, design and the dispersion shear (SPEC §8, thesis
+App. B)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from .glass import _glass
 
 __all__ = ["DoubleAmiciPrism", "THESIS_FIELD_DEG"]
 
-#: Half field of view of the thesis' lens–detector pair (100 mm, 4 mm detector): ``atan(4 / 200)`` in degrees,
+#: Half field of view of the thesis' lens–detector pair (100 mm, 4 mm detector): ``atan(4 / 200)``
+#: in degrees,
 #: the ``|θ0| ≤ 2.29°`` range Alg. 8 averages over.
 THESIS_FIELD_DEG = float(np.rad2deg(np.arctan(4.0 / 200.0)) * 2)
 
@@ -60,14 +62,22 @@ class DoubleAmiciPrism:
     def __post_init__(self):
         for name in ("phi1", "phi3"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float, np.floating, np.integer)) and np.isfinite(v) and 0 < v < 180):
+            if not (
+                isinstance(v, (int, float, np.floating, np.integer))
+                and np.isfinite(v)
+                and 0 < v < 180
+            ):
                 raise ValueError(f"{name} must be an angle in degrees in (0, 180), got {v!r}")
         if self.phi1 + self.phi3 >= 180:
             raise ValueError(
-                f"phi1 + phi3 must be < 180° (outer apex α1 = 180° − (φ1 + φ3) > 0), got {self.phi1 + self.phi3:g}"
+                "phi1 + phi3 must be < 180° (outer apex α1 = 180° − (φ1 + φ3) > 0), got "
+                f"{self.phi1 + self.phi3:g}"
             )
         if not 45 < self.phi3 < 90:
-            raise ValueError(f"phi3 must lie in (45°, 90°) so the middle apex 180° − 2φ3 is in (0°, 90°), got {self.phi3:g}")
+            raise ValueError(
+                "phi3 must lie in (45°, 90°) so the middle apex 180° − 2φ3 is in (0°, 90°), got "
+                f"{self.phi3:g}"
+            )
         _glass(self.glass1), _glass(self.glass2)  # unknown glass names fail here
 
     @property
@@ -89,7 +99,8 @@ class DoubleAmiciPrism:
             s = ratio * np.sin(angle)
             if np.any(np.abs(s) > 1):
                 raise ValueError(
-                    f"total internal reflection at face {face} of the prism (φ1={self.phi1:g}°, φ3={self.phi3:g}°): "
+                    f"total internal reflection at face {face} of the prism (φ1={self.phi1:g}°, "
+                    f"φ3={self.phi3:g}°): "
                     "no ray leaves for these angles"
                 )
             return np.arcsin(s)
@@ -113,7 +124,9 @@ class DoubleAmiciPrism:
         out = _finite("theta0", theta0) - self._trace(wavelength_nm, theta0)
         return float(out) if np.ndim(out) == 0 else out
 
-    def mean_deviation(self, wavelength_nm, *, field_deg: float = THESIS_FIELD_DEG, n_angles: int = 41):
+    def mean_deviation(
+        self, wavelength_nm, *, field_deg: float = THESIS_FIELD_DEG, n_angles: int = 41
+    ):
         """Deviation averaged over incidences ``θ0 ∈ [−field/2, field/2]`` (Alg. 8), degrees.
 
         ``field_deg`` is the full angular field (thesis: 2.29°, a 4 mm detector
@@ -121,19 +134,28 @@ class DoubleAmiciPrism:
         """
         if not (np.isfinite(field_deg) and field_deg >= 0):
             raise ValueError(f"field_deg must be a finite angle ≥ 0, got {field_deg!r}")
-        if isinstance(n_angles, bool) or not isinstance(n_angles, (int, np.integer)) or n_angles < 1:
+        if (
+            isinstance(n_angles, bool)
+            or not isinstance(n_angles, (int, np.integer))
+            or n_angles < 1
+        ):
             raise ValueError(f"n_angles must be a positive integer, got {n_angles!r}")
         lam = _finite("wavelength_nm", wavelength_nm)
         th = np.linspace(-field_deg / 2, field_deg / 2, n_angles) if n_angles > 1 else np.zeros(1)
         d = self.deviation(lam[..., None], th).mean(axis=-1)
         return float(d) if np.ndim(d) == 0 else d
 
-    def dispersion(self, wavelength_min_nm: float = 450.0, wavelength_max_nm: float = 650.0, theta0=0.0) -> float:
+    def dispersion(
+        self, wavelength_min_nm: float = 450.0, wavelength_max_nm: float = 650.0, theta0=0.0
+    ) -> float:
         """``Δ = δ(λmax) − δ(λmin)`` in degrees (Eq. 187)."""
-        return float(self.deviation(wavelength_max_nm, theta0) - self.deviation(wavelength_min_nm, theta0))
+        return float(
+            self.deviation(wavelength_max_nm, theta0) - self.deviation(wavelength_min_nm, theta0)
+        )
 
     def shear(self, wavelength_nm, distance_mm: float, *, center_nm: float = 570.0, theta0=0.0):
-        """Lateral displacement ``S(λ)`` in mm on a plane ``distance_mm`` behind the prism (Eq. 191).
+        """Lateral displacement ``S(λ)`` in mm on a plane ``distance_mm`` behind the prism (Eq.
+        191).
 
         ``S(λ) = x · [tan θ5(λ) − tan θ5(λc)]``: where the ray of wavelength
         ``λ`` lands relative to the ray of the centre wavelength, so
@@ -148,7 +170,15 @@ class DoubleAmiciPrism:
         out = distance_mm * (np.tan(t) - np.tan(tc))
         return float(out) if np.ndim(out) == 0 else out
 
-    def shifts(self, wavelengths_nm, distance_mm: float, pixel_um: float, *, theta0=0.0, integer: bool = False):
+    def shifts(
+        self,
+        wavelengths_nm,
+        distance_mm: float,
+        pixel_um: float,
+        *,
+        theta0=0.0,
+        integer: bool = False,
+    ):
         """Per-band shifts in pixels for a sensor ``distance_mm`` behind the prism, first band 0.
 
         ``|S(λ_l) − S(λ_0)| / pixel`` — ready for the ``shifts=`` argument of
@@ -175,7 +205,9 @@ class DoubleAmiciPrism:
         """
         lam = _finite("wavelengths_nm", wavelengths_nm).reshape(-1)
         if lam.size == 0 or np.any(np.diff(lam) <= 0):
-            raise ValueError(f"wavelengths_nm must be a non-empty, strictly increasing list, got {lam.tolist()}")
+            raise ValueError(
+                f"wavelengths_nm must be a non-empty, strictly increasing list, got {lam.tolist()}"
+            )
         if not (np.isfinite(pixel_um) and pixel_um > 0):
             raise ValueError(f"pixel_um must be a pitch > 0 µm, got {pixel_um!r}")
         s = self.shear(lam, distance_mm, center_nm=float(lam[0]), theta0=theta0) * 1000.0 / pixel_um
@@ -183,15 +215,24 @@ class DoubleAmiciPrism:
         d = np.diff(s)
         if not (np.all(d >= 0) or np.all(d <= 0)):
             raise ValueError(
-                "the prism's shear S(λ) is not monotonic over these wavelengths, so no per-band shift list "
+                "the prism's shear S(λ) is not monotonic over these wavelengths, so no per-band "
+                "shift list "
                 f"exists; shear in px: {np.round(s, 3).tolist()}"
             )
         s = np.abs(s)
         return np.round(s).astype(np.int64) if integer else s
 
     @classmethod
-    def design(cls, *, phi1: float = 85.9, center_nm: float = 570.0, glass1="N-SK2", glass2="SF4",
-               field_deg: float = 0.0, phi3_range=(46.0, 89.9)) -> "DoubleAmiciPrism":
+    def design(
+        cls,
+        *,
+        phi1: float = 85.9,
+        center_nm: float = 570.0,
+        glass1="N-SK2",
+        glass2="SF4",
+        field_deg: float = 0.0,
+        phi3_range=(46.0, 89.9),
+    ) -> "DoubleAmiciPrism":
         """The prism with apex ``phi1`` whose ``φ3`` makes the deviation zero at ``center_nm``.
 
         ``field_deg = 0`` zeroes the on-axis deviation (Alg. 7 with θ0 = 0);
@@ -209,7 +250,11 @@ class DoubleAmiciPrism:
         def f(phi3):
             try:
                 p = cls(phi1, phi3, glass1, glass2)
-                return p.mean_deviation(center_nm, field_deg=field_deg) if field_deg > 0 else p.deviation(center_nm)
+                return (
+                    p.mean_deviation(center_nm, field_deg=field_deg)
+                    if field_deg > 0
+                    else p.deviation(center_nm)
+                )
             except ValueError:
                 return np.nan
 
@@ -220,7 +265,8 @@ class DoubleAmiciPrism:
         idx = np.nonzero(ok[:-1] & ok[1:] & (np.sign(vals[:-1]) != np.sign(vals[1:])))[0]
         if idx.size == 0:
             raise ValueError(
-                f"no φ3 in {phi3_range} gives zero deviation at {center_nm:g} nm for φ1 = {phi1:g}° "
+                f"no φ3 in {phi3_range} gives zero deviation at {center_nm:g} nm "
+                f"for φ1 = {phi1:g}° "
                 f"({glass1}/{glass2}); try another phi1"
             )
         phi3 = brentq(f, grid[idx[0]], grid[idx[0] + 1], xtol=1e-12)

@@ -38,7 +38,9 @@ def _aberrations(zernikes) -> dict[int, float]:
     if zernikes is None:
         return {}
     if not isinstance(zernikes, dict):
-        raise ValueError(f"zernike must be a dict {{Noll index: coefficient in waves}}, got {zernikes!r}")
+        raise ValueError(
+            f"zernike must be a dict {{Noll index: coefficient in waves}}, got {zernikes!r}"
+        )
     out = {}
     for j, a in zernikes.items():
         if isinstance(j, bool) or not isinstance(j, numbers.Integral) or j < 1:
@@ -72,40 +74,74 @@ class Lens:
     52.632
     """
 
-    def __init__(self, *, focal_mm: float = 50.0, aperture_radius_mm: float = 2.5, focus_mm: float = 1000.0,
-                 pixel_um: float = 6.0):
+    def __init__(
+        self,
+        *,
+        focal_mm: float = 50.0,
+        aperture_radius_mm: float = 2.5,
+        focus_mm: float = 1000.0,
+        pixel_um: float = 6.0,
+    ):
         self.focal_mm = _pos("focal_mm", focal_mm)
         self.aperture_radius_mm = _pos("aperture_radius_mm", aperture_radius_mm)
         self.focus_mm = _pos("focus_mm", focus_mm, allow_inf=True)
         self.pixel_um = _pos("pixel_um", pixel_um)
         if self.focus_mm <= self.focal_mm:
-            raise ValueError(f"focus_mm ({self.focus_mm:g}) must exceed focal_mm ({self.focal_mm:g}) to form a real image")
+            raise ValueError(
+                f"focus_mm ({self.focus_mm:g}) must exceed focal_mm ({self.focal_mm:g}) to form a "
+                f"real image"
+            )
         self.image_distance_mm = 1.0 / (1.0 / self.focal_mm - 1.0 / self.focus_mm)
 
     def __repr__(self):
-        return (f"Lens(focal_mm={self.focal_mm:g}, aperture_radius_mm={self.aperture_radius_mm:g}, "
-                f"focus_mm={self.focus_mm:g}, pixel_um={self.pixel_um:g})")
+        return (
+            f"Lens(focal_mm={self.focal_mm:g}, aperture_radius_mm={self.aperture_radius_mm:g}, "
+            f"focus_mm={self.focus_mm:g}, pixel_um={self.pixel_um:g})"
+        )
 
 
 def defocus_coefficient(lens: Lens, wavelength_nm: float, depth_mm: float) -> float:
     """``Ω = (π/λ)(1/z + 1/z_i − 1/f) r²`` in radians at the pupil edge (Eq. 51)."""
     lam = _pos("wavelength_nm", wavelength_nm) * 1e-6  # mm
     z = _pos("depth_mm", depth_mm, allow_inf=True)
-    return float(np.pi / lam * (1.0 / z + 1.0 / lens.image_distance_mm - 1.0 / lens.focal_mm) * lens.aperture_radius_mm**2)
+    return float(
+        np.pi
+        / lam
+        * (1.0 / z + 1.0 / lens.image_distance_mm - 1.0 / lens.focal_mm)
+        * lens.aperture_radius_mm**2
+    )
 
 
-def pupil_psf(wavelength_nm: float, *, lens: Lens, size: int = 15, omega: float = 0.0, zernike=None,
-              pupil_samples: int | None = None, supersample: int = 3) -> np.ndarray:
-    """PSF (``size × size``, sums to 1) of ``lens`` at one wavelength for a defocus ``omega`` (rad) and aberrations.
+def pupil_psf(
+    wavelength_nm: float,
+    *,
+    lens: Lens,
+    size: int = 15,
+    omega: float = 0.0,
+    zernike=None,
+    pupil_samples: int | None = None,
+    supersample: int = 3,
+) -> np.ndarray:
+    """PSF (``size × size``, sums to 1) of ``lens`` at one wavelength for a defocus ``omega`` (rad)
+    and aberrations.
 
     ``zernike`` maps Noll indices to coefficients in waves (e.g. ``{6: 0.9}``,
     the thesis' vertical astigmatism).  ``pupil_samples`` points across the
     pupil diameter (default: enough to sample the pupil phase at ≤ 1 rad
     per step, at least 64).
     """
-    if isinstance(size, bool) or not isinstance(size, numbers.Integral) or size < 1 or size % 2 == 0:
+    if (
+        isinstance(size, bool)
+        or not isinstance(size, numbers.Integral)
+        or size < 1
+        or size % 2 == 0
+    ):
         raise ValueError(f"size must be an odd integer ≥ 1 (the PSF is centred), got {size!r}")
-    if isinstance(supersample, bool) or not isinstance(supersample, numbers.Integral) or supersample < 1:
+    if (
+        isinstance(supersample, bool)
+        or not isinstance(supersample, numbers.Integral)
+        or supersample < 1
+    ):
         raise ValueError(f"supersample must be an integer ≥ 1, got {supersample!r}")
     lam = _pos("wavelength_nm", wavelength_nm) * 1e-6
     if not np.isfinite(omega):
@@ -138,9 +174,18 @@ def pupil_psf(wavelength_nm: float, *, lens: Lens, size: int = 15, omega: float 
     return I / s
 
 
-def psf(wavelength_nm: float, depth_mm: float, *, lens: Lens | None = None, zernike=None, size: int = 15,
-        supersample: int = 3, pupil_samples: int | None = None) -> np.ndarray:
-    """PSF of a point at ``depth_mm`` imaged at ``wavelength_nm`` (nm) through ``lens`` with aberrations.
+def psf(
+    wavelength_nm: float,
+    depth_mm: float,
+    *,
+    lens: Lens | None = None,
+    zernike=None,
+    size: int = 15,
+    supersample: int = 3,
+    pupil_samples: int | None = None,
+) -> np.ndarray:
+    """PSF of a point at ``depth_mm`` imaged at ``wavelength_nm`` (nm) through ``lens`` with
+    aberrations.
 
     Parameters
     ----------
@@ -165,13 +210,28 @@ def psf(wavelength_nm: float, depth_mm: float, *, lens: Lens | None = None, zern
     """
     lens = Lens() if lens is None else lens
     omega = defocus_coefficient(lens, wavelength_nm, depth_mm)
-    return pupil_psf(wavelength_nm, lens=lens, size=size, omega=omega, zernike=zernike,
-                     pupil_samples=pupil_samples, supersample=supersample)
+    return pupil_psf(
+        wavelength_nm,
+        lens=lens,
+        size=size,
+        omega=omega,
+        zernike=zernike,
+        pupil_samples=pupil_samples,
+        supersample=supersample,
+    )
 
 
-def psf_stack(wavelengths_nm, depths_mm, *, lens: Lens | None = None, zernike=None, size: int = 15,
-              supersample: int = 3) -> np.ndarray:
-    """PSFs of every (band, depth plane) pair, shaped ``(size, size, Nλ, Nz)`` for :class:`~tensor_cosdi.systems.CASSDIDFA`.
+def psf_stack(
+    wavelengths_nm,
+    depths_mm,
+    *,
+    lens: Lens | None = None,
+    zernike=None,
+    size: int = 15,
+    supersample: int = 3,
+) -> np.ndarray:
+    """PSFs of every (band, depth plane) pair, shaped ``(size, size, Nλ, Nz)`` for
+    :class:`~tensor_cosdi.systems.CASSDIDFA`.
 
     Depth plane ``z`` of the cube is the scene at ``depths_mm[z]``; the fixed
     aberration ``zernike`` (thesis: ``{6: 0.9}``, vertical astigmatism,
@@ -191,7 +251,9 @@ def psf_stack(wavelengths_nm, depths_mm, *, lens: Lens | None = None, zernike=No
     out = np.empty((size, size, lam.size, dep.size))
     for i, w in enumerate(lam):
         for k, z in enumerate(dep):
-            out[:, :, i, k] = psf(w, z, lens=lens, zernike=zernike, size=size, supersample=supersample)
+            out[:, :, i, k] = psf(
+                w, z, lens=lens, zernike=zernike, size=size, supersample=supersample
+            )
     return out
 
 

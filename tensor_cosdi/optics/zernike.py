@@ -11,8 +11,17 @@ __all__ = ["noll_to_nm", "zernike", "zernike_radial", "NAMES"]
 
 #: Common names of the first Noll terms.
 NAMES = {
-    1: "piston", 2: "tilt x", 3: "tilt y", 4: "defocus", 5: "oblique astigmatism", 6: "vertical astigmatism",
-    7: "vertical coma", 8: "horizontal coma", 9: "vertical trefoil", 10: "oblique trefoil", 11: "primary spherical",
+    1: "piston",
+    2: "tilt x",
+    3: "tilt y",
+    4: "defocus",
+    5: "oblique astigmatism",
+    6: "vertical astigmatism",
+    7: "vertical coma",
+    8: "horizontal coma",
+    9: "vertical trefoil",
+    10: "oblique trefoil",
+    11: "primary spherical",
 }
 
 
@@ -45,7 +54,11 @@ def zernike_radial(n: int, m: int, rho):
     rho = np.asarray(rho, dtype=np.float64)
     out = np.zeros_like(rho)
     for s in range((n - m) // 2 + 1):
-        c = (-1) ** s * factorial(n - s) / (factorial(s) * factorial((n + m) // 2 - s) * factorial((n - m) // 2 - s))
+        c = (
+            (-1) ** s
+            * factorial(n - s)
+            / (factorial(s) * factorial((n + m) // 2 - s) * factorial((n - m) // 2 - s))
+        )
         out = out + c * rho ** (n - 2 * s)
     return out
 

@@ -8,14 +8,33 @@ fixed WDCT basis (``"wdct"``), GAP-TV (``"gap_tv"``) and regularised least
 squares (``"lsq"``).
 """
 
+from . import denoisers, engine, priors
 from ._base import METHODS, Method, Result, methods, reconstruct, register_method
-from . import engine, priors
+from .avsi import avsi
+from .dfa import multiresolution_dfa
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
-from .avsi import avsi
 from .pnp import pnp_admm, pnp_admm_operator
-from .dfa import multiresolution_dfa
-from . import denoisers
 
-__all__ = ["Result", "reconstruct", "methods", "register_method", "METHODS", "Method", "engine", "priors", "regularised_lsq", "gap_tv", "tv_denoise", "online_tucker_admm", "wdct_admm", "tucker_admm", "avsi", "pnp_admm", "pnp_admm_operator", "denoisers", "multiresolution_dfa"]
+__all__ = [
+    "Result",
+    "reconstruct",
+    "methods",
+    "register_method",
+    "METHODS",
+    "Method",
+    "engine",
+    "priors",
+    "regularised_lsq",
+    "gap_tv",
+    "tv_denoise",
+    "online_tucker_admm",
+    "wdct_admm",
+    "tucker_admm",
+    "avsi",
+    "pnp_admm",
+    "pnp_admm_operator",
+    "denoisers",
+    "multiresolution_dfa",
+]

@@ -10,8 +10,16 @@ import numpy as np
 
 from .._registry import Registry
 
-__all__ = ["Result", "reconstruct", "register_method", "methods", "METHODS", "Method", "History",
-           "relative_change"]
+__all__ = [
+    "Result",
+    "reconstruct",
+    "register_method",
+    "methods",
+    "METHODS",
+    "Method",
+    "History",
+    "relative_change",
+]
 
 
 @dataclass(frozen=True)
@@ -78,11 +86,13 @@ class Method:
 
 
 METHODS = Registry("method")
-"""``name → Method``: every method :func:`reconstruct` accepts (read-only; add with :func:`register_method`)."""
+"""``name → Method``: every method :func:`reconstruct` accepts (read-only; add with
+:func:`register_method`)."""
 
 
-def register_method(name: str, func: Callable, defaults: dict, summary: str = "", *,
-                    replace: bool = False) -> None:
+def register_method(
+    name: str, func: Callable, defaults: dict, summary: str = "", *, replace: bool = False
+) -> None:
     """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
 
     ``defaults`` lists every option the method accepts with its default;
@@ -92,7 +102,9 @@ def register_method(name: str, func: Callable, defaults: dict, summary: str = ""
     if not callable(func):
         raise ValueError(f"a method must be callable, got {func!r}")
     builtin = getattr(func, "__module__", "").startswith("tensor_cosdi.")
-    METHODS.register(name, Method(func, dict(defaults), summary, name), replace=replace, builtin=builtin)
+    METHODS.register(
+        name, Method(func, dict(defaults), summary, name), replace=replace, builtin=builtin
+    )
 
 
 def methods() -> tuple[str, ...]:
@@ -121,7 +133,8 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     unknown = sorted(set(options) - set(entry.defaults))
     if unknown:
         raise ValueError(
-            f"unknown option(s) {unknown} for method {method!r}; valid options: {sorted(entry.defaults)}"
+            f"unknown option(s) {unknown} for method {method!r}; valid options: "
+            f"{sorted(entry.defaults)}"
         )
     opts = {**entry.defaults, **options}
     g = system._check_measurement(measurement, "reconstruct")
@@ -130,7 +143,16 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     seconds = time.perf_counter() - t0
     cube, history, converged = out[:3]
     depth = out[3] if len(out) > 3 else None
-    return Result(cube, history, seconds, opts, method, bool(converged), depth, system if depth is None else None)
+    return Result(
+        cube,
+        history,
+        seconds,
+        opts,
+        method,
+        bool(converged),
+        depth,
+        system if depth is None else None,
+    )
 
 
 reconstruct.methods = methods  # tc.reconstruct.methods(), as the API contract promises

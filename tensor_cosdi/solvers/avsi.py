@@ -47,10 +47,23 @@ _check_int = engine.check_int
 __all__ = ["avsi"]
 
 
-def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2: float = 0.2, sigma3: float = 0.02,
-         tau_f: float = 0.1, tau_z: float = 0.05, inner_iter: int = 8, tol: float = 1e-4, wavelet_name: str = "sym8",
-         progress: bool = False):
-    """A-VSI (thesis Alg. 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as ``"avsi"``.
+def avsi(
+    system,
+    measurement,
+    *,
+    max_iter: int = 60,
+    sigma1: float = 0.2,
+    sigma2: float = 0.2,
+    sigma3: float = 0.02,
+    tau_f: float = 0.1,
+    tau_z: float = 0.05,
+    inner_iter: int = 8,
+    tol: float = 1e-4,
+    wavelet_name: str = "sym8",
+    progress: bool = False,
+):
+    """A-VSI (thesis Alg. 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as
+    ``"avsi"``.
 
     Parameters
     ----------
@@ -75,9 +88,14 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
     (32, 32, 8)
     """
     if getattr(system, "name", None) != "cassi_vsi":
-        raise ValueError(f"avsi reconstructs CASSIVSI systems (Alg. 1), got {type(system).__name__}; "
-                         "use 'otd', 'wdct', 'gap_tv' or 'lsq' for other systems")
-    s1, s2, s3 = (check_positive(n, v) for n, v in (("sigma1", sigma1), ("sigma2", sigma2), ("sigma3", sigma3)))
+        raise ValueError(
+            f"avsi reconstructs CASSIVSI systems (Alg. 1), got {type(system).__name__}; "
+            "use 'otd', 'wdct', 'gap_tv' or 'lsq' for other systems"
+        )
+    s1, s2, s3 = (
+        check_positive(n, v)
+        for n, v in (("sigma1", sigma1), ("sigma2", sigma2), ("sigma3", sigma3))
+    )
     tau_f, tau_z = check_positive("tau_f", tau_f), check_positive("tau_z", tau_z)
     tol = check_positive("tol", tol)
     max_iter = _check_int("max_iter", max_iter, 1)
@@ -123,7 +141,9 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
             eta1 = eta1 + at * HT._adjoint(g - g_r)
         if ar:
             eta1 = eta1 + ar * HR._adjoint(g - g_t)
-        with warnings.catch_warnings():  # a few CG steps per ADMM iteration is the design (inexact ADMM)
+        with (
+            warnings.catch_warnings()
+        ):  # a few CG steps per ADMM iteration is the design (inexact ADMM)
             warnings.simplefilter("ignore", RuntimeWarning)
             f_new = conjugate_gradient(normal_f, eta1, x0=f, rtol=1e-6, maxiter=inner_iter)
         eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D._forward(f_new) + chi3)
@@ -136,10 +156,16 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
         chi3 = chi3 - (z - D._forward(f_new))
         change = relative_change(f_new, f)
         f = f_new
-        prior = (tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f)))
-                 + tau_z * s * rms_z * float(tl.sum(tl.abs(theta_z))))
-        if loop.record(it, residual_norm=relative_residual(system, f, g) * gnorm, gnorm=gnorm, change=change,
-                       prior_term=prior):
+        prior = tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f))) + tau_z * s * rms_z * float(
+            tl.sum(tl.abs(theta_z))
+        )
+        if loop.record(
+            it,
+            residual_norm=relative_residual(system, f, g) * gnorm,
+            gnorm=gnorm,
+            change=change,
+            prior_term=prior,
+        ):
             break
     return f, loop.history, loop.converged
 
@@ -147,7 +173,17 @@ def avsi(system, measurement, *, max_iter: int = 60, sigma1: float = 0.2, sigma2
 register_method(
     "avsi",
     avsi,
-    {"max_iter": 60, "sigma1": 0.2, "sigma2": 0.2, "sigma3": 0.02, "tau_f": 0.1, "tau_z": 0.05, "inner_iter": 8,
-     "tol": 1e-4, "wavelet_name": "sym8", "progress": False},
+    {
+        "max_iter": 60,
+        "sigma1": 0.2,
+        "sigma2": 0.2,
+        "sigma3": 0.02,
+        "tau_f": 0.1,
+        "tau_z": 0.05,
+        "inner_iter": 8,
+        "tol": 1e-4,
+        "wavelet_name": "sym8",
+        "progress": False,
+    },
     "A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",
 )

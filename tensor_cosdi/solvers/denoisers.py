@@ -1,4 +1,5 @@
-"""Plug-in denoisers for PnP-ADMM (SPEC §6): scikit-image's TV and wavelet denoisers, and a registry.
+"""Plug-in denoisers for PnP-ADMM (SPEC §6): scikit-image's TV and wavelet denoisers, and a
+registry.
 
 A denoiser is a callable ``denoise(x, sigma) -> x`` on a tensor whose axes 0
 and 1 are spatial (any further axes are channels: bands, patterns…);
@@ -25,7 +26,8 @@ def _host(x):
 
 
 def tv(x, sigma: float, *, n_iter: int = 50):
-    """Isotropic TV (Chambolle, ``skimage.restoration.denoise_tv_chambolle``) per channel, weight ``sigma``."""
+    """Isotropic TV (Chambolle, ``skimage.restoration.denoise_tv_chambolle``) per channel, weight
+    ``sigma``."""
     from skimage.restoration import denoise_tv_chambolle
 
     flat, shape = _host(x)
@@ -34,12 +36,20 @@ def tv(x, sigma: float, *, n_iter: int = 50):
 
 
 def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
-    """BayesShrink wavelet denoising (``skimage.restoration.denoise_wavelet``) per channel, noise ``sigma``."""
+    """BayesShrink wavelet denoising (``skimage.restoration.denoise_wavelet``) per channel, noise
+    ``sigma``."""
     from skimage.restoration import denoise_wavelet
 
     flat, shape = _host(x)
-    out = denoise_wavelet(flat, sigma=float(sigma), wavelet=wavelet_name, mode=mode, channel_axis=2,
-                          method="BayesShrink", rescale_sigma=False)
+    out = denoise_wavelet(
+        flat,
+        sigma=float(sigma),
+        wavelet=wavelet_name,
+        mode=mode,
+        channel_axis=2,
+        method="BayesShrink",
+        rescale_sigma=False,
+    )
     return B.tensor_like(out.reshape(shape), x)
 
 
@@ -66,8 +76,10 @@ def resolve(name_or_callable) -> Callable:
     try:
         return _DENOISERS[name_or_callable]
     except (KeyError, TypeError):
-        raise ValueError(f"unknown denoiser {name_or_callable!r}; registered: {list(denoisers())} "
-                         "(or pass a callable (x, sigma) -> x)") from None
+        raise ValueError(
+            f"unknown denoiser {name_or_callable!r}; registered: {list(denoisers())} "
+            "(or pass a callable (x, sigma) -> x)"
+        ) from None
 
 
 register_denoiser("tv", tv)

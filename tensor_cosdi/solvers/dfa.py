@@ -28,7 +28,6 @@ steps: the lifted operators have no cheap ``A Aᵀ`` structure, and GAP's
 
 from __future__ import annotations
 
-
 import numpy as np
 import tensorly as tl
 
@@ -43,21 +42,49 @@ _check_int = engine.check_int
 __all__ = ["multiresolution_dfa", "fista_tv"]
 
 
-def fista_tv(op, g, start, *, max_iter: int = 60, tv_weight: float = 0.05, tol: float = 1e-4, project=None,
-             desc: str = "FISTA-TV", progress: bool = False):
-    """``min ½‖g − A x‖² + TV(x)`` by FISTA from ``start``; ``project(x)`` (optional) after each TV step.
+def fista_tv(
+    op,
+    g,
+    start,
+    *,
+    max_iter: int = 60,
+    tv_weight: float = 0.05,
+    tol: float = 1e-4,
+    project=None,
+    desc: str = "FISTA-TV",
+    progress: bool = False,
+):
+    """``min ½‖g − A x‖² + TV(x)`` by FISTA from ``start``; ``project(x)`` (optional) after each TV
+    step.
 
     :func:`tensor_cosdi.solvers.engine.fista` with the
     :class:`~tensor_cosdi.solvers.priors.TV` prior; ``tv_weight / 10`` is
     relative to the largest value of ``start``.  Returns ``(x, history, converged)``.
     """
-    return engine.fista(op, g, TV(tv_weight / 10), start, max_iter=max_iter, tol=tol, project=project,
-                        progress=progress, desc=desc)
+    return engine.fista(
+        op,
+        g,
+        TV(tv_weight / 10),
+        start,
+        max_iter=max_iter,
+        tol=tol,
+        project=project,
+        progress=progress,
+        desc=desc,
+    )
 
 
-def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: float = 0.05, tol: float = 1e-4,
-                        progress: bool = False):
-    """Multiresolution DFA (thesis Alg. 2-4) for a :class:`~tensor_cosdi.systems.CASSDIDFA`.  Registered as ``"dfa"``.
+def multiresolution_dfa(
+    system,
+    measurement,
+    *,
+    max_iter: int = 60,
+    tv_weight: float = 0.05,
+    tol: float = 1e-4,
+    progress: bool = False,
+):
+    """Multiresolution DFA (thesis Alg. 2-4) for a :class:`~tensor_cosdi.systems.CASSDIDFA`.
+    Registered as ``"dfa"``.
 
     Parameters
     ----------
@@ -78,7 +105,9 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
     ((32, 32, 8, 3), (32, 32))
     """
     if getattr(system, "name", None) != "cassdi_dfa":
-        raise ValueError(f"dfa reconstructs CASSDIDFA systems (Alg. 2-4), got {type(system).__name__}")
+        raise ValueError(
+            f"dfa reconstructs CASSDIDFA systems (Alg. 2-4), got {type(system).__name__}"
+        )
     tv_weight, tol = (check_positive(n, v) for n, v in (("tv_weight", tv_weight), ("tol", tol)))
     max_iter = _check_int("max_iter", max_iter, 1)
     g = measurement
@@ -91,7 +120,10 @@ def multiresolution_dfa(system, measurement, *, max_iter: int = 60, tv_weight: f
     # 1. all-in-focus grayscale
     lift_g = (1.0 / (nl * nz)) * (Replicate((nx, ny, nl), 3, nz) @ Replicate((nx, ny), 2, nl))
     a_g = op @ lift_g
-    fg0 = a_g.solve_normal(a_g._adjoint(g), 1e-2 * float(tl.norm(a_g._forward(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny))
+    fg0 = a_g.solve_normal(
+        a_g._adjoint(g),
+        1e-2 * float(tl.norm(a_g._forward(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny),
+    )
     fg, h, c1 = fista_tv(a_g, g, fg0, desc="DFA fg", **kw)
     fg = tl.clip(fg, 0, None)
     add(h)

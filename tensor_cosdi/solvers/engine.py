@@ -1,4 +1,5 @@
-"""One reconstruction engine per splitting — ADMM, GAP (accelerated) and FISTA — with priors as parts.
+"""One reconstruction engine per splitting — ADMM, GAP (accelerated) and FISTA — with priors as
+parts.
 
 Every iterative method of :func:`tensor_cosdi.reconstruct` is one of these
 loops with a prior (:mod:`tensor_cosdi.solvers.priors`) plugged in:
@@ -73,11 +74,18 @@ class Loop:
     def __iter__(self):
         from tqdm import tqdm
 
-        return iter(tqdm(range(self.max_iter), desc=self.desc, disable=not self.progress, leave=False))
+        return iter(
+            tqdm(range(self.max_iter), desc=self.desc, disable=not self.progress, leave=False)
+        )
 
-    def record(self, it: int, *, residual_norm: float, gnorm: float, change: float, prior_term: float) -> bool:
-        self.history.record(residual=residual_norm / gnorm, change=change,
-                            objective=0.5 * residual_norm**2 + prior_term)
+    def record(
+        self, it: int, *, residual_norm: float, gnorm: float, change: float, prior_term: float
+    ) -> bool:
+        self.history.record(
+            residual=residual_norm / gnorm,
+            change=change,
+            objective=0.5 * residual_norm**2 + prior_term,
+        )
         if change < self.tol and it > 0:
             self.converged = True
         return self.converged
@@ -87,9 +95,21 @@ def _gnorm(g) -> float:
     return max(float(tl.norm(g)), np.finfo(float).tiny)
 
 
-def admm(op, g, prior, *, rho: float, start=None, max_iter: int = 60, tol: float = 1e-4,
-         normal_solve=None, progress: bool = False, desc: str = "ADMM"):
-    """ADMM for ``min ½‖A x − g‖² + R(x)`` with the split ``z = x``.  Returns ``(z, history, converged)``.
+def admm(
+    op,
+    g,
+    prior,
+    *,
+    rho: float,
+    start=None,
+    max_iter: int = 60,
+    tol: float = 1e-4,
+    normal_solve=None,
+    progress: bool = False,
+    desc: str = "ADMM",
+):
+    """ADMM for ``min ½‖A x − g‖² + R(x)`` with the split ``z = x``.  Returns ``(z, history,
+    converged)``.
 
     Parameters
     ----------
@@ -119,16 +139,32 @@ def admm(op, g, prior, *, rho: float, start=None, max_iter: int = 60, tol: float
         x = x_new
         z = prior.prox(x + u)
         u = u + (x - z)
-        if loop.record(it, residual_norm=float(tl.norm(op._forward(z) - g)), gnorm=gnorm, change=change,
-                       prior_term=prior.objective(z)):
+        if loop.record(
+            it,
+            residual_norm=float(tl.norm(op._forward(z) - g)),
+            gnorm=gnorm,
+            change=change,
+            prior_term=prior.objective(z),
+        ):
             break
         if it + 1 < loop.max_iter:
             prior.update(x, it + 1)
     return z, loop.history, loop.converged
 
 
-def gap(op, g, prior, *, eps: float = 1e-6, accelerate: bool = True, start=None, max_iter: int = 60,
-        tol: float = 1e-4, progress: bool = False, desc: str = "GAP"):
+def gap(
+    op,
+    g,
+    prior,
+    *,
+    eps: float = 1e-6,
+    accelerate: bool = True,
+    start=None,
+    max_iter: int = 60,
+    tol: float = 1e-4,
+    progress: bool = False,
+    desc: str = "GAP",
+):
     """(Accelerated) generalised alternating projection.  Returns ``(x, history, converged)``.
 
     ``ε = eps · s``; the default start is the least-norm ``Aᵀ(AAᵀ + εI)⁻¹ g``.
@@ -149,8 +185,13 @@ def gap(op, g, prior, *, eps: float = 1e-6, accelerate: bool = True, start=None,
         change = relative_change(x_new, x)
         x = x_new
         ax = op._forward(x)
-        if loop.record(it, residual_norm=float(tl.norm(ax - g)), gnorm=gnorm, change=change,
-                       prior_term=prior.objective(x)):
+        if loop.record(
+            it,
+            residual_norm=float(tl.norm(ax - g)),
+            gnorm=gnorm,
+            change=change,
+            prior_term=prior.objective(x),
+        ):
             break
         if it + 1 < loop.max_iter:
             prior.update(x, it + 1)
@@ -166,9 +207,21 @@ def lipschitz(op, like, *, n_iter: int = 20, seed: int = 0) -> float:
     return 1.05 * float(tl.norm(op._adjoint(op._forward(v))))
 
 
-def fista(op, g, prior, start, *, max_iter: int = 60, tol: float = 1e-4, project=None, L: float | None = None,
-          progress: bool = False, desc: str = "FISTA"):
-    """FISTA for ``min ½‖A x − g‖² + R(x)`` from ``start``; ``project(x)`` (optional) after each prox.
+def fista(
+    op,
+    g,
+    prior,
+    start,
+    *,
+    max_iter: int = 60,
+    tol: float = 1e-4,
+    project=None,
+    L: float | None = None,
+    progress: bool = False,
+    desc: str = "FISTA",
+):
+    """FISTA for ``min ½‖A x − g‖² + R(x)`` from ``start``; ``project(x)`` (optional) after each
+    prox.
 
     ``L`` defaults to :func:`lipschitz`.  Returns ``(x, history, converged)``.
     """
@@ -185,8 +238,13 @@ def fista(op, g, prior, start, *, max_iter: int = 60, tol: float = 1e-4, project
         y = x_new + ((t - 1) / t_new) * (x_new - x)
         change = relative_change(x_new, x)
         x, t = x_new, t_new
-        if loop.record(it, residual_norm=float(tl.norm(op._forward(x) - g)), gnorm=gnorm, change=change,
-                       prior_term=prior.objective(x)):
+        if loop.record(
+            it,
+            residual_norm=float(tl.norm(op._forward(x) - g)),
+            gnorm=gnorm,
+            change=change,
+            prior_term=prior.objective(x),
+        ):
             break
         if it + 1 < loop.max_iter:
             prior.update(x, it + 1)

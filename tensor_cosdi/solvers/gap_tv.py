@@ -41,13 +41,33 @@ def gap_tv(
     first (least-norm) estimate.  Stops when the relative change of ``x`` is
     below ``tol`` or after ``max_iter`` iterations.  Registered as ``"gap_tv"``.
     """
-    return gap_tv_operator(system.operator, measurement, max_iter=max_iter, tv_weight=tv_weight,
-                           accelerate=accelerate, tol=tol, eps=eps, progress=progress)
+    return gap_tv_operator(
+        system.operator,
+        measurement,
+        max_iter=max_iter,
+        tv_weight=tv_weight,
+        accelerate=accelerate,
+        tol=tol,
+        eps=eps,
+        progress=progress,
+    )
 
 
-def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=True, tol=1e-4, eps=1e-6,
-                    progress=False, desc="GAP-TV", denoiser=None):
-    """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1 spatial).
+def gap_tv_operator(
+    op,
+    measurement,
+    *,
+    max_iter=60,
+    tv_weight=0.05,
+    accelerate=True,
+    tol=1e-4,
+    eps=1e-6,
+    progress=False,
+    desc="GAP-TV",
+    denoiser=None,
+):
+    """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1
+    spatial).
 
     ``denoiser(x, weight)`` replaces the TV step (default
     :func:`tensor_cosdi.solvers.denoisers.tv`).
@@ -56,13 +76,29 @@ def gap_tv_operator(op, measurement, *, max_iter=60, tv_weight=0.05, accelerate=
     eps = check_positive("eps", eps)
     tol = check_positive("tol", tol)
     engine.check_int("max_iter", max_iter, 1)
-    return engine.gap(op, measurement, TV(tv_weight, denoise=denoiser), eps=eps, accelerate=accelerate,
-                      max_iter=max_iter, tol=tol, progress=progress, desc=desc)
+    return engine.gap(
+        op,
+        measurement,
+        TV(tv_weight, denoise=denoiser),
+        eps=eps,
+        accelerate=accelerate,
+        max_iter=max_iter,
+        tol=tol,
+        progress=progress,
+        desc=desc,
+    )
 
 
 register_method(
     "gap_tv",
     gap_tv,
-    {"max_iter": 60, "tv_weight": 0.05, "accelerate": True, "tol": 1e-4, "eps": 1e-6, "progress": False},
+    {
+        "max_iter": 60,
+        "tv_weight": 0.05,
+        "accelerate": True,
+        "tol": 1e-4,
+        "eps": 1e-6,
+        "progress": False,
+    },
     "generalised alternating projection with a TV denoiser",
 )

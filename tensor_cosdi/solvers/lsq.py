@@ -15,7 +15,8 @@ __all__ = ["regularised_lsq"]
 def regularised_lsq(system, measurement, *, mu: float = 1e-2):
     """``F = argmin ‖G − A F‖² + μ s ‖F‖² = (AᵀA + μ s I)⁻¹ Aᵀ G`` (SPEC §4, §5 baseline).
 
-    ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`), so ``mu`` is relative.  One closed-form
+    ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`), so ``mu`` is relative.
+    One closed-form
     solve where ``A Aᵀ`` has structure (diagonal, per-pixel blocks, banded
     rows), conjugate gradients otherwise.  Registered as method ``"lsq"``.
     """
@@ -26,7 +27,12 @@ def regularised_lsq(system, measurement, *, mu: float = 1e-2):
     cube = system.operator.solve_normal(system.operator._adjoint(g), lam)
     res = relative_residual(system, cube, g)
     objective = (res * float(tl.norm(g))) ** 2 + lam * float(tl.norm(cube)) ** 2
-    history = {"objective": [objective], "residual": [res], "change": [1.0], "seconds": [time.perf_counter() - t0]}
+    history = {
+        "objective": [objective],
+        "residual": [res],
+        "change": [1.0],
+        "seconds": [time.perf_counter() - t0],
+    }
     return cube, history, True
 
 

@@ -1,4 +1,5 @@
-"""Online Tucker dictionary ADMM (thesis Alg. 5, generalised to every system; SPEC §5) and WDCT-ADMM.
+"""Online Tucker dictionary ADMM (thesis Alg. 5, generalised to every system; SPEC §5) and
+WDCT-ADMM.
 
 Both methods solve, for a cube written in a Kronecker basis
 ``F = Θ ×₁ Ψ1 ×₂ Ψ2 … ×_d Ψd`` of square orthonormal matrices,
@@ -72,8 +73,15 @@ def panchromatic_estimate(system, measurement, *, pan_iter: int = 60, pan_atoms:
     return system.decimation.forward(x), x
 
 
-def initial_bases(system, measurement, *, spatial: str = "panchromatic", wavelet_name: str = "sym8",
-                  pan_iter: int = 60, pan_atoms: int = 3):
+def initial_bases(
+    system,
+    measurement,
+    *,
+    spatial: str = "panchromatic",
+    wavelet_name: str = "sym8",
+    pan_iter: int = 60,
+    pan_atoms: int = 3,
+):
     """The starting per-mode bases ``{mode: ModeTransform}`` of OTD (or WDCT), and a starting cube.
 
     Parameters
@@ -106,7 +114,9 @@ def initial_bases(system, measurement, *, spatial: str = "panchromatic", wavelet
     mats = {m: DCT(n) for m, n in enumerate(shape) if m >= 2}
     start = None
     if spatial == "panchromatic":
-        z, start = panchromatic_estimate(system, measurement, pan_iter=pan_iter, pan_atoms=pan_atoms)
+        z, start = panchromatic_estimate(
+            system, measurement, pan_iter=pan_iter, pan_atoms=pan_atoms
+        )
         mats.update({m: Dense(u) for m, u in tucker_bases(z, modes=[0, 1]).items()})
     elif spatial == "wavelet":
         mats[0], mats[1] = Wavelet(shape[0], wavelet_name), Wavelet(shape[1], wavelet_name)
@@ -115,8 +125,15 @@ def initial_bases(system, measurement, *, spatial: str = "panchromatic", wavelet
     return mats, start
 
 
-def subspace_gap_tv(system, measurement, *, n_atoms: int = 3, max_iter: int = 60, tv_weight: float = 0.05,
-                    eps: float = 1e-6):
+def subspace_gap_tv(
+    system,
+    measurement,
+    *,
+    n_atoms: int = 3,
+    max_iter: int = 60,
+    tv_weight: float = 0.05,
+    eps: float = 1e-6,
+):
     """A fast first estimate for the panchromatic image: GAP-TV in a smooth spectral subspace.
 
     The decimated model of Eq. 62 assumes flat spectra (``F = Dᵀ Z / n``);
@@ -140,14 +157,23 @@ def subspace_gap_tv(system, measurement, *, n_atoms: int = 3, max_iter: int = 60
     g = measurement
     names = list(system.axes)
     modes = [names.index(a) for a in system.panchromatic_axes]
-    mats = [B.tensor_like(dct(system.cube_shape[m])[:, : min(n_atoms, system.cube_shape[m])], g) for m in modes]
+    mats = [
+        B.tensor_like(dct(system.cube_shape[m])[:, : min(n_atoms, system.cube_shape[m])], g)
+        for m in modes
+    ]
 
     def subspace_tv(v, weight):
         coef = tenalg.multi_mode_dot(v, mats, modes=modes, transpose=True)
         return tenalg.multi_mode_dot(tv(coef, weight), mats, modes=modes)
 
-    x, _, _ = engine.gap(system.operator, g, TV(tv_weight, denoise=subspace_tv), eps=eps, max_iter=max_iter,
-                         desc="panchromatic")
+    x, _, _ = engine.gap(
+        system.operator,
+        g,
+        TV(tv_weight, denoise=subspace_tv),
+        eps=eps,
+        max_iter=max_iter,
+        desc="panchromatic",
+    )
     return x
 
 
@@ -155,7 +181,8 @@ _soft = soft
 
 
 def theta_step(operator, basis, atg, w, mu):
-    """Θ-step (Eq. 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg = AᵀG``.
+    """Θ-step (Eq. 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg =
+    AᵀG``.
 
     ``Θ = Ψᵀ (AᵀA + μI)⁻¹ (AᵀG + μ Ψ w)``: orthonormal ``Ψ`` leaves the
     structured ``solve_normal`` of ``A`` (SPEC §4).  Returns ``(F, Θ)`` with
@@ -194,7 +221,8 @@ def tucker_admm(
     progress: bool = False,
     desc: str = "ADMM",
 ):
-    """ADMM in a Kronecker basis, the engine call behind ``"otd"`` and ``"wdct"`` (see the module notes).
+    """ADMM in a Kronecker basis, the engine call behind ``"otd"`` and ``"wdct"`` (see the module
+    notes).
 
     :func:`tensor_cosdi.solvers.engine.admm` with a
     :class:`~tensor_cosdi.solvers.priors.TuckerDictionary` prior (a
@@ -234,20 +262,46 @@ def tucker_admm(
     max_iter = _check_int("max_iter", max_iter, 1)
     update_every = _check_int("update_every", update_every, 0)
     if update_modes and update_every:
-        prior = TuckerDictionary(bases, lam=lam, mu=mu, beta=float(beta), weights=weights,
-                                 update_modes=update_modes, update_every=update_every)
+        prior = TuckerDictionary(
+            bases,
+            lam=lam,
+            mu=mu,
+            beta=float(beta),
+            weights=weights,
+            update_modes=update_modes,
+            update_every=update_every,
+        )
     else:
         prior = FixedBasis(bases, lam=lam, mu=mu, beta=float(beta), weights=weights)
-    return engine.admm(system.operator, measurement, prior, rho=mu, start=start, max_iter=max_iter, tol=tol,
-                       progress=progress, desc=desc)
+    return engine.admm(
+        system.operator,
+        measurement,
+        prior,
+        rho=mu,
+        start=start,
+        max_iter=max_iter,
+        tol=tol,
+        progress=progress,
+        desc=desc,
+    )
 
 
 _COMMON = {"max_iter": 60, "lam": 0.1, "beta": 0.0, "tol": 1e-4, "weights": None, "progress": False}
 
 
-def online_tucker_admm(system, measurement, *, update_every: int = 10, spatial: str = "panchromatic",
-                       update_spatial: bool = True, pan_iter: int = 60, pan_atoms: int = 3, **options):
-    """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as ``"otd"``.
+def online_tucker_admm(
+    system,
+    measurement,
+    *,
+    update_every: int = 10,
+    spatial: str = "panchromatic",
+    update_spatial: bool = True,
+    pan_iter: int = 60,
+    pan_atoms: int = 3,
+    **options,
+):
+    """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as
+    ``"otd"``.
 
     Steps (SPEC §5): the panchromatic estimate ``Z`` (exact where the
     system allows, else :func:`subspace_gap_tv`, which also gives the
@@ -270,10 +324,20 @@ def online_tucker_admm(system, measurement, *, update_every: int = 10, spatial: 
     >>> res.cube.shape, res.method
     ((32, 32, 8), 'otd')
     """
-    bases, start = initial_bases(system, measurement, spatial=spatial, pan_iter=pan_iter, pan_atoms=pan_atoms)
+    bases, start = initial_bases(
+        system, measurement, spatial=spatial, pan_iter=pan_iter, pan_atoms=pan_atoms
+    )
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
-    return tucker_admm(system, measurement, bases, start=start, update_modes=update, update_every=update_every,
-                       desc="OTD", **options)
+    return tucker_admm(
+        system,
+        measurement,
+        bases,
+        start=start,
+        update_modes=update,
+        update_every=update_every,
+        desc="OTD",
+        **options,
+    )
 
 
 def wdct_admm(system, measurement, *, wavelet_name: str = "sym8", **options):
@@ -288,8 +352,20 @@ def wdct_admm(system, measurement, *, wavelet_name: str = "sym8", **options):
 register_method(
     "otd",
     online_tucker_admm,
-    {**_COMMON, "mu": 0.2, "update_every": 10, "spatial": "panchromatic", "update_spatial": True, "pan_iter": 60,
-     "pan_atoms": 3},
+    {
+        **_COMMON,
+        "mu": 0.2,
+        "update_every": 10,
+        "spatial": "panchromatic",
+        "update_spatial": True,
+        "pan_iter": 60,
+        "pan_atoms": 3,
+    },
     "online Tucker dictionary ADMM (thesis Alg. 5, every system)",
 )
-register_method("wdct", wdct_admm, {**_COMMON, "mu": 0.05, "wavelet_name": "sym8"}, "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis")
+register_method(
+    "wdct",
+    wdct_admm,
+    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8"},
+    "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis",
+)

@@ -39,8 +39,20 @@ _check_int = engine.check_int
 __all__ = ["pnp_admm", "pnp_admm_operator", "hierarchical_pnp"]
 
 
-def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 0.05, max_iter: int = 40,
-                      tol: float = 1e-4, start=None, tie=None, progress: bool = False, desc: str = "PnP-ADMM"):
+def pnp_admm_operator(
+    op,
+    g,
+    *,
+    denoiser="tv",
+    rho: float = 0.1,
+    sigma: float = 0.05,
+    max_iter: int = 40,
+    tol: float = 1e-4,
+    start=None,
+    tie=None,
+    progress: bool = False,
+    desc: str = "PnP-ADMM",
+):
     """PnP-ADMM on a bare operator: ``min ½‖g − A x‖² + R(x)`` with ``R`` implied by ``denoiser``.
 
     :func:`tensor_cosdi.solvers.engine.admm` with a
@@ -67,14 +79,35 @@ def pnp_admm_operator(op, g, *, denoiser="tv", rho: float = 0.1, sigma: float = 
             # the engine forms Aᵀg + ρ(z − u); the tie adds w Tᵀt to the right-hand side
             return cg(b + extra, x0)
 
-    return engine.admm(op, g, Denoiser(denoiser, sigma=sigma), rho=rho, start=start, max_iter=max_iter, tol=tol,
-                       normal_solve=normal_solve, progress=progress, desc=desc)
+    return engine.admm(
+        op,
+        g,
+        Denoiser(denoiser, sigma=sigma),
+        rho=rho,
+        start=start,
+        max_iter=max_iter,
+        tol=tol,
+        normal_solve=normal_solve,
+        progress=progress,
+        desc=desc,
+    )
 
 
-def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: float = 0.05,
-                     max_iter: int = 40, tie_weight: float = 0.5, tol: float = 1e-4, n_steps: int | None = None,
-                     progress: bool = False):
-    """Alg. 6 for a system whose cube is ``(Nx, Ny, Nλ, Nt)``.  Returns ``(P, history, converged, depth)``.
+def hierarchical_pnp(
+    system,
+    measurement,
+    *,
+    denoiser="tv",
+    rho: float = 0.1,
+    sigma: float = 0.05,
+    max_iter: int = 40,
+    tie_weight: float = 0.5,
+    tol: float = 1e-4,
+    n_steps: int | None = None,
+    progress: bool = False,
+):
+    """Alg. 6 for a system whose cube is ``(Nx, Ny, Nλ, Nt)``.  Returns ``(P, history, converged,
+    depth)``.
 
     ``depth`` is the wrapped phase ``(Nx, Ny, n_freq)`` of the fringe images
     when ``n_steps`` (``K``) divides ``Nt`` (frequency-major patterns,
@@ -87,8 +120,17 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
     op = system.operator
     # 1. fringe images Z (Nx, Ny, Nt): flat spectrum per pattern
     pz = (1.0 / nl) * Replicate((nx, ny, nt), 2, nl)
-    z, h1, c1 = pnp_admm_operator(op @ pz, g, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter, tol=tol,
-                                  progress=progress, desc="PnP-ADMM Z")
+    z, h1, c1 = pnp_admm_operator(
+        op @ pz,
+        g,
+        denoiser=denoiser,
+        rho=rho,
+        sigma=sigma,
+        max_iter=max_iter,
+        tol=tol,
+        progress=progress,
+        desc="PnP-ADMM Z",
+    )
     z = tl.clip(z, 0, None)
     # 2. modulation (mean 1 over the patterns) and the reflectance F (Nx, Ny, Nλ)
     zsum = tl.sum(z, axis=2)
@@ -98,8 +140,18 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
     from ..operators import SumAxis
 
     tie = (SumAxis((nx, ny, nl), 2), zsum / nt, tie_weight)
-    f, h2, c2 = pnp_admm_operator(op @ mod, g, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter, tol=tol,
-                                  tie=tie, progress=progress, desc="PnP-ADMM F")
+    f, h2, c2 = pnp_admm_operator(
+        op @ mod,
+        g,
+        denoiser=denoiser,
+        rho=rho,
+        sigma=sigma,
+        max_iter=max_iter,
+        tol=tol,
+        tie=tie,
+        progress=progress,
+        desc="PnP-ADMM F",
+    )
     f = tl.clip(f, 0, None)
     cube = mod._forward(f)
     hist = History()
@@ -111,14 +163,29 @@ def hierarchical_pnp(system, measurement, *, denoiser="tv", rho: float = 0.1, si
     if K is not None:
         K = _check_int("n_steps", K, 3)
         if nt % K:
-            raise ValueError(f"n_steps={K} does not divide the {nt} patterns (frequency-major groups of K)")
+            raise ValueError(
+                f"n_steps={K} does not divide the {nt} patterns (frequency-major groups of K)"
+            )
         zn = B.to_numpy(z)
-        phase = np.stack([wrapped_phase(zn[..., i * K:(i + 1) * K]) for i in range(nt // K)], axis=-1)
+        phase = np.stack(
+            [wrapped_phase(zn[..., i * K : (i + 1) * K]) for i in range(nt // K)], axis=-1
+        )
     return cube, hist, c1 and c2, phase
 
 
-def pnp_admm(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: float = 0.05, max_iter: int = 40,
-             tie_weight: float = 0.5, tol: float = 1e-4, n_steps: int | None = 4, progress: bool = False):
+def pnp_admm(
+    system,
+    measurement,
+    *,
+    denoiser="tv",
+    rho: float = 0.1,
+    sigma: float = 0.05,
+    max_iter: int = 40,
+    tie_weight: float = 0.5,
+    tol: float = 1e-4,
+    n_steps: int | None = 4,
+    progress: bool = False,
+):
     """Hierarchical PnP-ADMM (thesis Alg. 6) for CS2LI and Mu-CoSDI.  Registered as ``"pnp_admm"``.
 
     Parameters
@@ -148,23 +215,55 @@ def pnp_admm(system, measurement, *, denoiser="tv", rho: float = 0.1, sigma: flo
     ((32, 32, 8, 4), (32, 32, 1))
     """
     if getattr(system, "name", None) not in ("cs2li", "mu_cosdi"):
-        raise ValueError(f"pnp_admm reconstructs CS2LI and MuCoSDI systems (Alg. 6), got {type(system).__name__}")
-    check_positive("rho", rho), check_positive("sigma", sigma), check_positive("tie_weight", tie_weight)
+        raise ValueError(
+            f"pnp_admm reconstructs CS2LI and MuCoSDI systems (Alg. 6), got {type(system).__name__}"
+        )
+    (
+        check_positive("rho", rho),
+        check_positive("sigma", sigma),
+        check_positive("tie_weight", tie_weight),
+    )
     check_positive("tol", tol)
     max_iter = _check_int("max_iter", max_iter, 1)
     resolve(denoiser)
     if len(system.cube_shape) == 4:
-        return hierarchical_pnp(system, measurement, denoiser=denoiser, rho=rho, sigma=sigma, max_iter=max_iter,
-                                tie_weight=tie_weight, tol=tol, n_steps=n_steps, progress=progress)
-    cube, hist, conv = pnp_admm_operator(system.operator, measurement, denoiser=denoiser, rho=rho, sigma=sigma,
-                                         max_iter=max_iter, tol=tol, progress=progress)
+        return hierarchical_pnp(
+            system,
+            measurement,
+            denoiser=denoiser,
+            rho=rho,
+            sigma=sigma,
+            max_iter=max_iter,
+            tie_weight=tie_weight,
+            tol=tol,
+            n_steps=n_steps,
+            progress=progress,
+        )
+    cube, hist, conv = pnp_admm_operator(
+        system.operator,
+        measurement,
+        denoiser=denoiser,
+        rho=rho,
+        sigma=sigma,
+        max_iter=max_iter,
+        tol=tol,
+        progress=progress,
+    )
     return cube, hist, conv
 
 
 register_method(
     "pnp_admm",
     pnp_admm,
-    {"denoiser": "tv", "rho": 0.1, "sigma": 0.05, "max_iter": 40, "tie_weight": 0.5, "tol": 1e-4, "n_steps": 4,
-     "progress": False},
+    {
+        "denoiser": "tv",
+        "rho": 0.1,
+        "sigma": 0.05,
+        "max_iter": 40,
+        "tie_weight": 0.5,
+        "tol": 1e-4,
+        "n_steps": 4,
+        "progress": False,
+    },
     "hierarchical plug-and-play ADMM (thesis Alg. 6) for CS2LI / Mu-CoSDI",
 )

@@ -35,12 +35,22 @@ from .. import _backend as B
 from ..bases import KroneckerBasis, tucker_bases
 from .denoisers import resolve
 
-__all__ = ["Prior", "SparseInBasis", "TuckerDictionary", "FixedBasis", "TV", "Denoiser", "soft", "rms",
-           "total_variation"]
+__all__ = [
+    "Prior",
+    "SparseInBasis",
+    "TuckerDictionary",
+    "FixedBasis",
+    "TV",
+    "Denoiser",
+    "soft",
+    "rms",
+    "total_variation",
+]
 
 
 def soft(x, t):
-    """Soft thresholding ``sign(x) · max(|x| − t, 0)`` (``t`` a scalar or a tensor of ``x``'s shape)."""
+    """Soft thresholding ``sign(x) · max(|x| − t, 0)`` (``t`` a scalar or a tensor of ``x``'s
+    shape)."""
     return tl.sign(x) * tl.clip(tl.abs(x) - t, 0, None)
 
 
@@ -119,7 +129,9 @@ class SparseInBasis(Prior):
         if self.weights is not None:
             w = np.asarray(B.to_numpy(self.weights), dtype=np.float64)
             if w.shape != shape or not (np.isfinite(w).all() and (w >= 0).all()):
-                raise ValueError(f"weights must be finite, ≥ 0 and of shape {shape}, got shape {w.shape}")
+                raise ValueError(
+                    f"weights must be finite, ≥ 0 and of shape {shape}, got shape {w.shape}"
+                )
             self._w = B.tensor_like(w, start)
             thresh = B.tensor_like(w * thresh, start)
         else:
@@ -157,7 +169,8 @@ class FixedBasis(SparseInBasis):
 
 
 class TuckerDictionary(SparseInBasis):
-    """The online Tucker dictionary (thesis Alg. 5): sparse in per-mode bases re-learned from the estimate.
+    """The online Tucker dictionary (thesis Alg. 5): sparse in per-mode bases re-learned from the
+    estimate.
 
     Every ``update_every`` iterations (0: never) the bases of ``update_modes``
     are replaced by the HOSVD bases of the current estimate's unfoldings
@@ -167,8 +180,17 @@ class TuckerDictionary(SparseInBasis):
 
     name = "tucker_dictionary"
 
-    def __init__(self, bases, *, lam: float, mu: float, beta: float = 0.0, weights=None, update_modes=(),
-                 update_every: int = 10):
+    def __init__(
+        self,
+        bases,
+        *,
+        lam: float,
+        mu: float,
+        beta: float = 0.0,
+        weights=None,
+        update_modes=(),
+        update_every: int = 10,
+    ):
         super().__init__(bases, lam=lam, mu=mu, beta=beta, weights=weights)
         self.update_modes = tuple(update_modes)
         self.update_every = int(update_every)
@@ -187,7 +209,8 @@ class TuckerDictionary(SparseInBasis):
 
 
 class TV(Prior):
-    """Isotropic 2-D total variation of every slice (axes 0, 1), by Chambolle's method (scikit-image).
+    """Isotropic 2-D total variation of every slice (axes 0, 1), by Chambolle's method
+    (scikit-image).
 
     Parameters
     ----------
@@ -216,7 +239,8 @@ class TV(Prior):
 
 
 class Denoiser(Prior):
-    """A plug-and-play denoiser (any of :func:`~tensor_cosdi.solvers.denoisers.denoisers` or a callable).
+    """A plug-and-play denoiser (any of :func:`~tensor_cosdi.solvers.denoisers.denoisers` or a
+    callable).
 
     ``sigma`` is relative: the denoiser runs at ``σ = sigma · max|start|``,
     whatever the engine's step (the plug-and-play convention).  Implicit: its

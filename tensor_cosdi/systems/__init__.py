@@ -7,7 +7,7 @@ system                      cube → measurement                                
 :class:`DDCASSI`            ``(Nx, Ny, Nλ) → (Nx, Ny[, K])``                      diagonal / K×K
 :class:`DualCameraCASSI`    ``(Nx, Ny, Nλ) → (Nx, Ny+S, 2)``                      none (CG)
 :class:`CASSIVSI`           ``(Nx, Ny, Nλ) → (Nx, Ny+S)``                         row-banded
-:class:`CASSDIDFA`          ``(Nx, Ny, Nλ, Nz) → (Nx, Ny+S)``                     diagonal (CG with PSFs)
+:class:`CASSDIDFA`          ``(Nx, Ny, Nλ, Nz) → (Nx, Ny+S)``                     diagonal; PSFs: CG
 :class:`C3SLFI`             ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2, K)`` or 5-D                  K×K per pixel
 :class:`CS2LI`              ``(Nx, Ny, Nλ, Nt) → (Nx, Ny, Nt)``                   diagonal
 :class:`MuCoSDI`            SL / LF / monocular on the dual-disperser core       diagonal
@@ -41,7 +41,9 @@ class SystemRegistry(Registry):
     def register_class(self, cls, *, replace: bool = False, builtin: bool = False) -> None:
         """Register a :class:`System` subclass under its ``name`` class attribute."""
         if not (isinstance(cls, type) and issubclass(cls, System)) or not cls.name:
-            raise ValueError(f"a registered system must be a System subclass with a non-empty name, got {cls!r}")
+            raise ValueError(
+                f"a registered system must be a System subclass with a non-empty name, got {cls!r}"
+            )
         self.register(cls.name, cls, replace=replace, builtin=builtin)
 
     def name_of_class(self, class_name: str) -> str:
@@ -49,12 +51,15 @@ class SystemRegistry(Registry):
         for name, cls in self.items():
             if cls.__name__ == class_name:
                 return name
-        raise ValueError(f"unknown system class {class_name!r}; registered: "
-                         f"{[c.__name__ for c in self.values()]}")
+        raise ValueError(
+            f"unknown system class {class_name!r}; registered: "
+            f"{[c.__name__ for c in self.values()]}"
+        )
 
 
 REGISTRY = SystemRegistry("system")
-"""``name → System subclass``, read-only: every imager the library knows (``register_class`` adds yours)."""
+"""``name → System subclass``, read-only: every imager the library knows (``register_class`` adds
+yours)."""
 for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, CS2LI, MuCoSDI):
     REGISTRY.register_class(_cls, builtin=True)
 del _cls

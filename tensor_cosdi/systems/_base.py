@@ -222,7 +222,8 @@ class System(SystemRoles):
 
     @property
     def panchromatic_exact(self) -> bool:
-        """Whether :meth:`panchromatic` returns ``D F`` exactly (up to noise) rather than an estimate."""
+        """Whether :meth:`panchromatic` returns ``D F`` exactly (up to noise) rather than an
+        estimate."""
         return False
 
     def panchromatic(self, measurement, *, mu: float = 1e-2):
@@ -266,8 +267,10 @@ class System(SystemRoles):
 
 def coded_state(system, *, code: str = "code") -> tuple[dict, dict]:
     """``(params, arrays)`` of the systems built from one code, shifts and ``n_bands``."""
-    return {"n_bands": int(system.n_bands)}, {code: np.asarray(getattr(system, code)),
-                                              "shifts": np.asarray(system.shifts)}
+    return {"n_bands": int(system.n_bands)}, {
+        code: np.asarray(getattr(system, code)),
+        "shifts": np.asarray(system.shifts),
+    }
 
 
 # ---- building blocks of the explicit matrices ----------------------------------------
@@ -354,7 +357,8 @@ def dual_disperser_operator(ceff: np.ndarray, cube_shape):
 
 
 def dual_disperser_matrix(code: np.ndarray, shifts, ny: int, repeats: int) -> sp.csr_matrix:
-    """Eq. 115 / 144: ``H = I_repeats ⊗ A``, ``A = [diag(c_0) … diag(c_{Nλ−1})]``, ``c_l = vec(C[:, s_l : s_l + Ny, l])``."""
+    """Eq. 115 / 144: ``H = I_repeats ⊗ A``, ``A = [diag(c_0) … diag(c_{Nλ−1})]``, ``c_l = vec(C[:,
+    s_l : s_l + Ny, l])``."""
     lo, t = fractional_weights(shifts)
     diags = []
     for l in range(len(lo)):

@@ -80,7 +80,9 @@ def stack_frames(frames) -> np.ndarray:
         if a.ndim == 2:
             a = a[..., None]
     if a.ndim != 3:
-        raise ValueError(f"frames must be a (H, W, N) stack or a list of 2-D frames, got shape {a.shape}")
+        raise ValueError(
+            f"frames must be a (H, W, N) stack or a list of 2-D frames, got shape {a.shape}"
+        )
     return a
 
 
@@ -91,11 +93,13 @@ class SystemRoles:
     name: ClassVar[str] = ""
     #: Options of :meth:`example_problem` beyond the common ones, with defaults.
     example_options: ClassVar[dict] = {}
-    #: ``"planes"``, ``"phase"``, ``"disparity"``, ``"estimator"`` or ``None`` (what :meth:`depth_from_cube` returns).
+    #: ``"planes"``, ``"phase"``, ``"disparity"``, ``"estimator"`` or ``None`` (what
+    #: :meth:`depth_from_cube` returns).
     depth_kind: ClassVar[str | None] = None
     #: Whether instances of the class can have a depth channel at all.
     has_depth: ClassVar[bool] = False
-    #: The scene and options ``tensor-cosdi demo`` shows this imager with (``None``: not in the demo).
+    #: The scene and options ``tensor-cosdi demo`` shows this imager with (``None``: not in the
+    #: demo).
     demo_scene: ClassVar[str | None] = None
     demo_options: ClassVar[dict] = {}
 
@@ -113,16 +117,27 @@ class SystemRoles:
         :meth:`from_state` of it rebuilds a system whose forward is bit-identical.
         """
         params, arrays = self._state()
-        arrays = {"wavelengths": np.asarray(self.wavelengths), **{k: np.asarray(v) for k, v in arrays.items()}}
-        return {"system": self.name, "class": type(self).__name__, "params": dict(params), "arrays": arrays}
+        arrays = {
+            "wavelengths": np.asarray(self.wavelengths),
+            **{k: np.asarray(v) for k, v in arrays.items()},
+        }
+        return {
+            "system": self.name,
+            "class": type(self).__name__,
+            "params": dict(params),
+            "arrays": arrays,
+        }
 
     @classmethod
     def from_state(cls, state: dict):
-        """Rebuild a system from :meth:`to_state` (called on ``System``, the registry picks the class)."""
+        """Rebuild a system from :meth:`to_state` (called on ``System``, the registry picks the
+        class)."""
         from . import REGISTRY
 
         if not isinstance(state, dict) or "params" not in state or "arrays" not in state:
-            raise ValueError("a system state is a dict with 'system', 'params' and 'arrays' (System.to_state())")
+            raise ValueError(
+                "a system state is a dict with 'system', 'params' and 'arrays' (System.to_state())"
+            )
         name = state.get("system") or REGISTRY.name_of_class(state.get("class"))
         target = REGISTRY[name]
         if cls.name and cls is not target:
@@ -140,19 +155,26 @@ class SystemRoles:
         return shape[2] if len(shape) == 3 else 1
 
     def frames_to_measurement(self, frames) -> np.ndarray:
-        """Stack of sensor frames (list of ``(H, W)`` or ``(H, W, N)``) → the measurement tensor (NumPy)."""
+        """Stack of sensor frames (list of ``(H, W)`` or ``(H, W, N)``) → the measurement tensor
+        (NumPy)."""
         a = stack_frames(frames)
         n = self.frame_count
         if a.shape[2] != n:
-            raise ValueError(f"{type(self).__name__} takes {n} frame(s) per measurement, got {a.shape[2]}")
+            raise ValueError(
+                f"{type(self).__name__} takes {n} frame(s) per measurement, got {a.shape[2]}"
+            )
         shape = tuple(self.measurement_shape)
         target = shape if len(shape) == 3 else shape + (1,)
         if a.shape != target:
-            raise ValueError(f"{type(self).__name__}: expected {target[2]} frame(s) of {target[:2]}, got {a.shape}")
+            raise ValueError(
+                f"{type(self).__name__}: expected {target[2]} frame(s) of {target[:2]}, got "
+                f"{a.shape}"
+            )
         return a if len(shape) == 3 else a[..., 0]
 
     def measurement_to_frames(self, measurement) -> np.ndarray:
-        """The measurement → the ``(H, W, N)`` stack of sensor frames (inverse of :meth:`frames_to_measurement`)."""
+        """The measurement → the ``(H, W, N)`` stack of sensor frames (inverse of
+        :meth:`frames_to_measurement`)."""
         g = self._frames_check(measurement)
         return g if g.ndim == 3 else g[..., None]
 
@@ -160,21 +182,25 @@ class SystemRoles:
         g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
         if g.shape != tuple(self.measurement_shape):
             raise ValueError(
-                f"measurement shape {g.shape} does not match the system's {tuple(self.measurement_shape)}"
+                f"measurement shape {g.shape} does not match the system's "
+                f"{tuple(self.measurement_shape)}"
             )
         return g
 
     # ---- depth and previews -------------------------------------------------------------
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-        """The depth channel of a cube of :attr:`cube_shape` (see :attr:`depth_kind`); ``None`` here."""
+        """The depth channel of a cube of :attr:`cube_shape` (see :attr:`depth_kind`); ``None``
+        here."""
         return None
 
     def spectral_view(self, cube) -> np.ndarray:
-        """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube (sRGB previews); the cube itself here."""
+        """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube (sRGB previews); the cube itself
+        here."""
         return np.asarray(B.to_numpy(cube), dtype=np.float64)
 
     def score_depth(self, depth, problem: Problem) -> dict:
-        """How well ``depth`` (a :meth:`depth_from_cube` result) matches ``problem``'s truth; ``{}`` if no truth.
+        """How well ``depth`` (a :meth:`depth_from_cube` result) matches ``problem``'s truth; ``{}``
+        if no truth.
 
         ``"planes_right"`` (fraction of pixels on the right plane),
         ``"disparity_mae"`` (px per view step) or ``"phase_mae"`` (rad, first
@@ -190,14 +216,28 @@ class SystemRoles:
         if self.depth_kind == "disparity":
             return {"disparity_mae": float(np.mean(np.abs(d - problem.depth)))}
         if self.depth_kind == "phase" and "phase" in problem.extras:
-            return {"phase_mae": float(np.mean(np.abs(wrap(d[..., 0] - problem.extras["phase"][..., 0]))))}
+            return {
+                "phase_mae": float(
+                    np.mean(np.abs(wrap(d[..., 0] - problem.extras["phase"][..., 0])))
+                )
+            }
         return {}
 
     # ---- seeded problems --------------------------------------------------------------
     @classmethod
-    def example_problem(cls, scene: str = "chelsea", *, shape=(64, 64), n_bands: int = 16,
-                        snr_db: float | None = 30.0, rng=0, shifts=1, **options) -> Problem:
-        """A seeded problem: this imager viewing ``scene`` (a name of :data:`tensor_cosdi.scenes.SCENES`).
+    def example_problem(
+        cls,
+        scene: str = "chelsea",
+        *,
+        shape=(64, 64),
+        n_bands: int = 16,
+        snr_db: float | None = 30.0,
+        rng=0,
+        shifts=1,
+        **options,
+    ) -> Problem:
+        """A seeded problem: this imager viewing ``scene`` (a name of
+        :data:`tensor_cosdi.scenes.SCENES`).
 
         ``shape`` is the detector-side spatial size, ``n_bands`` the bands
         between 450 and 650 nm, ``snr_db`` the measurement SNR (``None``:
@@ -209,21 +249,28 @@ class SystemRoles:
 
         unknown = sorted(set(options) - set(cls.example_options))
         if unknown:
-            raise ValueError(f"{cls.name}: unknown option(s) {unknown}; its options are "
-                             f"{sorted(cls.example_options) or 'none'} (and shape, n_bands, snr_db, rng, shifts)")
+            raise ValueError(
+                f"{cls.name}: unknown option(s) {unknown}; its options are "
+                f"{sorted(cls.example_options) or 'none'} (and shape, n_bands, snr_db, rng, shifts)"
+            )
         opts = {**cls.example_options, **options}
         scenes.SCENES[scene]  # noqa: B018 - an unknown scene lists the valid ones
         nx, ny = validate_shape(shape, "shape")
         wl = scenes.default_wavelengths(n_bands)
         gen = B.default_rng(rng)
         seed = int(gen.integers(2**31))
-        system, cube, reflectance, depth, extras = cls._example(scene, (nx, ny), wl, seed, shifts, **opts)
+        system, cube, reflectance, depth, extras = cls._example(
+            scene, (nx, ny), wl, seed, shifts, **opts
+        )
         g = system.simulate(cube, snr_db=snr_db, rng=gen)
-        return Problem(f"{cls.name}/{scene}", system, cube, g, wl, snr_db, reflectance, depth, extras)
+        return Problem(
+            f"{cls.name}/{scene}", system, cube, g, wl, snr_db, reflectance, depth, extras
+        )
 
     @classmethod
     def _example(cls, scene, shape, wl, seed, shifts, **opts):
-        """``(system, cube, reflectance, depth, extras)`` of a spectral-only system: cube = reflectance."""
+        """``(system, cube, reflectance, depth, extras)`` of a spectral-only system: cube =
+        reflectance."""
         from .. import scenes
 
         reflectance = scenes.scene_cube(scene, shape, wl)
@@ -239,7 +286,8 @@ class SystemRoles:
 
 # ---- shared by several imagers ------------------------------------------------------------
 def fringe_phase(cube, n_steps: int):
-    """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums of a ``(Nx, Ny, Nλ, Nt)`` cube.
+    """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums of a ``(Nx, Ny, Nλ,
+    Nt)`` cube.
 
     ``K = n_steps`` when it divides ``Nt`` (frequency-major patterns), else
     all ``Nt`` patterns as one sequence; ``None`` with fewer than 3 patterns.
@@ -251,7 +299,7 @@ def fringe_phase(cube, n_steps: int):
     K = n_steps if nt % n_steps == 0 and n_steps >= 3 else nt
     if K < 3:
         return None
-    return np.stack([wrapped_phase(z[..., i * K:(i + 1) * K]) for i in range(nt // K)], axis=-1)
+    return np.stack([wrapped_phase(z[..., i * K : (i + 1) * K]) for i in range(nt // K)], axis=-1)
 
 
 def views_disparity(light_field, max_disparity: float):
@@ -271,4 +319,10 @@ def fringe_example(cls, scene, shape, wl, seed, shifts, n_steps):
     sl = scenes.structured_light(shape, wl, rng=seed)
     cube = np.asarray(fringe_cube(reflectance, sl.phase, n_steps=n_steps, amplitude=0.5))
     system = cls.example(shape + (len(wl), n_steps), rng=seed, shifts=shifts, wavelengths=wl)
-    return system, cube, reflectance, sl.height, {"phase": sl.phase, "phase_per_height": sl.phase_per_height}
+    return (
+        system,
+        cube,
+        reflectance,
+        sl.height,
+        {"phase": sl.phase, "phase_per_height": sl.phase_per_height},
+    )

@@ -21,7 +21,9 @@ def _views(views):
     try:
         n4, n5 = (int(v) for v in views)
     except (TypeError, ValueError):
-        raise ValueError(f"views must be a pair of positive integers (N4, N5), got {views!r}") from None
+        raise ValueError(
+            f"views must be a pair of positive integers (N4, N5), got {views!r}"
+        ) from None
     if n4 < 1 or n5 < 1 or tuple(views) != (n4, n5):
         raise ValueError(f"views must be a pair of positive integers (N4, N5), got {views!r}")
     return n4, n5
@@ -134,7 +136,8 @@ class C3SLFI(System):
                 worst = np.unravel_index(int(np.argmax(err)), err.shape)
                 raise ValueError(
                     "codes are not complementary: Σ_k T[..., k] must be 1 for every voxel "
-                    f"(Lemma 1), but it is {total[worst]:g} at index {tuple(int(i) for i in worst)}; "
+                    f"(Lemma 1), but it is {total[worst]:g} at index "
+                    f"{tuple(int(i) for i in worst)}; "
                     "pass complementary=False to allow this"
                 )
         if _phi is not None:
@@ -167,35 +170,54 @@ class C3SLFI(System):
 
     def _state(self):
         if self.phi is not None:
-            raise ValueError("a separable C3SLFI (C3SLFI.separable) is saved by its Φ3 matrix, which bundles do not "
-                             "support yet; build it with explicit codes to save it")
-        return ({"layout": self.layout, "raw_layout": self.raw_layout, "complementary": bool(self.complementary),
-                 "views": None if self.views is None else [int(v) for v in self.views]},
-                {"codes": np.asarray(self.codes)})
+            raise ValueError(
+                "a separable C3SLFI (C3SLFI.separable) is saved by its Φ3 matrix, which bundles do "
+                "not "
+                "support yet; build it with explicit codes to save it"
+            )
+        return (
+            {
+                "layout": self.layout,
+                "raw_layout": self.raw_layout,
+                "complementary": bool(self.complementary),
+                "views": None if self.views is None else [int(v) for v in self.views],
+            },
+            {"codes": np.asarray(self.codes)},
+        )
 
     @classmethod
     def _from_state(cls, params, arrays):
         views = params.pop("views", None)
-        return cls(arrays["codes"], views=None if views is None else tuple(views), wavelengths=arrays["wavelengths"],
-                   **params)
+        return cls(
+            arrays["codes"],
+            views=None if views is None else tuple(views),
+            wavelengths=arrays["wavelengths"],
+            **params,
+        )
 
     @property
     def frame_count(self) -> int:
         return self.n_snapshots
 
     def frames_to_measurement(self, frames):
-        """``K`` raw lenslet frames (snapshot order, :attr:`raw_layout`) → the measurement (3-D or 5-D)."""
+        """``K`` raw lenslet frames (snapshot order, :attr:`raw_layout`) → the measurement (3-D or
+        5-D)."""
         from ._roles import stack_frames
 
         a = stack_frames(frames)
         shape = tuple(self.measurement_shape)
         if self.layout == "3d":
             if a.shape != shape:
-                raise ValueError(f"C3SLFI frames: expected {shape[2]} frames of {shape[:2]}, got {a.shape}")
+                raise ValueError(
+                    f"C3SLFI frames: expected {shape[2]} frames of {shape[:2]}, got {a.shape}"
+                )
             return a
         g3_shape = (shape[0] * shape[3], shape[1] * shape[4], shape[2])
         if a.shape != g3_shape:
-            raise ValueError(f"C3SLFI frames: expected {g3_shape[2]} lenslet frames of {g3_shape[:2]}, got {a.shape}")
+            raise ValueError(
+                f"C3SLFI frames: expected {g3_shape[2]} lenslet frames of {g3_shape[:2]}, got "
+                f"{a.shape}"
+            )
         return np.asarray(self._layout(self.n_snapshots).adjoint(a))
 
     def measurement_to_frames(self, measurement):
@@ -203,7 +225,8 @@ class C3SLFI(System):
         return np.asarray(self.measurement_to_3d(g)) if self.layout == "5d" else g
 
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-        """Disparity (px per view step) of the centre view, over all bands; ``None`` without views."""
+        """Disparity (px per view step) of the centre view, over all bands; ``None`` without
+        views."""
         from ._roles import views_disparity
 
         if self.layout == "3d" and self.views is None:
@@ -230,12 +253,21 @@ class C3SLFI(System):
         _, disp = scenes.motorcycle((nx // n4, ny // n5), [550.0])
         d = (disp - disp.mean()) / max(np.abs(disp - disp.mean()).max(), 1e-12) * max_disparity
         lf = scenes.light_field(centre, d, views=(n4, n5))
-        system = cls.example((nx, ny, len(wl)), rng=seed, n_snapshots=n_snapshots, views=(n4, n5), wavelengths=wl)
+        system = cls.example(
+            (nx, ny, len(wl)), rng=seed, n_snapshots=n_snapshots, views=(n4, n5), wavelengths=wl
+        )
         return system, np.asarray(system.to_3d(lf)), centre, d, {}
 
     @classmethod
     def separable(
-        cls, phi, cube_shape, *, views=None, raw_layout="interleaved", complementary=True, wavelengths=None
+        cls,
+        phi,
+        cube_shape,
+        *,
+        views=None,
+        raw_layout="interleaved",
+        complementary=True,
+        wavelengths=None,
     ):
         """Spatially invariant spectral codes, the n-mode form ``G = F ×₃ Φ3`` (Eq. 80).
 
@@ -252,7 +284,8 @@ class C3SLFI(System):
             raise ValueError(f"cube_shape must have 3 or 5 positive sizes, got {cube_shape!r}")
         if phi.shape[1] != shape[2]:
             raise ValueError(
-                f"phi of shape {phi.shape} needs (K, N3) with N3 = {shape[2]} bands of cube_shape {shape}"
+                f"phi of shape {phi.shape} needs (K, N3) with N3 = {shape[2]} bands of cube_shape "
+                f"{shape}"
             )
         t = phi.T.reshape((1, 1, shape[2]) + (1,) * (len(shape) - 3) + (phi.shape[0],))
         codes = np.broadcast_to(t, shape + (phi.shape[0],))
@@ -267,7 +300,16 @@ class C3SLFI(System):
         )
 
     @classmethod
-    def example(cls, cube_shape=None, *, rng=0, n_snapshots: int = 2, n_filters=None, views=None, **overrides):
+    def example(
+        cls,
+        cube_shape=None,
+        *,
+        rng=0,
+        n_snapshots: int = 2,
+        n_filters=None,
+        views=None,
+        **overrides,
+    ):
         """A seeded instance with complementary colour codes.
 
         ``cube_shape`` of 3 axes (default ``(8, 8, 6)`` with ``views=(2, 2)``)
@@ -276,7 +318,9 @@ class C3SLFI(System):
         shape = (8, 8, 6) if cube_shape is None else tuple(cube_shape)
         if len(shape) == 3 and views is None and cube_shape is None:
             views = (2, 2)
-        codes = complementary_colour_codes(shape, count(n_snapshots, "n_snapshots", 2), n_filters=n_filters, rng=rng)
+        codes = complementary_colour_codes(
+            shape, count(n_snapshots, "n_snapshots", 2), n_filters=n_filters, rng=rng
+        )
         layout = "3d" if len(shape) == 3 else "5d"
         return cls(codes, layout=layout, views=views, **overrides)
 
@@ -312,7 +356,8 @@ class C3SLFI(System):
         return LightFieldLayout(s[:2] + (mid,) + s[3:], self.raw_layout)
 
     def to_5d(self, cube):
-        """A cube of this system → the 5-D light field ``(N1, N2, N3, N4, N5)`` (exact permutation)."""
+        """A cube of this system → the 5-D light field ``(N1, N2, N3, N4, N5)`` (exact
+        permutation)."""
         return cube if self.layout == "5d" else self._layout(self.cube_shape[2]).adjoint(cube)
 
     def to_3d(self, cube):
@@ -330,10 +375,16 @@ class C3SLFI(System):
         return self._layout(self.n_snapshots).forward(measurement)
 
     def _converted(self, layout, raw_layout, convert):
-        kw = dict(raw_layout=raw_layout, complementary=self.complementary, wavelengths=self.wavelengths)
+        kw = dict(
+            raw_layout=raw_layout, complementary=self.complementary, wavelengths=self.wavelengths
+        )
         shape5 = self._shape5()
         if self.phi is not None:
-            target = shape5 if layout == "5d" else (shape5[0] * shape5[3], shape5[1] * shape5[4], shape5[2])
+            target = (
+                shape5
+                if layout == "5d"
+                else (shape5[0] * shape5[3], shape5[1] * shape5[4], shape5[2])
+            )
             return C3SLFI.separable(self.phi, target, views=shape5[3:], **kw)
         codes = np.stack([convert(self.codes[..., k]) for k in range(self.n_snapshots)], axis=-1)
         return C3SLFI(codes, layout=layout, views=shape5[3:], **kw)
@@ -346,7 +397,8 @@ class C3SLFI(System):
         return self._converted("5d", self.raw_layout, lambda c: _np_adjoint(lay, c))
 
     def as_3d(self, raw_layout=None):
-        """The same system on the 3-D lenslet image in ``raw_layout`` (default :attr:`raw_layout`)."""
+        """The same system on the 3-D lenslet image in ``raw_layout`` (default
+        :attr:`raw_layout`)."""
         raw_layout = self.raw_layout if raw_layout is None else raw_layout
         if raw_layout not in LAYOUTS:
             raise ValueError(f"raw_layout must be one of {LAYOUTS}, got {raw_layout!r}")
@@ -363,11 +415,15 @@ class C3SLFI(System):
         K = self.n_snapshots
         if self.phi is not None:
             # Eq. 80: vec(F ×₃ Φ3) = (I_{N4N5} ⊗ Φ3 ⊗ I_{N1N2}) vec(F)
-            return sp.kron(sp.identity(nv), sp.kron(sp.csr_matrix(self.phi), sp.identity(n1 * n2))).tocsr()
+            return sp.kron(
+                sp.identity(nv), sp.kron(sp.csr_matrix(self.phi), sp.identity(n1 * n2))
+            ).tocsr()
         # Eq. 206-207: snapshot k is [diag(t_{0,k}) … diag(t_{N3−1,k})] for every view
         p = n1 * n2
         T = np.asarray(self.codes).reshape((p, n3, nv, K), order="F")
-        u, l, v, k = np.meshgrid(np.arange(p), np.arange(n3), np.arange(nv), np.arange(K), indexing="ij")
+        u, l, v, k = np.meshgrid(
+            np.arange(p), np.arange(n3), np.arange(nv), np.arange(K), indexing="ij"
+        )
         rows = u + p * k + p * K * v
         cols = u + p * l + p * n3 * v
         return sp.csr_matrix(

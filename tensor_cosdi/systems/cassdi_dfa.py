@@ -8,7 +8,15 @@ import scipy.sparse as sp
 from .. import _backend as B
 from ..codes import depth_codes
 from ..operators import Blur, Code, Shear, SumAxis
-from ._base import System, as_code, coded_shear_sum_matrix, coded_state, count, shifts_for, wavelengths_for
+from ._base import (
+    System,
+    as_code,
+    coded_shear_sum_matrix,
+    coded_state,
+    count,
+    shifts_for,
+    wavelengths_for,
+)
 
 __all__ = ["CASSDIDFA"]
 
@@ -72,13 +80,19 @@ class CASSDIDFA(System):
         cube = (nx, ny, nl, nz)
         shear = Shear(cube, self.shifts)
         per_band = SumAxis(shear.output_shape, 2)
-        op = SumAxis(per_band.output_shape, 2) @ per_band @ shear @ Code(self.codes, cube, axes=(0, 1, 3))
+        op = (
+            SumAxis(per_band.output_shape, 2)
+            @ per_band
+            @ shear
+            @ Code(self.codes, cube, axes=(0, 1, 3))
+        )
         self.psfs = None
         if psfs is not None:
             p = np.array(B.to_numpy(psfs), dtype=np.float64)
             if p.ndim not in (2, 4):
                 raise ValueError(
-                    f"psfs must have shape (h, w) or (h, w, Nλ, Nz) = (h, w, {nl}, {nz}), got {p.shape}"
+                    f"psfs must have shape (h, w) or (h, w, Nλ, Nz) = (h, w, {nl}, {nz}), got "
+                    f"{p.shape}"
                 )
             if p.ndim == 4 and (p.shape[2] not in (1, nl) or p.shape[3] not in (1, nz)):
                 raise ValueError(
@@ -121,11 +135,17 @@ class CASSDIDFA(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["codes"], shifts=arrays["shifts"], psfs=arrays.get("psfs"),
-                   wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["codes"],
+            shifts=arrays["shifts"],
+            psfs=arrays.get("psfs"),
+            wavelengths=arrays["wavelengths"],
+            **params,
+        )
 
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-        """Index of the depth plane holding most of each pixel's energy, ``argmax_z Σ_λ F`` (float)."""
+        """Index of the depth plane holding most of each pixel's energy, ``argmax_z Σ_λ F``
+        (float)."""
         x = np.asarray(B.to_numpy(cube), dtype=np.float64)
         return np.argmax(x.sum(axis=2), axis=2).astype(np.float64)
 
@@ -145,7 +165,9 @@ class CASSDIDFA(System):
         return system, cube, reflectance, depth, {}
 
     @classmethod
-    def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, psf_size: int = 0, **overrides):
+    def example(
+        cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, psf_size: int = 0, **overrides
+    ):
         """A seeded instance (default cube ``(16, 16, 8, 3)``).
 
         ``psf_size > 0`` adds random normalised ``psf_size × psf_size`` PSFs per
@@ -165,7 +187,9 @@ class CASSDIDFA(System):
         # Eq. 60: H = [H_0 … H_{Nz−1}], H_z the coded shear-sum of code z
         H = sp.hstack(
             [
-                coded_shear_sum_matrix(np.repeat(self.codes[:, :, z, None], nl, axis=2), self.shifts, width)
+                coded_shear_sum_matrix(
+                    np.repeat(self.codes[:, :, z, None], nl, axis=2), self.shifts, width
+                )
                 for z in range(nz)
             ],
             format="csr",
@@ -181,7 +205,8 @@ class CASSDIDFA(System):
 
 
 def _convolution_matrix(psf: np.ndarray, nx: int, ny: int) -> sp.csr_matrix:
-    """``y[i, j] = Σ_{a,b} h[a, b] x[i − a + ⌊h/2⌋, j − b + ⌊w/2⌋]`` (zero outside), column-major."""
+    """``y[i, j] = Σ_{a,b} h[a, b] x[i − a + ⌊h/2⌋, j − b + ⌊w/2⌋]`` (zero outside),
+    column-major."""
     h, w = psf.shape
     i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
     rows, cols, vals = [], [], []
@@ -193,5 +218,6 @@ def _convolution_matrix(psf: np.ndarray, nx: int, ny: int) -> sp.csr_matrix:
             cols.append((ii + nx * jj)[ok])
             vals.append(np.full(int(ok.sum()), psf[a, b]))
     return sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(nx * ny, nx * ny)
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(nx * ny, nx * ny),
     )

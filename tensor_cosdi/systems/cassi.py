@@ -12,9 +12,9 @@ from ..noise import add_noise
 from ..operators import Code, Pad, Shear, Stack, SumAxis
 from ._base import (
     System,
-    coded_state,
     as_code,
     coded_shear_sum_matrix,
+    coded_state,
     count,
     dual_disperser,
     dual_disperser_matrix,
@@ -89,7 +89,9 @@ class SDCASSI(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
@@ -102,7 +104,9 @@ class SDCASSI(System):
         _finish_shots(self, ops, wavelengths_for(wavelengths, nl))
 
     @classmethod
-    def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):
+    def example(
+        cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides
+    ):
         """A seeded instance: random binary code(s) for ``cube_shape`` (default ``(16, 16, 8)``).
 
         ``shots > 1`` gives a multi-shot system; ``overrides`` go to the constructor.
@@ -155,7 +159,9 @@ class DDCASSI(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
@@ -169,12 +175,16 @@ class DDCASSI(System):
         _finish_shots(self, ops, wavelengths_for(wavelengths, nl))
 
     @classmethod
-    def example(cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides):
+    def example(
+        cls, cube_shape=None, *, rng=0, shots: int = 1, transmittance: float = 0.5, **overrides
+    ):
         """A seeded instance for ``cube_shape`` (default ``(16, 16, 8)``)."""
         nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
         _, extra = shifts_for(overrides.get("shifts", 1), nl)
         shape = (nx, ny + extra) + (() if shots == 1 else (count(shots, "shots"),))
-        return cls(random_binary(shape, transmittance=transmittance, rng=rng), n_bands=nl, **overrides)
+        return cls(
+            random_binary(shape, transmittance=transmittance, rng=rng), n_bands=nl, **overrides
+        )
 
     def matrix(self):
         ny = self.cube_shape[1]
@@ -221,14 +231,17 @@ class DualCameraCASSI(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     @property
     def frame_count(self) -> int:
         return 2
 
     def frames_to_measurement(self, frames):
-        """The CASSI frame ``(Nx, Ny + S)`` and the panchromatic one zero-padded to it → ``(Nx, Ny + S, 2)``.
+        """The CASSI frame ``(Nx, Ny + S)`` and the panchromatic one zero-padded to it → ``(Nx, Ny +
+        S, 2)``.
 
         Use :func:`tensor_cosdi.io.dual_camera_frames` to pad an ``(Nx, Ny)`` panchromatic frame.
         """
@@ -240,10 +253,14 @@ class DualCameraCASSI(System):
         nx, w = self.measurement_shape[:2]
         ny = self.cube_shape[1]
         if a.shape[:2] != (nx, w):
-            raise ValueError(f"DualCameraCASSI frames must be {nx}×{w} (CASSI) and {nx}×{ny} (panchromatic, "
-                             f"give it zero-padded to {nx}×{w} or use dual_camera_frames); got {a.shape[:2]}")
+            raise ValueError(
+                f"DualCameraCASSI frames must be {nx}×{w} (CASSI) and {nx}×{ny} (panchromatic, "
+                f"give it zero-padded to {nx}×{w} or use dual_camera_frames); got {a.shape[:2]}"
+            )
         if np.any(a[:, ny:, 1] != 0):
-            raise ValueError(f"the panchromatic frame has non-zero columns beyond {ny}: not a {nx}×{ny} image")
+            raise ValueError(
+                f"the panchromatic frame has non-zero columns beyond {ny}: not a {nx}×{ny} image"
+            )
         return a.copy()
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
@@ -266,10 +283,15 @@ class DualCameraCASSI(System):
     def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, **overrides):
         """A seeded instance for ``cube_shape`` (default ``(16, 16, 8)``)."""
         nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
-        return cls(random_binary((nx, ny), transmittance=transmittance, rng=rng), n_bands=nl, **overrides)
+        return cls(
+            random_binary((nx, ny), transmittance=transmittance, rng=rng), n_bands=nl, **overrides
+        )
 
-    def simulate(self, cube, snr_db: float | None = None, rng=None, *, pan_snr_db: float | None = None):
-        """Both frames; noise at ``snr_db`` on the CASSI frame, at ``pan_snr_db`` (default none) on the panchromatic one."""
+    def simulate(
+        self, cube, snr_db: float | None = None, rng=None, *, pan_snr_db: float | None = None
+    ):
+        """Both frames; noise at ``snr_db`` on the CASSI frame, at ``pan_snr_db`` (default none) on
+        the panchromatic one."""
         g = self.forward(cube)
         rng = B.default_rng(rng)
         ny = self.cube_shape[1]
@@ -290,7 +312,9 @@ class DualCameraCASSI(System):
     def matrix(self):
         nx, ny, nl = self.cube_shape
         width = self.measurement_shape[1]
-        top = coded_shear_sum_matrix(np.repeat(self.code[:, :, None], nl, axis=2), self.shifts, width)
+        top = coded_shear_sum_matrix(
+            np.repeat(self.code[:, :, None], nl, axis=2), self.shifts, width
+        )
         # panchromatic: row Nx·W + u for every band of pixel u (B = 1ᵀ ⊗ I)
         u = np.tile(np.arange(nx * ny), nl)
         cols = np.arange(nx * ny * nl)

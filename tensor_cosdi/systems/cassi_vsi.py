@@ -9,7 +9,15 @@ import scipy.sparse as sp
 
 from ..codes import random_binary
 from ..operators import Code, Pad, Shear, SumAxis, weighted_sum
-from ._base import System, as_code, coded_shear_sum_matrix, coded_state, count, shifts_for, wavelengths_for
+from ._base import (
+    System,
+    as_code,
+    coded_shear_sum_matrix,
+    coded_state,
+    count,
+    shifts_for,
+    wavelengths_for,
+)
 
 __all__ = ["CASSIVSI"]
 
@@ -76,7 +84,9 @@ class CASSIVSI(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def __init__(self, code, *, n_bands, alpha_t=0.7, beta=None, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2,))
@@ -87,11 +97,17 @@ class CASSIVSI(System):
         except (TypeError, ValueError):
             raise ValueError(f"alpha_t must be a number in [0, 1], got {alpha_t!r}") from None
         if not 0.0 <= a <= 1.0:
-            raise ValueError(f"alpha_t must be in [0, 1] (a fraction of the light), got {alpha_t!r}")
+            raise ValueError(
+                f"alpha_t must be in [0, 1] (a fraction of the light), got {alpha_t!r}"
+            )
         self.alpha_t = a
         self.alpha_r = round(1.0 - a, 15)
         beta = 0 if beta is None else beta
-        if isinstance(beta, bool) or not isinstance(beta, numbers.Integral) or not 0 <= beta <= extra:
+        if (
+            isinstance(beta, bool)
+            or not isinstance(beta, numbers.Integral)
+            or not 0 <= beta <= extra
+        ):
             raise ValueError(
                 f"beta must be an integer column offset in [0, {extra}] (0 to ⌈max shift⌉), "
                 f"got {beta!r}"
@@ -102,8 +118,13 @@ class CASSIVSI(System):
         code = Code(self.code, cube)
         shear = Shear(cube, self.shifts)
         dispersed = SumAxis(shear.output_shape, 2) @ shear @ code
-        direct = Pad((nx, ny), axis=1, before=self.beta, after=extra - self.beta) @ SumAxis(cube, 2) @ code
-        #: the two arms without their weights: ``H = αT·HT + αR·HR`` (Eq. 45), used by A-VSI (Alg. 1)
+        direct = (
+            Pad((nx, ny), axis=1, before=self.beta, after=extra - self.beta)
+            @ SumAxis(cube, 2)
+            @ code
+        )
+        #: the two arms without their weights: ``H = αT·HT + αR·HR`` (Eq. 45), used by A-VSI (Alg.
+        #: 1)
         self.arms = (dispersed, direct)
         terms = [(op, w) for op, w in ((dispersed, self.alpha_t), (direct, self.alpha_r)) if w != 0]
         self._finish(
@@ -117,12 +138,16 @@ class CASSIVSI(System):
     def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, **overrides):
         """A seeded instance with a random binary code (default cube ``(16, 16, 8)``)."""
         nx, ny, nl = (16, 16, 8) if cube_shape is None else cube_shape
-        return cls(random_binary((nx, ny), transmittance=transmittance, rng=rng), n_bands=nl, **overrides)
+        return cls(
+            random_binary((nx, ny), transmittance=transmittance, rng=rng), n_bands=nl, **overrides
+        )
 
     def matrix(self):
         nx, ny, nl = self.cube_shape
         width = self.measurement_shape[1]
-        HT = coded_shear_sum_matrix(np.repeat(self.code[:, :, None], nl, axis=2), self.shifts, width)
+        HT = coded_shear_sum_matrix(
+            np.repeat(self.code[:, :, None], nl, axis=2), self.shifts, width
+        )
         # HR (Eq. 44): entry αR c_u at row u + β Nx for every column j = u + NxNy l
         c = self.code.reshape(-1, order="F")
         u = np.tile(np.arange(nx * ny), nl)

@@ -1,4 +1,5 @@
-"""CS2LI: compressive spectral structured light, a dual disperser with a colour-coded mirror (SPEC §3.4)."""
+"""CS2LI: compressive spectral structured light, a dual disperser with a colour-coded mirror (SPEC
+§3.4)."""
 
 from __future__ import annotations
 
@@ -9,11 +10,10 @@ import tensorly as tl
 
 from .. import _backend as B
 from ..codes import colour_coded_aperture
-from ._roles import fringe_example, fringe_phase
 from ._base import (
     System,
-    coded_state,
     as_code,
+    coded_state,
     count,
     dual_disperser,
     dual_disperser_matrix,
@@ -21,6 +21,7 @@ from ._base import (
     shifts_for,
     wavelengths_for,
 )
+from ._roles import fringe_example, fringe_phase
 
 __all__ = ["CS2LI", "fringe_cube"]
 
@@ -77,10 +78,13 @@ class CS2LI(System):
 
     @classmethod
     def _from_state(cls, params, arrays):
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-        """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums (N-step PSA, ``K = n_steps``)."""
+        """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums (N-step PSA, ``K
+        = n_steps``)."""
         return fringe_phase(cube, n_steps)
 
     def spectral_view(self, cube):
@@ -115,7 +119,9 @@ class CS2LI(System):
         nx, ny, nl, nt = (16, 16, 8, 4) if cube_shape is None else cube_shape
         _, extra = shifts_for(overrides.get("shifts", 1), nl)
         nf = min(n_filters, nl)
-        code = colour_coded_aperture((nx, ny + extra), nl, n_filters=nf, transmittance=transmittance, rng=rng)
+        code = colour_coded_aperture(
+            (nx, ny + extra), nl, n_filters=nf, transmittance=transmittance, rng=rng
+        )
         if nf == 1:
             code = code[:, :, 0]
         return cls(code, n_bands=nl, n_patterns=nt, **overrides)
@@ -125,7 +131,9 @@ class CS2LI(System):
         return dual_disperser_matrix(self.code, self.shifts, ny, nt)
 
 
-def fringe_cube(reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, amplitude: float = 1.0):
+def fringe_cube(
+    reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, amplitude: float = 1.0
+):
     """The cube ``P`` a CS2LI senses: reflectance under phase-shifted white fringes (Eq. 107).
 
     ``P[x, y, l, f·K + k] = F[x, y, l] · (offset + amplitude · cos(φ_f(x, y) + 2πk/K))``
@@ -157,7 +165,9 @@ def fringe_cube(reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, a
     ((2, 3, 4, 4), [2.0, 1.0, 0.0, 1.0])
     """
     if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
-        raise ValueError(f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}")
+        raise ValueError(
+            f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}"
+        )
     if not (np.isfinite(offset) and np.isfinite(amplitude) and 0 <= amplitude <= offset):
         raise ValueError(
             f"need 0 ≤ amplitude ≤ offset so the projected light is ≥ 0, got offset={offset!r}, "
@@ -170,7 +180,9 @@ def fringe_cube(reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, a
     if ph.ndim == 2:
         ph = ph[:, :, None]
     if ph.ndim != 3 or ph.shape[:2] != shape[:2]:
-        raise ValueError(f"phases must have shape {shape[:2]} or {shape[:2]} + (n_freq,), got {ph.shape}")
+        raise ValueError(
+            f"phases must have shape {shape[:2]} or {shape[:2]} + (n_freq,), got {ph.shape}"
+        )
     if not np.isfinite(ph).all():
         raise ValueError("phases contain NaN or inf")
     k = np.arange(n_steps)

@@ -2,17 +2,15 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from .. import _backend as B
 from ..codes import random_binary
 from ..operators import LAYOUTS, LightFieldLayout
-from ._roles import fringe_example, fringe_phase, views_disparity
 from ._base import (
     System,
-    coded_state,
     as_code,
+    coded_state,
     count,
     dual_disperser,
     dual_disperser_matrix,
@@ -20,6 +18,7 @@ from ._base import (
     shifts_for,
     wavelengths_for,
 )
+from ._roles import fringe_example, fringe_phase, views_disparity
 
 __all__ = ["MuCoSDI", "MODALITIES"]
 
@@ -96,18 +95,23 @@ class MuCoSDI(System):
         elif self.modality == "lf":
             params.update(views=list(self.views), raw_layout=self.raw_layout)
         elif self.depth_estimator is not None:
-            raise ValueError("a Mu-CoSDI with a depth_estimator callable cannot be saved (code is not data); "
-                             "save it without one and pass the estimator again after loading")
+            raise ValueError(
+                "a Mu-CoSDI with a depth_estimator callable cannot be saved (code is not data); "
+                "save it without one and pass the estimator again after loading"
+            )
         return params, arrays
 
     @classmethod
     def _from_state(cls, params, arrays):
         if "views" in params:
             params["views"] = tuple(params["views"])
-        return cls(arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params)
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
-        """``"sl"``: wrapped fringe phase per frequency; ``"lf"``: centre-view disparity; ``"monocular"``: the estimator."""
+        """``"sl"``: wrapped fringe phase per frequency; ``"lf"``: centre-view disparity;
+        ``"monocular"``: the estimator."""
         if self.modality == "sl":
             return fringe_phase(cube, n_steps)
         if self.modality == "lf":
@@ -123,7 +127,9 @@ class MuCoSDI(System):
     def _example(cls, scene, shape, wl, seed, shifts, n_steps):
         return fringe_example(cls, scene, shape, wl, seed, shifts, n_steps)
 
-    def __init__(self, code, *, n_bands, modality="sl", shifts=1, wavelengths=None, **modality_options):
+    def __init__(
+        self, code, *, n_bands, modality="sl", shifts=1, wavelengths=None, **modality_options
+    ):
         if modality not in MODALITIES:
             raise ValueError(f"modality must be one of {tuple(MODALITIES)}, got {modality!r}")
         required, optional = MODALITIES[modality]
@@ -155,10 +161,13 @@ class MuCoSDI(System):
             try:
                 nu, nv = (count(v, "views") for v in views)
             except TypeError:
-                raise ValueError(f"views must be a pair of positive integers (Nu, Nv), got {views!r}") from None
+                raise ValueError(
+                    f"views must be a pair of positive integers (Nu, Nv), got {views!r}"
+                ) from None
             if h % nu or w % nv:
                 raise ValueError(
-                    f"views ({nu}, {nv}) do not divide the lenslet image {(h, w)}: its size must be "
+                    f"views ({nu}, {nv}) do not divide the lenslet image {(h, w)}: its size "
+                    "must be "
                     "(Nx·Nu, Ny·Nv)"
                 )
             if opts["raw_layout"] not in LAYOUTS:
@@ -167,7 +176,9 @@ class MuCoSDI(System):
         if modality == "monocular":
             est = opts["depth_estimator"]
             if est is not None and not callable(est):
-                raise ValueError(f"depth_estimator must be a callable cube → depth map, got {est!r}")
+                raise ValueError(
+                    f"depth_estimator must be a callable cube → depth map, got {est!r}"
+                )
             self.depth_estimator = est
         self._finish(
             dual_disperser_operator(self.effective_code, cube),
@@ -177,7 +188,15 @@ class MuCoSDI(System):
         )
 
     @classmethod
-    def example(cls, cube_shape=None, *, rng=0, modality: str = "sl", transmittance: float = 0.5, **overrides):
+    def example(
+        cls,
+        cube_shape=None,
+        *,
+        rng=0,
+        modality: str = "sl",
+        transmittance: float = 0.5,
+        **overrides,
+    ):
         """A seeded instance with a random binary code.
 
         Default cubes: ``(16, 16, 8, 4)`` for ``"sl"``, ``(16, 16, 8)`` with
@@ -196,13 +215,16 @@ class MuCoSDI(System):
 
     def _lenslet(self):
         if self.modality != "lf":
-            raise ValueError(f"views exist only for modality 'lf', this system is {self.modality!r}")
+            raise ValueError(
+                f"views exist only for modality 'lf', this system is {self.modality!r}"
+            )
         h, w, nl = self.cube_shape
         nu, nv = self.views
         return LightFieldLayout((h // nu, w // nv, nl, nu, nv), self.raw_layout)
 
     def to_views(self, cube):
-        """Lenslet-layout cube → spectral light field ``(Nx, Ny, Nλ, Nu, Nv)`` (modality ``"lf"``)."""
+        """Lenslet-layout cube → spectral light field ``(Nx, Ny, Nλ, Nu, Nv)`` (modality
+        ``"lf"``)."""
         return self._lenslet().adjoint(cube)
 
     def from_views(self, light_field):
@@ -210,7 +232,8 @@ class MuCoSDI(System):
         return self._lenslet().forward(light_field)
 
     def estimate_depth(self, cube):
-        """Depth map from a reconstructed cube with the user's estimator (modality ``"monocular"``)."""
+        """Depth map from a reconstructed cube with the user's estimator (modality
+        ``"monocular"``)."""
         if self.modality != "monocular":
             raise ValueError(
                 f"estimate_depth uses the monocular estimator; modality {self.modality!r} gets its "

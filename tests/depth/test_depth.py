@@ -1,4 +1,5 @@
-"""Depth from fringes, light-field views and focal stacks (SPEC §7) on rendered scenes with known truth."""
+"""Depth from fringes, light-field views and focal stacks (SPEC §7) on rendered scenes with known
+truth."""
 
 import numpy as np
 import pytest
@@ -10,8 +11,11 @@ from tensor_cosdi.noise import add_noise
 
 @pytest.fixture(scope="module")
 def sl_scene():
-    # two frequencies whose beat (0.8 period) covers the field once: heterodyne gives the absolute phase
-    return scenes.structured_light((64, 64), [550.0], frequencies=(8.0, 7.2), phase_per_height=2.0, rng=3)
+    # two frequencies whose beat (0.8 period) covers the field once: heterodyne gives the absolute
+    # phase
+    return scenes.structured_light(
+        (64, 64), [550.0], frequencies=(8.0, 7.2), phase_per_height=2.0, rng=3
+    )
 
 
 def _frames(phase, K):
@@ -26,7 +30,9 @@ def test_wrapped_phase_exact_on_noise_free_fringes(sl_scene, K):
     assert np.abs(depth.wrap(est - phi)).max() < 1e-9
     assert est.min() > -np.pi and est.max() <= np.pi
     # any offset/amplitude, any step axis
-    est2 = depth.wrapped_phase(np.moveaxis(3 + 2 * np.cos(phi[..., None] + 2 * np.pi * np.arange(K) / K), -1, 0), axis=0)
+    est2 = depth.wrapped_phase(
+        np.moveaxis(3 + 2 * np.cos(phi[..., None] + 2 * np.pi * np.arange(K) / K), -1, 0), axis=0
+    )
     assert np.abs(depth.wrap(est2 - phi)).max() < 1e-9
 
 
@@ -159,7 +165,9 @@ def test_depth_from_focus_on_a_rendered_stack():
         lens = optics.Lens(focal_mm=50, aperture_radius_mm=3.0, focus_mm=focus, pixel_um=6)
         im = np.zeros_like(img)
         for z, dz in enumerate(depths):
-            im += (planes == z) * signal.fftconvolve(img, optics.psf(550, dz, lens=lens, size=21), mode="same")
+            im += (planes == z) * signal.fftconvolve(
+                img, optics.psf(550, dz, lens=lens, size=21), mode="same"
+            )
         stack.append(im)
     est = depth.depth_from_focus(np.stack(stack, -1))
     tex = depth.textured_mask(img)
@@ -182,5 +190,7 @@ def test_depth_from_focus_confidence():
     sharp[:, 16:] = 0.5  # textureless half
     stack = np.stack([ndimage.gaussian_filter(sharp, s) for s in (2.0, 0.0, 2.0)], -1)
     est, conf = depth.depth_from_focus(stack, return_confidence=True)
-    assert conf[:, 4:12].min() > 1.5 and np.allclose(conf[:, 28:], 1.0)  # texture blurs up to column 25
+    assert conf[:, 4:12].min() > 1.5 and np.allclose(
+        conf[:, 28:], 1.0
+    )  # texture blurs up to column 25
     assert np.all(np.round(est[:, 4:12]) == 1)

@@ -17,8 +17,21 @@ def test_plan_command(tmp_path, capsys):
     assert len(io.AcquisitionPlan.load(out).steps) == 8
     assert main(["plan", "patterns", "8", str(out)]) == 2
     assert "exists" in capsys.readouterr().err
-    assert main(["plan", "focal-sweep", "2", str(tmp_path / "fs.json"), "--zernike", "4:-0.5,6:0.9",
-                 "--zernike", "4:0.5,6:0.9"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                "focal-sweep",
+                "2",
+                str(tmp_path / "fs.json"),
+                "--zernike",
+                "4:-0.5,6:0.9",
+                "--zernike",
+                "4:0.5,6:0.9",
+            ]
+        )
+        == 0
+    )
     assert io.AcquisitionPlan.load(tmp_path / "fs.json").steps[1].commands[1] == "DM 4:0.5 6:0.9"
 
 
@@ -34,8 +47,21 @@ def test_acquire_command_and_resume(tmp_path, capsys):
 
     dev = io.FakeTriggerDevice(on_trigger=camera_software, silent={"DMD 2"})
     try:
-        args = ["acquire", str(tmp_path / "plan.json"), "--port", dev.port, "--frames-dir", str(frames),
-                "--log", str(tmp_path / "log.jsonl"), "--timeout", "0.2", "--retries", "0", "--quiet"]
+        args = [
+            "acquire",
+            str(tmp_path / "plan.json"),
+            "--port",
+            dev.port,
+            "--frames-dir",
+            str(frames),
+            "--log",
+            str(tmp_path / "log.jsonl"),
+            "--timeout",
+            "0.2",
+            "--retries",
+            "0",
+            "--quiet",
+        ]
         assert main(args) == 3
         assert "step 2" in capsys.readouterr().err
         dev.silent.clear()
@@ -54,28 +80,81 @@ def test_reconstruct_command(tmp_path, capsys):
     tifffile.imwrite(tmp_path / "capture.tif", raw)
     tifffile.imwrite(tmp_path / "dark.tif", dark.astype(np.float32))
     out = tmp_path / "result.npz"
-    args = ["reconstruct", str(cal), str(tmp_path / "capture.tif"), "--dark", str(tmp_path / "dark.tif"),
-            "--out", str(out), "--method", "otd", "--option", "max_iter=30", "--quiet"]
+    args = [
+        "reconstruct",
+        str(cal),
+        str(tmp_path / "capture.tif"),
+        "--dark",
+        str(tmp_path / "dark.tif"),
+        "--out",
+        str(out),
+        "--method",
+        "otd",
+        "--option",
+        "max_iter=30",
+        "--quiet",
+    ]
     assert main(args) == 0
     assert "reconstructed with otd" in capsys.readouterr().out
     b = io.load_bundle(out)
     assert b.cube.shape == (32, 32, 8) and b.info["kind"] == "reconstruction"
     assert b.metadata["options"]["max_iter"] == 30
-    assert {os.path.basename(s["path"]) for s in b.provenance} == {"capture.tif", "calibration.npz", "dark.tif"}
+    assert {os.path.basename(s["path"]) for s in b.provenance} == {
+        "capture.tif",
+        "calibration.npz",
+        "dark.tif",
+    }
     # the counts were scaled by 1000: the reconstruction is too
     assert tc.metrics.psnr(p.cube * 1000, b.cube, data_range=1000) > 15
     assert main(args) == 2 and "exists" in capsys.readouterr().err
     assert main(args + ["--force"]) == 0
-    assert main(["reconstruct", str(cal), str(tmp_path / "capture.tif"), "--out", str(tmp_path / "x"),
-                 "--method", "nope"]) == 2
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(cal),
+                str(tmp_path / "capture.tif"),
+                "--out",
+                str(tmp_path / "x"),
+                "--method",
+                "nope",
+            ]
+        )
+        == 2
+    )
     assert "unknown method 'nope'" in capsys.readouterr().err
     # a folder holding the frame and its dark frame: the dark is not taken for a frame
     folder = tmp_path / "session"
     folder.mkdir()
     tifffile.imwrite(folder / "capture.tif", raw)
     tifffile.imwrite(folder / "dark.tif", dark.astype(np.float32))
-    assert main(["reconstruct", str(cal), str(folder), "--dark", str(folder / "dark.tif"), "--out",
-                 str(tmp_path / "z"), "--quiet"]) == 0
-    assert main(["reconstruct", str(cal), str(tmp_path / "dark.tif"), "--dark", str(tmp_path / "capture.tif"),
-                 "--out", str(tmp_path / "y")]) == 2
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(cal),
+                str(folder),
+                "--dark",
+                str(folder / "dark.tif"),
+                "--out",
+                str(tmp_path / "z"),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "reconstruct",
+                str(cal),
+                str(tmp_path / "dark.tif"),
+                "--dark",
+                str(tmp_path / "capture.tif"),
+                "--out",
+                str(tmp_path / "y"),
+            ]
+        )
+        == 2
+    )
     assert "not above the dark frame" in capsys.readouterr().err

@@ -1,4 +1,5 @@
-"""Capture files → measurement tensors: readers, corrections, bad files, per-system layouts (issue: lab adapter)."""
+"""Capture files → measurement tensors: readers, corrections, bad files, per-system layouts (issue:
+lab adapter)."""
 
 from pathlib import Path
 
@@ -98,7 +99,9 @@ def test_load_frames_errors(tmp_path):
     _write_sequence(tmp_path / "ok", frames)
     with pytest.raises(ValueError, match="expected 5 frames, found 4"):
         io.load_frames(tmp_path / "ok", expected=5)
-    with pytest.raises(ValueError, match="frame_000.tif: its mean 100 is not above the dark frame's 200"):
+    with pytest.raises(
+        ValueError, match="frame_000.tif: its mean 100 is not above the dark frame's 200"
+    ):
         io.load_frames(tmp_path / "ok", dark=np.full((6, 6), 200.0))
     with pytest.raises(ValueError, match="cannot be binned 4×4"):
         io.load_frames(tmp_path / "ok", binning=4)
@@ -150,7 +153,9 @@ def test_c3slfi_5d_frames_are_the_raw_lenslet_images():
 @pytest.mark.parametrize("suffix", [".tif", ".npy", ".png"])
 def test_write_then_load_frames_is_exact(tmp_path, suffix):
     sys_ = tc.systems.CS2LI.example((8, 8, 4, 6))
-    frames = io.measurement_to_frames(sys_, sys_.forward(np.random.default_rng(0).random(sys_.cube_shape)))
+    frames = io.measurement_to_frames(
+        sys_, sys_.forward(np.random.default_rng(0).random(sys_.cube_shape))
+    )
     if suffix == ".png":
         frames = (frames * 1000).astype(np.uint16)
     paths = io.write_frames(frames, tmp_path / "cap", suffix=suffix)
@@ -185,23 +190,32 @@ def test_real_mask_gives_the_documented_geometry():
     assert frames.shape == (256, 310, 1)
 
 
-@pytest.mark.parametrize("shifts", [[0, 1, 3, 4, 6], [0, 1.5, 3, 4.5, 6]], ids=["integer", "fractional"])
+@pytest.mark.parametrize(
+    "shifts", [[0, 1, 3, 4, 6], [0, 1.5, 3, 4.5, 6]], ids=["integer", "fractional"]
+)
 def test_monochromator_calibration_recovers_code_and_shifts(shifts):
     code = tc.codes.random_binary((24, 24), rng=3)
     sd = tc.systems.SDCASSI(code, n_bands=5, shifts=shifts)
     # frame l: the system under monochromatic light of band l (a flat white scene in that band only)
-    frames = np.stack([np.asarray(sd.forward(np.ones((24, 24, 1)) * np.eye(5)[l])) for l in range(5)], -1)
+    frames = np.stack(
+        [np.asarray(sd.forward(np.ones((24, 24, 1)) * np.eye(5)[l])) for l in range(5)], -1
+    )
     dark = np.full(frames.shape[:2], 3.0)
     s = io.shifts_from_line_frames(frames + dark[..., None], dark=dark)
     np.testing.assert_allclose(s, shifts, atol=0.06)
-    mean_code, per_band = io.code_from_monochromator(frames + dark[..., None], shifts=s, dark=dark, ny=24)
+    mean_code, per_band = io.code_from_monochromator(
+        frames + dark[..., None], shifts=s, dark=dark, ny=24
+    )
     assert per_band.shape == (24, 24, 5)
-    # integer shifts: the code itself; half-pixel shifts: the model's own linear interpolation blurs it
+    # integer shifts: the code itself; half-pixel shifts: the model's own linear interpolation blurs
+    # it
     assert np.mean(np.abs(mean_code - code)) < (0.01 if shifts[1] == 1 else 0.15)
     # the calibrated code rebuilds the system: same measurement of a scene
     scene = np.random.default_rng(0).random((24, 24, 5))
     rebuilt = tc.systems.SDCASSI(mean_code, n_bands=5, shifts=s)
-    err = np.linalg.norm(rebuilt.forward(scene) - sd.forward(scene)) / np.linalg.norm(sd.forward(scene))
+    err = np.linalg.norm(rebuilt.forward(scene) - sd.forward(scene)) / np.linalg.norm(
+        sd.forward(scene)
+    )
     assert err < (0.01 if shifts[1] == 1 else 0.15)
     with pytest.raises(ValueError, match="not non-decreasing"):
         io.shifts_from_line_frames(frames[..., ::-1])

@@ -19,7 +19,9 @@ def _synthetic_flat(pitch, rotation, offset, shape=(160, 150)):
     return 100 + 1000 * np.cos(np.pi * u / pitch) ** 2 * np.cos(np.pi * v / pitch) ** 2
 
 
-@pytest.mark.parametrize("pitch, rotation", [(9.7, 0.0), (12.31, 0.02), (15.38, -0.01), (11.3, 0.15), (10.2, -0.3)])
+@pytest.mark.parametrize(
+    "pitch, rotation", [(9.7, 0.0), (12.31, 0.02), (15.38, -0.01), (11.3, 0.15), (10.2, -0.3)]
+)
 def test_lenslet_grid_on_synthetic_flats(pitch, rotation):
     flat = _synthetic_flat(pitch, rotation, (70.3, 66.8))
     grid = io.calibrate_lenslet_grid(flat)
@@ -43,7 +45,8 @@ def test_lenslet_grid_on_the_real_capture():
     assert abs(grid.rotation) < np.deg2rad(1)  # measured 0.117°
     assert len(grid.residuals) > 700  # 784 discs
     assert np.sqrt(np.mean(grid.residuals**2)) < 0.3  # measured 0.17 px RMS, 0.37 px max
-    # the flat's centre view is bright and even: every lenslet's peak lines up with the fitted centre
+    # the flat's centre view is bright and even: every lenslet's peak lines up with the fitted
+    # centre
     views = grid.views(white.astype(float) - dark)
     n = views.shape[0]
     assert n == 15 and views.shape[2:] == (28, 28)
@@ -67,8 +70,11 @@ def test_lenslet_errors():
 
 
 SYSTEMS = [
-    tc.systems.SDCASSI(tc.codes.random_binary((8, 8), rng=0).astype(np.float32), n_bands=4,
-                       shifts=[0, 1.5, 2, 3.25]),
+    tc.systems.SDCASSI(
+        tc.codes.random_binary((8, 8), rng=0).astype(np.float32),
+        n_bands=4,
+        shifts=[0, 1.5, 2, 3.25],
+    ),
     tc.systems.DualCameraCASSI.example((8, 8, 4)),
     tc.systems.CASSIVSI.example((8, 8, 4), alpha_t=0.75, beta=2),
     tc.systems.CASSDIDFA.example((8, 8, 4, 3), psf_size=3),
@@ -87,10 +93,17 @@ def test_bundles_round_trip_bit_exactly(tmp_path, system):
     g = np.asarray(system.simulate(cube, snr_db=30, rng=1))
     src = tmp_path / "frame.bin"
     src.write_bytes(b"raw capture")
-    path = io.save_bundle(tmp_path / "b", system=system, measurement=g, cube=cube, depth=np.arange(4.0),
-                          calibration={"white": np.ones(3), "dark": np.zeros(3, np.uint16)},
-                          arrays={"note": np.array([1, 2, 3], np.int8)}, metadata={"exposure_ms": 12.5, "op": "ana"},
-                          sources=[src])
+    path = io.save_bundle(
+        tmp_path / "b",
+        system=system,
+        measurement=g,
+        cube=cube,
+        depth=np.arange(4.0),
+        calibration={"white": np.ones(3), "dark": np.zeros(3, np.uint16)},
+        arrays={"note": np.array([1, 2, 3], np.int8)},
+        metadata={"exposure_ms": 12.5, "op": "ana"},
+        sources=[src],
+    )
     assert path.name == "b.npz"
     b = io.load_bundle(path)
     assert np.array_equal(b.measurement, g) and b.measurement.dtype == g.dtype
@@ -124,7 +137,9 @@ def test_bundle_errors(tmp_path):
     with pytest.raises(ValueError, match="JSON-serialisable"):
         io.save_bundle(tmp_path / "a", metadata={"x": object()})
     with pytest.raises(ValueError, match="separable"):
-        io.save_bundle(tmp_path / "a", system=tc.systems.C3SLFI.separable(np.eye(2, 4) * 0 + 0.5, (4, 4, 4)))
+        io.save_bundle(
+            tmp_path / "a", system=tc.systems.C3SLFI.separable(np.eye(2, 4) * 0 + 0.5, (4, 4, 4))
+        )
     np.savez(tmp_path / "plain.npz", a=np.ones(2))
     with pytest.raises(ValueError, match="not a tensor_cosdi bundle"):
         io.load_bundle(tmp_path / "plain.npz")
@@ -150,5 +165,7 @@ def test_rectified_lenslet_image_matches_the_system_layouts(layout):
     expect = np.asarray(LightFieldLayout((Ni, Nj, 1, U, V), layout).forward(lf))[..., 0]
     assert img.shape == (Ni * U, Nj * V) and np.array_equal(img, expect)
     # one rectified frame per band is exactly a Mu-CoSDI "lf" measurement of that shape
-    mu = tc.systems.MuCoSDI(np.ones((Ni * U, Nj * V + 1)), n_bands=2, modality="lf", views=(U, V), raw_layout=layout)
+    mu = tc.systems.MuCoSDI(
+        np.ones((Ni * U, Nj * V + 1)), n_bands=2, modality="lf", views=(U, V), raw_layout=layout
+    )
     assert io.frames_to_measurement(mu, img).shape == mu.measurement_shape

@@ -1,4 +1,5 @@
-"""Serial device triggers: the line protocol, retries, and a frame log that survives every failure."""
+"""Serial device triggers: the line protocol, retries, and a frame log that survives every
+failure."""
 
 import json
 import os
@@ -7,9 +8,17 @@ import numpy as np
 import pytest
 
 from tensor_cosdi import io
-from tensor_cosdi.io import Acquisition, AcquisitionPlan, DeviceError, FakeTriggerDevice, SerialDevice
+from tensor_cosdi.io import (
+    Acquisition,
+    AcquisitionPlan,
+    DeviceError,
+    FakeTriggerDevice,
+    SerialDevice,
+)
 
-pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminal fake device needs POSIX")
+pytestmark = pytest.mark.skipif(
+    os.name != "posix", reason="pseudo-terminal fake device needs POSIX"
+)
 
 
 class Camera:
@@ -47,23 +56,35 @@ def test_normal_plan_logs_every_frame(tmp_path, device):
         written = Acquisition(plan, host, tmp_path / "log.jsonl", cam).run()
     assert [e["step"] for e in written] == [0, 1, 2, 3, 4]
     assert dev.fired == [0, 1, 2, 3, 4]
-    assert [line for line in dev.received if line.startswith("PROJ")] == [f"PROJ {t}" for t in range(5)]
+    assert [line for line in dev.received if line.startswith("PROJ")] == [
+        f"PROJ {t}" for t in range(5)
+    ]
     header, entries = io.read_log(tmp_path / "log.jsonl")
-    assert header["plan"] == plan.fingerprint() and [e["index"] for e in entries] == [{"t": t} for t in range(5)]
+    assert header["plan"] == plan.fingerprint() and [e["index"] for e in entries] == [
+        {"t": t} for t in range(5)
+    ]
     assert all(len(e["sha256"]) == 64 for e in entries)
 
 
 def test_late_answer_then_retry_succeeds(tmp_path, device):
     dev = device(late_once={"DMD 1": 0.4})
     with SerialDevice(dev.port, timeout=0.2, retries=2) as host:
-        Acquisition(AcquisitionPlan.snapshots(3), host, tmp_path / "log.jsonl", Camera(tmp_path)).run()
-    assert dev.received.count("DMD 1") == 2 and dev.fired == [0, 1, 2]  # timed out once, the re-send succeeded
+        Acquisition(
+            AcquisitionPlan.snapshots(3), host, tmp_path / "log.jsonl", Camera(tmp_path)
+        ).run()
+    assert dev.received.count("DMD 1") == 2 and dev.fired == [
+        0,
+        1,
+        2,
+    ]  # timed out once, the re-send succeeded
 
 
 def test_garbage_reply_is_retried(tmp_path, device):
     dev = device(garbage_once={"TRIG 1"})
     with SerialDevice(dev.port, timeout=0.3, retries=1) as host:
-        Acquisition(AcquisitionPlan.snapshots(2), host, tmp_path / "log.jsonl", Camera(tmp_path)).run()
+        Acquisition(
+            AcquisitionPlan.snapshots(2), host, tmp_path / "log.jsonl", Camera(tmp_path)
+        ).run()
     assert dev.fired == [0, 1]  # the retried trigger fired once
 
 
@@ -73,7 +94,9 @@ def test_device_that_never_answers_then_resume(tmp_path, device):
     cam = Camera(tmp_path)
     log = tmp_path / "log.jsonl"
     with SerialDevice(dev.port, timeout=0.15, retries=1) as host:
-        with pytest.raises(DeviceError, match="step 2 .*PROJ 2.*2 finished frame\\(s\\); run again to resume"):
+        with pytest.raises(
+            DeviceError, match="step 2 .*PROJ 2.*2 finished frame\\(s\\); run again to resume"
+        ):
             Acquisition(plan, host, log, cam).run()
     _, entries = io.read_log(log)
     assert [e["step"] for e in entries] == [0, 1]  # log intact
@@ -89,7 +112,8 @@ def test_device_that_never_answers_then_resume(tmp_path, device):
 
 
 def test_loop_port_never_acknowledges(tmp_path):
-    # pyserial's loop:// echoes every line back and never says OK: the echo is ignored, the wait times out
+    # pyserial's loop:// echoes every line back and never says OK: the echo is ignored, the wait
+    # times out
     with SerialDevice("loop://", timeout=0.1, retries=2) as host:
         with pytest.raises(DeviceError, match="after 3 attempt\\(s\\)"):
             host.command("DMD 0")
@@ -143,7 +167,9 @@ def test_err_reply_is_final(device):
 
 def test_plans(tmp_path):
     plan = AcquisitionPlan.focal_sweep([{4: -0.5, 6: 0.9}, {4: 0.0, 6: 0.9}])
-    assert plan.steps[0].commands == ("DMD 0", "DM 4:-0.5 6:0.9") and plan.steps[1].index == {"z": 1}
+    assert plan.steps[0].commands == ("DMD 0", "DM 4:-0.5 6:0.9") and plan.steps[1].index == {
+        "z": 1
+    }
     p = plan.save(tmp_path / "plan.json")
     assert AcquisitionPlan.load(p) == plan
     with pytest.raises(FileExistsError):
@@ -151,4 +177,6 @@ def test_plans(tmp_path):
     with pytest.raises(ValueError, match="unknown command verb 'FIRE'"):
         AcquisitionPlan(({"index": {"k": 0}, "commands": ("FIRE 1",), "frame": "a.tif"},))
     with pytest.raises(ValueError, match="own, non-empty frame"):
-        AcquisitionPlan(({"index": {"k": 0}, "frame": "a.tif"}, {"index": {"k": 1}, "frame": "a.tif"}))
+        AcquisitionPlan(
+            ({"index": {"k": 0}, "frame": "a.tif"}, {"index": {"k": 1}, "frame": "a.tif"})
+        )

@@ -100,7 +100,9 @@ def test_integral_float_sizes_accepted():
 
 
 def test_constructor_consistency_errors():
-    with pytest.raises(ValueError, match=r"code shape \(4, 6\) does not match input shape \(4, 5, 3\)"):
+    with pytest.raises(
+        ValueError, match=r"code shape \(4, 6\) does not match input shape \(4, 5, 3\)"
+    ):
         Code(np.ones((4, 6)), (4, 5, 3))
     with pytest.raises(ValueError, match="expected 1 to 3 axes"):
         Code(np.ones((4, 5, 3, 2)), (4, 5, 3))
@@ -129,7 +131,10 @@ def test_constructor_consistency_errors():
 def test_combination_errors():
     a = sd((4, 5, 3))
     b = sd((4, 6, 3))
-    with pytest.raises(ValueError, match=r"output shape \(4, 8\) differs from the outer operator's input shape \(4, 5, 3\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"output shape \(4, 8\) differs from the outer operator's input shape \(4, 5, 3\)",
+    ):
         a @ b
     with pytest.raises(ValueError, match="different shapes"):
         a + b

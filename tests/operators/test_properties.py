@@ -85,7 +85,12 @@ def test_code_broadcasting_and_sums(shape, seed, data):
     check_matrix_path(Replicate(shape, data.draw(st.integers(0, nd)), data.draw(sizes)), seed)
     check_matrix_path(Transpose(shape, data.draw(st.permutations(range(nd)))), seed)
     check_matrix_path(
-        Pad(shape, axis=axis, before=data.draw(st.integers(0, 3)), after=data.draw(st.integers(0, 3))),
+        Pad(
+            shape,
+            axis=axis,
+            before=data.draw(st.integers(0, 3)),
+            after=data.draw(st.integers(0, 3)),
+        ),
         seed,
     )
 

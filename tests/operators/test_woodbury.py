@@ -18,11 +18,11 @@ from tensor_cosdi.operators import (
     Shear,
     Stack,
     SumAxis,
+    TensorOperator,
     conjugate_gradient,
     vec,
     weighted_sum,
 )
-from tensor_cosdi.operators import TensorOperator
 from tensor_cosdi.operators.woodbury import Pattern, StructureError, check_structure
 from tensor_cosdi.testing import registry
 
@@ -166,7 +166,13 @@ def test_vsi_row_banded_random(nx, ny, nb, beta, alpha, mu, seed):
 
 
 @given(
-    shape=st.tuples(st.integers(1, 4), st.integers(1, 4), st.integers(1, 5), st.integers(1, 3), st.integers(1, 3)),
+    shape=st.tuples(
+        st.integers(1, 4),
+        st.integers(1, 4),
+        st.integers(1, 5),
+        st.integers(1, 3),
+        st.integers(1, 3),
+    ),
     K=st.integers(1, 5),
     mu=st.sampled_from(MUS),
     seed=st.integers(0, 2**16),

@@ -88,7 +88,9 @@ def test_zernike_named_terms():
     assert optics.zernike(4, rho, theta) == pytest.approx(np.sqrt(3) * (2 * rho**2 - 1))
     assert optics.zernike(6, rho, theta) == pytest.approx(np.sqrt(6) * rho**2 * np.cos(2 * theta))
     assert optics.zernike(5, rho, theta) == pytest.approx(np.sqrt(6) * rho**2 * np.sin(2 * theta))
-    assert optics.zernike(11, rho, theta) == pytest.approx(np.sqrt(5) * (6 * rho**4 - 6 * rho**2 + 1))
+    assert optics.zernike(11, rho, theta) == pytest.approx(
+        np.sqrt(5) * (6 * rho**4 - 6 * rho**2 + 1)
+    )
     with pytest.raises(ValueError, match="Noll index"):
         optics.zernike(0, rho, theta)
 
@@ -126,7 +128,8 @@ def test_psf_astigmatism_breaks_the_symmetry():
     # pure defocus stays round
     a, b = spreads(optics.psf(550, 1300, lens=lens, size=31))
     assert abs(a - b) / (a + b) < 1e-6
-    # vertical astigmatism (Z6) elongates the defocused PSF along one axis in front of focus and along
+    # vertical astigmatism (Z6) elongates the defocused PSF along one axis in front of focus and
+    # along
     # the other behind it: the asymmetry that tells near from far (what DFA exploits, Sec. 4.3)
     near = optics.psf(550, 900, lens=lens, size=31, zernike={6: 0.5})
     far = optics.psf(550, 1150, lens=lens, size=31, zernike={6: 0.5})

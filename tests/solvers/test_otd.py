@@ -1,4 +1,5 @@
-"""OTD-ADMM and WDCT-ADMM: exact steps against dense algebra, and quality floors on seeded scenes."""
+"""OTD-ADMM and WDCT-ADMM: exact steps against dense algebra, and quality floors on seeded
+scenes."""
 
 import numpy as np
 import pytest
@@ -6,9 +7,8 @@ from scipy.optimize import minimize_scalar
 
 import tensor_cosdi as tc
 from tensor_cosdi import studies
-from tensor_cosdi.bases import dct, is_orthonormal, svd_basis, wavelet
+from tensor_cosdi.bases import KroneckerBasis, dct, is_orthonormal, svd_basis, wavelet
 from tensor_cosdi.operators import vec
-from tensor_cosdi.bases import KroneckerBasis
 from tensor_cosdi.solvers.otd import initial_bases, omega_step, subspace_gap_tv, theta_step
 from tensor_cosdi.systems import (
     C3SLFI,
@@ -50,7 +50,9 @@ def test_theta_step_equals_the_dense_solve(name):
     system = TINY[name]()
     rng = np.random.default_rng(3)
     shape = system.cube_shape
-    bases = {m: svd_basis(rng.standard_normal((n, n))) if m < 2 else dct(n) for m, n in enumerate(shape)}
+    bases = {
+        m: svd_basis(rng.standard_normal((n, n))) if m < 2 else dct(n) for m, n in enumerate(shape)
+    }
     g = rng.standard_normal(system.measurement_shape)
     w = rng.standard_normal(shape)
     H = system.matrix().toarray()
@@ -71,8 +73,12 @@ def test_omega_step_is_the_exact_proximal_minimiser():
     for mu, beta, lam in [(1.0, 0.0, 0.5), (0.3, 2.0, 1.0), (5.0, 0.5, 0.1)]:
         got = omega_step(theta, nu, prev, lam / (2 * (beta + mu)), mu, beta)
         for i in range(theta.size):
-            obj = lambda w: beta * (w - prev[i]) ** 2 + lam * abs(w) + mu * (theta[i] - w - nu[i]) ** 2
-            ref = minimize_scalar(obj, bounds=(-10, 10), method="bounded", options={"xatol": 1e-10}).x
+            obj = lambda w: (
+                beta * (w - prev[i]) ** 2 + lam * abs(w) + mu * (theta[i] - w - nu[i]) ** 2
+            )
+            ref = minimize_scalar(
+                obj, bounds=(-10, 10), method="bounded", options={"xatol": 1e-10}
+            ).x
             assert abs(got[i] - ref) < 1e-6
     # the thesis' threshold λ/(4μ+2β) (Eq. 106) is not the minimiser when β > 0
     eq106 = np.sign(theta - nu) * np.maximum(np.abs(theta - nu) - 1.0 / (4 * 0.3 + 2 * 2.0), 0)
@@ -80,7 +86,9 @@ def test_omega_step_is_the_exact_proximal_minimiser():
 
 
 def test_initial_bases_are_orthonormal_and_come_from_the_panchromatic_image():
-    p = studies.make_problem("c3slfi", "colorchecker", shape=(16, 16), n_bands=6, views=(2, 2), snr_db=None)
+    p = studies.make_problem(
+        "c3slfi", "colorchecker", shape=(16, 16), n_bands=6, views=(2, 2), snr_db=None
+    )
     transforms, start = initial_bases(p.system, p.measurement)
     bases = {m: t.matrix for m, t in transforms.items()}
     assert start is None  # Lemma 1: exact panchromatic, no estimate needed
@@ -93,13 +101,18 @@ def test_initial_bases_are_orthonormal_and_come_from_the_panchromatic_image():
     np.testing.assert_allclose(bases[2], dct(6))
     wb, _ = initial_bases(p.system, p.measurement, spatial="wavelet")
     np.testing.assert_allclose(wb[0].matrix, wavelet(16))
-    assert (transforms[2].kind, wb[0].kind, wb[1].kind) == ("dct", "wavelet", "wavelet")  # fast transforms
+    assert (transforms[2].kind, wb[0].kind, wb[1].kind) == (
+        "dct",
+        "wavelet",
+        "wavelet",
+    )  # fast transforms
     with pytest.raises(ValueError, match="spatial must be one of"):
         initial_bases(p.system, p.measurement, spatial="curvelet")
 
 
 def test_subspace_panchromatic_is_far_better_than_the_flat_decimated_model():
-    """SD-CASSI, ColorChecker, 30 dB: ‖Z − DF‖/‖DF‖ of the subspace GAP-TV start vs the flat model."""
+    """SD-CASSI, ColorChecker, 30 dB: ‖Z − DF‖/‖DF‖ of the subspace GAP-TV start vs the flat
+    model."""
     p = studies.make_problem("sd_cassi", "colorchecker", shape=(48, 48), n_bands=12)
     truth = p.cube.sum(axis=2)
     err = lambda z: np.linalg.norm(z - truth) / np.linalg.norm(truth)
@@ -108,7 +121,16 @@ def test_subspace_panchromatic_is_far_better_than_the_flat_decimated_model():
     assert flat > 0.5 and sub < 0.3, (flat, sub)
 
 
-SYSTEM_CASES = ["sd_cassi", "dd_cassi", "dual_camera_cassi", "cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"]
+SYSTEM_CASES = [
+    "sd_cassi",
+    "dd_cassi",
+    "dual_camera_cassi",
+    "cassi_vsi",
+    "cassdi_dfa",
+    "c3slfi",
+    "cs2li",
+    "mu_cosdi",
+]
 
 
 @pytest.fixture(scope="module")
@@ -128,19 +150,27 @@ def test_otd_beats_least_squares_and_wdct_on_every_system(scores, name):
 
 
 def test_c3slfi_otd_3d_beats_wdct_3d_by_2db_and_otd_5d():
-    """K = 4 complementary snapshots, 20 dB, 64×64×16 (4×4 views), ColorChecker; same options for all.
+    """K = 4 complementary snapshots, 20 dB, 64×64×16 (4×4 views), ColorChecker; same options for
+    all.
 
     Measured (seed 0): OTD-3D 30.5 dB, WDCT-3D 28.1 dB, OTD-5D 29.4 dB.  On
     the chelsea and astronaut photos the OTD-3D margin over WDCT-3D is
     smaller (1.4 and 1.0 dB), see the README's performance section.
     """
-    p = studies.make_problem("c3slfi", "colorchecker", shape=(64, 64), n_bands=16, snr_db=20.0, n_snapshots=4)
+    p = studies.make_problem(
+        "c3slfi", "colorchecker", shape=(64, 64), n_bands=16, snr_db=20.0, n_snapshots=4
+    )
     five = p.system.as_5d()
     opts = {"lam": 0.3}
     otd3 = tc.reconstruct(p.system, p.measurement, "otd", **opts).cube
     wdct3 = tc.reconstruct(p.system, p.measurement, "wdct", **opts).cube
-    otd5 = p.system.to_3d(tc.reconstruct(five, p.system.measurement_to_5d(p.measurement), "otd", **opts).cube)
-    q = {k: studies.score(p, c)["psnr"] for k, c in {"otd3": otd3, "wdct3": wdct3, "otd5": otd5}.items()}
+    otd5 = p.system.to_3d(
+        tc.reconstruct(five, p.system.measurement_to_5d(p.measurement), "otd", **opts).cube
+    )
+    q = {
+        k: studies.score(p, c)["psnr"]
+        for k, c in {"otd3": otd3, "wdct3": wdct3, "otd5": otd5}.items()
+    }
     assert q["otd3"] >= q["wdct3"] + 2.0 and q["otd3"] > q["otd5"], q
 
 
@@ -151,7 +181,8 @@ def test_result_history_options_and_stopping():
     assert all(len(v) == 15 for v in res.history.values())
     assert np.all(np.diff(res.history["seconds"]) >= 0)
     assert res.options["update_every"] == 5 and res.options["lam"] == 0.1
-    # 30 dB SNR: the noise is 3.2 % of ‖G‖; a regularised fit should sit near that, not fit the noise
+    # 30 dB SNR: the noise is 3.2 % of ‖G‖; a regularised fit should sit near that, not fit the
+    # noise
     assert 0.01 < res.history["residual"][-1] < 0.06
     loose = tc.reconstruct(p.system, p.measurement, "wdct", tol=0.5, max_iter=50)
     assert loose.converged and loose.iterations < 50
@@ -201,6 +232,8 @@ def test_otd_on_the_pytorch_backend_matches_numpy():
     p = studies.make_problem("cs2li", "colorchecker", shape=(16, 16), n_bands=6)
     ref = tc.reconstruct(p.system, p.measurement, "otd", max_iter=8).cube
     with tl.backend_context("pytorch"):
-        res = tc.reconstruct(p.system, tl.tensor(p.measurement, dtype=torch.float64), "otd", max_iter=8)
+        res = tc.reconstruct(
+            p.system, tl.tensor(p.measurement, dtype=torch.float64), "otd", max_iter=8
+        )
         assert isinstance(res.cube, torch.Tensor)
         np.testing.assert_allclose(tl.to_numpy(res.cube), ref, atol=1e-10 * np.abs(ref).max())

@@ -14,9 +14,14 @@ def test_registry_lists_methods_and_rejects_unknown_ones():
     g = np.zeros(sd.measurement_shape)
     with pytest.raises(ValueError, match=r"unknown method 'nope'; valid names: \[.*'lsq'"):
         tc.reconstruct(sd, g, method="nope")
-    with pytest.raises(ValueError, match=r"unknown option\(s\) \['iters'\] for method 'lsq'; valid options: \['mu'\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"unknown option\(s\) \['iters'\] for method 'lsq'; valid options: \['mu'\]",
+    ):
         tc.reconstruct(sd, g, method="lsq", iters=3)
-    with pytest.raises(ValueError, match=r"SDCASSI.reconstruct: expected a measurement of shape \(6, 10\)"):
+    with pytest.raises(
+        ValueError, match=r"SDCASSI.reconstruct: expected a measurement of shape \(6, 10\)"
+    ):
         tc.reconstruct(sd, np.zeros((6, 7)), method="lsq")
     with pytest.raises(ValueError, match="mu must be a finite number > 0"):
         tc.reconstruct(sd, g, method="lsq", mu=0)
@@ -35,7 +40,12 @@ def test_registry_lists_methods_and_rejects_unknown_ones():
 
 @pytest.mark.parametrize(
     "system",
-    [SDCASSI.example((5, 6, 4)), CASSIVSI.example((5, 6, 4)), C3SLFI.example((4, 4, 5)), DualCameraCASSI.example((4, 5, 3))],
+    [
+        SDCASSI.example((5, 6, 4)),
+        CASSIVSI.example((5, 6, 4)),
+        C3SLFI.example((4, 4, 5)),
+        DualCameraCASSI.example((4, 5, 3)),
+    ],
     ids=["sd", "vsi", "c3slfi", "dual"],
 )
 def test_lsq_equals_the_dense_tikhonov_solution(system):
@@ -47,7 +57,12 @@ def test_lsq_equals_the_dense_tikhonov_solution(system):
     assert isinstance(res, tc.Result)
     np.testing.assert_allclose(vec(res.cube), ref, rtol=1e-7, atol=1e-9 * np.abs(ref).max())
     assert res.options == {"mu": 1e-2} and res.method == "lsq" and res.converged
-    assert res.iterations == 1 and set(res.history) == {"objective", "residual", "change", "seconds"}
+    assert res.iterations == 1 and set(res.history) == {
+        "objective",
+        "residual",
+        "change",
+        "seconds",
+    }
     assert res.seconds >= 0
     if not isinstance(system, tc.systems.C3SLFI):  # spectral-only systems have no depth channel
         assert res.depth is None
@@ -60,7 +75,9 @@ def test_more_shots_give_a_better_lsq_estimate():
     quality = []
     for system in (SDCASSI(code[:, :, 0], n_bands=8, shifts=1), SDCASSI(code, n_bands=8, shifts=1)):
         g = system.simulate(cube, 30.0, rng=1)
-        quality.append(tc.metrics.psnr(cube, tc.reconstruct(system, g, method="lsq").cube, data_range=1.0))
+        quality.append(
+            tc.metrics.psnr(cube, tc.reconstruct(system, g, method="lsq").cube, data_range=1.0)
+        )
     assert quality[1] > quality[0] + 2.0, quality
 
 

@@ -1,4 +1,5 @@
-"""The thesis' own algorithms (SPEC §6): A-VSI, multiresolution DFA, hierarchical PnP-ADMM; Result.depth."""
+"""The thesis' own algorithms (SPEC §6): A-VSI, multiresolution DFA, hierarchical PnP-ADMM;
+Result.depth."""
 
 import numpy as np
 import pytest
@@ -68,14 +69,21 @@ def test_pnp_denoisers_plug_in():
     [("avsi", "sd_cassi"), ("dfa", "cassi_vsi"), ("pnp_admm", "c3slfi")],
 )
 def test_thesis_algorithms_refuse_other_systems(method, system):
-    p = studies.make_problem(system, "colorchecker", shape=(16, 16), n_bands=4,
-                             **({"views": (2, 2)} if system == "c3slfi" else {}))
+    p = studies.make_problem(
+        system,
+        "colorchecker",
+        shape=(16, 16),
+        n_bands=4,
+        **({"views": (2, 2)} if system == "c3slfi" else {}),
+    )
     with pytest.raises(ValueError, match=f"{method} reconstructs"):
         tc.reconstruct(p.system, p.measurement, method)
 
 
 def test_result_depth_of_a_light_field_reconstruction():
-    p = studies.make_problem("c3slfi", "chelsea", shape=(64, 64), n_bands=8, snr_db=30, max_disparity=1.0)
+    p = studies.make_problem(
+        "c3slfi", "chelsea", shape=(64, 64), n_bands=8, snr_db=30, max_disparity=1.0
+    )
     res = tc.reconstruct(p.system, p.measurement, "otd")
     d = res.depth  # computed on first access from the reconstructed views
     assert d.shape == (16, 16) and res.depth is d

@@ -35,7 +35,9 @@ def shifts(draw, n_bands):
     if kind == "step":
         return draw(st.integers(0, 2))
     if kind == "integer":
-        return np.cumsum([0] + draw(st.lists(st.integers(0, 2), min_size=n_bands - 1, max_size=n_bands - 1)))
+        return np.cumsum(
+            [0] + draw(st.lists(st.integers(0, 2), min_size=n_bands - 1, max_size=n_bands - 1))
+        )
     steps = draw(
         st.lists(
             st.floats(0, 1.75, allow_nan=False).map(lambda v: round(v * 4) / 4),
@@ -59,8 +61,12 @@ def check(system, seed):
     F = g.standard_normal(system.cube_shape)
     G = g.standard_normal(system.measurement_shape)
     ref_f, ref_a = H @ vec(F), H.T @ vec(G)
-    np.testing.assert_allclose(vec(system.forward(F)), ref_f, rtol=0, atol=1e-12 * max(1, np.abs(ref_f).max()))
-    np.testing.assert_allclose(vec(system.adjoint(G)), ref_a, rtol=0, atol=1e-12 * max(1, np.abs(ref_a).max()))
+    np.testing.assert_allclose(
+        vec(system.forward(F)), ref_f, rtol=0, atol=1e-12 * max(1, np.abs(ref_f).max())
+    )
+    np.testing.assert_allclose(
+        vec(system.adjoint(G)), ref_a, rtol=0, atol=1e-12 * max(1, np.abs(ref_a).max())
+    )
     assert dot_test(system.operator, rng=seed) < 1e-10
 
 
@@ -93,7 +99,15 @@ def test_cassi_vsi(nx, ny, nl, alpha, data, seed):
     check(CASSIVSI(code, n_bands=nl, alpha_t=alpha, beta=beta, shifts=s), seed)
 
 
-@given(nx=size, ny=size, nl=bands, nz=st.integers(1, 3), psf=st.integers(0, 4), data=st.data(), seed=seeds)
+@given(
+    nx=size,
+    ny=size,
+    nl=bands,
+    nz=st.integers(1, 3),
+    psf=st.integers(0, 4),
+    data=st.data(),
+    seed=seeds,
+)
 def test_cassdi_dfa(nx, ny, nl, nz, psf, data, seed):
     s = data.draw(shifts(nl))
     g = np.random.default_rng(seed)
@@ -105,9 +119,16 @@ def test_cassdi_dfa(nx, ny, nl, nz, psf, data, seed):
 
 
 @given(
-    n1=st.integers(1, 3), n2=st.integers(1, 3), nl=bands, n4=st.integers(1, 3), n5=st.integers(1, 3),
-    K=st.integers(2, 4), form=st.sampled_from(["3d", "5d"]), raw=st.sampled_from(["interleaved", "tiled"]),
-    complementary=st.booleans(), seed=seeds,
+    n1=st.integers(1, 3),
+    n2=st.integers(1, 3),
+    nl=bands,
+    n4=st.integers(1, 3),
+    n5=st.integers(1, 3),
+    K=st.integers(2, 4),
+    form=st.sampled_from(["3d", "5d"]),
+    raw=st.sampled_from(["interleaved", "tiled"]),
+    complementary=st.booleans(),
+    seed=seeds,
 )
 def test_c3slfi(n1, n2, nl, n4, n5, K, form, raw, complementary, seed):
     shape = (n1 * n4, n2 * n5, nl) if form == "3d" else (n1, n2, nl, n4, n5)
@@ -131,7 +152,15 @@ def test_c3slfi_separable(n1, n2, nl, K, five, seed):
     assert abs(full.matrix() - system.matrix()).max() == 0
 
 
-@given(nx=size, ny=size, nl=bands, nt=st.integers(1, 3), colour=st.booleans(), data=st.data(), seed=seeds)
+@given(
+    nx=size,
+    ny=size,
+    nl=bands,
+    nt=st.integers(1, 3),
+    colour=st.booleans(),
+    data=st.data(),
+    seed=seeds,
+)
 def test_cs2li(nx, ny, nl, nt, colour, data, seed):
     s = data.draw(shifts(nl))
     w = ny + extra_width(s, nl)
@@ -141,7 +170,12 @@ def test_cs2li(nx, ny, nl, nt, colour, data, seed):
 
 
 @given(
-    nx=size, ny=size, nl=bands, modality=st.sampled_from(["sl", "lf", "monocular"]), data=st.data(), seed=seeds
+    nx=size,
+    ny=size,
+    nl=bands,
+    modality=st.sampled_from(["sl", "lf", "monocular"]),
+    data=st.data(),
+    seed=seeds,
 )
 def test_mu_cosdi(nx, ny, nl, modality, data, seed):
     s = data.draw(shifts(nl))
@@ -157,7 +191,8 @@ def test_mu_cosdi(nx, ny, nl, modality, data, seed):
 
 
 def test_matrix_detects_a_wrong_operator():
-    """The comparison can fail: a VSI whose grayscale arm lands one column off differs from Eq. 44."""
+    """The comparison can fail: a VSI whose grayscale arm lands one column off differs from Eq.
+    44."""
     a = CASSIVSI.example((4, 5, 3), beta=0)
     b = CASSIVSI(a.code, n_bands=3, beta=1)
     F = np.random.default_rng(0).standard_normal(a.cube_shape)

@@ -39,7 +39,10 @@ CASES = [
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=1.2), r"alpha_t must be in \[0, 1\]"),
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=-0.1), r"alpha_t must be in \[0, 1\]"),
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="much"), "alpha_t must be a number"),
-    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=3), r"beta must be an integer column offset in \[0, 2\]"),
+    (
+        lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=3),
+        r"beta must be an integer column offset in \[0, 2\]",
+    ),
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=-1), "beta must be"),
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=1.5), "beta must be"),
     (lambda: CASSIVSI(ones((4, 5, 2)), n_bands=3), "code must have 2 axes"),
@@ -49,7 +52,10 @@ CASES = [
         lambda: CASSDIDFA(ones((4, 5, 2)), n_bands=3, psfs=ones((3, 3, 2, 2))),
         r"psfs shape \(3, 3, 2, 2\) does not match the cube: expected \(h, w, 3, 2\)",
     ),
-    (lambda: CASSDIDFA(ones((4, 5, 2)), n_bands=3, psfs=ones((3, 3, 3))), r"psfs must have shape \(h, w\)"),
+    (
+        lambda: CASSDIDFA(ones((4, 5, 2)), n_bands=3, psfs=ones((3, 3, 3))),
+        r"psfs must have shape \(h, w\)",
+    ),
     (lambda: CASSDIDFA(ones((4, 5, 2)), n_bands=3, psfs=-ones((3, 3))), "intensities"),
     (lambda: CASSDIDFA(ones((4, 5, 2)), n_bands=3, psfs=np.zeros((3, 3))), "positive sum"),
     # C3SLFI
@@ -67,10 +73,22 @@ CASES = [
     (lambda: CS2LI(ones((4, 7, 2)), n_bands=3, n_patterns=2), "has 2 bands, expected n_bands = 3"),
     (lambda: CS2LI(ones((4, 7)), n_bands=3, n_patterns=0), "n_patterns must be an integer ≥ 1"),
     (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="stereo"), "modality must be one of"),
-    (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="sl"), r"needs the option\(s\) \['n_patterns'\]"),
-    (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", n_patterns=3), r"unknown option.*valid: \['raw_layout', 'views'\]"),
-    (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", views=(3, 2)), "do not divide the lenslet image"),
-    (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", views=(2, 0)), "views must be an integer ≥ 1"),
+    (
+        lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="sl"),
+        r"needs the option\(s\) \['n_patterns'\]",
+    ),
+    (
+        lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", n_patterns=3),
+        r"unknown option.*valid: \['raw_layout', 'views'\]",
+    ),
+    (
+        lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", views=(3, 2)),
+        "do not divide the lenslet image",
+    ),
+    (
+        lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="lf", views=(2, 0)),
+        "views must be an integer ≥ 1",
+    ),
     (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="monocular", depth_estimator=3), "callable"),
     (lambda: DualCameraCASSI(ones((4, 5, 2)), n_bands=3), "code must have 2 axes"),
     # code generators
@@ -92,9 +110,14 @@ def test_constructor_errors(build, message):
 
 def test_shape_errors_name_both_shapes():
     sd = SDCASSI.example((4, 5, 3))
-    with pytest.raises(ValueError, match=r"SDCASSI.forward: .*cube of shape \(4, 5, 3\) \(axes x, y, λ\).*\(4, 5, 4\)"):
+    with pytest.raises(
+        ValueError,
+        match=r"SDCASSI.forward: .*cube of shape \(4, 5, 3\) \(axes x, y, λ\).*\(4, 5, 4\)",
+    ):
         sd.forward(np.zeros((4, 5, 4)))
-    with pytest.raises(ValueError, match=r"SDCASSI.adjoint: .*measurement of shape \(4, 7\).*\(4, 5\)"):
+    with pytest.raises(
+        ValueError, match=r"SDCASSI.adjoint: .*measurement of shape \(4, 7\).*\(4, 5\)"
+    ):
         sd.adjoint(np.zeros((4, 5)))
     with pytest.raises(ValueError, match=r"CS2LI.panchromatic: .*\(axes x, y, t\)"):
         CS2LI.example().panchromatic(np.zeros((16, 16)))
@@ -103,7 +126,9 @@ def test_shape_errors_name_both_shapes():
 
 
 def test_monocular_depth_estimator():
-    mono = MuCoSDI.example((4, 5, 3), modality="monocular", depth_estimator=lambda cube: cube.sum(2))
+    mono = MuCoSDI.example(
+        (4, 5, 3), modality="monocular", depth_estimator=lambda cube: cube.sum(2)
+    )
     cube = np.ones(mono.cube_shape)
     np.testing.assert_array_equal(mono.estimate_depth(cube), np.full((4, 5), 3.0))
     with pytest.raises(ValueError, match="no depth_estimator"):

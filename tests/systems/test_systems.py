@@ -1,4 +1,5 @@
-"""Systems: Gram structures, structured solves, Lemma 1, layouts, real masks, simulate, panchromatic."""
+"""Systems: Gram structures, structured solves, Lemma 1, layouts, real masks, simulate,
+panchromatic."""
 
 import os
 from pathlib import Path
@@ -27,7 +28,11 @@ from tensor_cosdi.systems import (
 from tensor_cosdi.testing import dot_test
 
 # the project's real data: $TENSOR_COSDI_DATA, else ../shared/data next to the repository
-DATA = Path(os.environ.get("TENSOR_COSDI_DATA", Path(__file__).resolve().parents[2] / ".." / "shared" / "data"))
+DATA = Path(
+    os.environ.get(
+        "TENSOR_COSDI_DATA", Path(__file__).resolve().parents[2] / ".." / "shared" / "data"
+    )
+)
 MASKS = DATA / "masks"
 needs_masks = pytest.mark.skipif(
     not MASKS.is_dir(), reason=f"{MASKS} is not present (set TENSOR_COSDI_DATA to the data folder)"
@@ -45,7 +50,11 @@ SYSTEMS = [
     ("cassdi_dfa_psf", lambda: CASSDIDFA.example((5, 5, 3, 2), psf_size=3), type(None)),
     ("c3slfi_3d", lambda: C3SLFI.example((6, 6, 5), n_snapshots=3, views=(3, 2)), PixelBlocks),
     ("c3slfi_5d", lambda: C3SLFI.example((2, 3, 4, 2, 2)), PixelBlocks),
-    ("c3slfi_separable", lambda: C3SLFI.separable(np.eye(3)[[0, 1, 2, 0]].T, (4, 4, 4)), PixelBlocks),
+    (
+        "c3slfi_separable",
+        lambda: C3SLFI.separable(np.eye(3)[[0, 1, 2, 0]].T, (4, 4, 4)),
+        PixelBlocks,
+    ),
     ("cs2li", lambda: CS2LI.example((5, 6, 4, 3), n_filters=2), Diagonal),
     ("mu_cosdi_sl", lambda: MuCoSDI.example((5, 6, 4, 2)), Diagonal),
     ("mu_cosdi_lf", lambda: MuCoSDI.example((4, 6, 3), modality="lf"), Diagonal),
@@ -183,7 +192,9 @@ def test_fig103_tensor_block_inverse_equals_matrix_inverse():
         worst_dual = max(worst_dual, np.linalg.norm(x_tensor - x_matrix) / np.linalg.norm(x_matrix))
         y_tensor = vec(system.solve_normal(r, mu))
         y_matrix = splu((H.T @ H + mu * sp.identity(H.shape[1])).tocsc()).solve(vec(r))
-        worst_normal = max(worst_normal, np.linalg.norm(y_tensor - y_matrix) / np.linalg.norm(y_matrix))
+        worst_normal = max(
+            worst_normal, np.linalg.norm(y_tensor - y_matrix) / np.linalg.norm(y_matrix)
+        )
     assert worst_dual < 1e-12, worst_dual
     assert worst_normal < 1e-10, worst_normal
 
@@ -191,7 +202,8 @@ def test_fig103_tensor_block_inverse_equals_matrix_inverse():
 # ---- real masks -------------------------------------------------------------------
 @needs_masks
 @pytest.mark.parametrize(
-    "name, shift, n_bands, expected", [("tsa_mask256.mat", 2, 28, (256, 310)), ("pnp_mask256.mat", 1, 31, (256, 286))]
+    "name, shift, n_bands, expected",
+    [("tsa_mask256.mat", 2, 28, (256, 310)), ("pnp_mask256.mat", 1, 31, (256, 286))],
 )
 def test_real_masks(name, shift, n_bands, expected):
     mask = scipy.io.loadmat(MASKS / name)["mask"]
@@ -210,13 +222,19 @@ def test_real_masks(name, shift, n_bands, expected):
 @pytest.mark.parametrize(
     "mask, shift, n_bands, expected",
     [
-        (np.random.default_rng(0).uniform(0.0066, 1, (256, 256)).astype(np.float32), 2, 28, (256, 310)),
+        (
+            np.random.default_rng(0).uniform(0.0066, 1, (256, 256)).astype(np.float32),
+            2,
+            28,
+            (256, 310),
+        ),
         (codes.random_binary((256, 256), rng=1), 1, 31, (256, 286)),
     ],
     ids=["tsa_like", "pnp_like"],
 )
 def test_standard_protocol_geometry(mask, shift, n_bands, expected):
-    """The geometry of the two standard CASSI protocols, with masks like the real ones (always runs)."""
+    """The geometry of the two standard CASSI protocols, with masks like the real ones (always
+    runs)."""
     system = SDCASSI(mask, n_bands=n_bands, shifts=shift)
     assert system.measurement_shape == expected
     F = np.ones(system.cube_shape, dtype=np.float32)
@@ -259,24 +277,38 @@ def test_simulate_snr_on_a_large_measurement():
     ids=["dd", "cs2li", "mu_cosdi"],
 )
 def test_panchromatic_is_exact_for_flat_spectra_on_aligned_systems(system):
-    """Dual-disperser measurements are per pixel: a spectrally flat cube gives Z back wherever a band is open."""
+    """Dual-disperser measurements are per pixel: a spectrally flat cube gives Z back wherever a
+    band is open."""
     g = np.random.default_rng(0)
     shape = system.cube_shape
     Z = g.random(shape[:2] + shape[3:]) + 0.5
     F = np.repeat(np.expand_dims(Z, 2), shape[2], axis=2) / shape[2]
     est = system.panchromatic(system.forward(F), mu=1e-12)
-    open_ = np.sum(system.effective_code if hasattr(system, "effective_code") else system.effective_codes[0], 2) > 0
+    open_ = (
+        np.sum(
+            system.effective_code
+            if hasattr(system, "effective_code")
+            else system.effective_codes[0],
+            2,
+        )
+        > 0
+    )
     open_ = open_.reshape(open_.shape + (1,) * (Z.ndim - 2))
     np.testing.assert_allclose(np.where(open_, est, Z), Z, rtol=1e-8)
 
 
 @pytest.mark.parametrize(
     "system",
-    [SDCASSI.example((5, 6, 4)), CASSIVSI.example((5, 6, 4)), CASSDIDFA.example((4, 5, 3, 2), psf_size=3)],
+    [
+        SDCASSI.example((5, 6, 4)),
+        CASSIVSI.example((5, 6, 4)),
+        CASSDIDFA.example((4, 5, 3, 2), psf_size=3),
+    ],
     ids=["sd", "vsi", "dfa_psf"],
 )
 def test_panchromatic_is_the_tikhonov_solution_of_the_decimated_model(system):
-    """``Z = argmin ‖G − A Dᵀ Z / n‖² + μ s ‖Z‖²`` (SPEC §5 step 1), checked against a dense solve."""
+    """``Z = argmin ‖G − A Dᵀ Z / n‖² + μ s ‖Z‖²`` (SPEC §5 step 1), checked against a dense
+    solve."""
     g = np.random.default_rng(1)
     G = g.standard_normal(system.measurement_shape)
     D = system.decimation.to_matrix()
@@ -291,7 +323,10 @@ def test_panchromatic_is_the_tikhonov_solution_of_the_decimated_model(system):
 
 
 def test_panchromatic_shapes():
-    assert CASSDIDFA.example().panchromatic_shape == (16, 16)  # all-in-focus grayscale (λ and z summed)
+    assert CASSDIDFA.example().panchromatic_shape == (
+        16,
+        16,
+    )  # all-in-focus grayscale (λ and z summed)
     assert CS2LI.example().panchromatic_shape == (16, 16, 4)  # grayscale fringe images
     assert C3SLFI.example((2, 3, 4, 2, 2)).panchromatic_shape == (2, 3, 2, 2)
     dual = DualCameraCASSI.example((4, 5, 3))
@@ -322,7 +357,9 @@ def test_fringe_cube_physics():
     np.testing.assert_allclose(P[..., :4].sum(-1), 4 * F, rtol=1e-12)
     np.testing.assert_allclose(P[..., 4:].sum(-1), 4 * F, rtol=1e-12)
     # pattern t = f·K + k is F · (b + a cos(φ_f + 2πk/K))
-    np.testing.assert_allclose(P[2, 3, 1, 6], F[2, 3, 1] * (1 + 0.8 * np.cos(phases[2, 3, 1] + np.pi)))
+    np.testing.assert_allclose(
+        P[2, 3, 1, 6], F[2, 3, 1] * (1 + 0.8 * np.cos(phases[2, 3, 1] + np.pi))
+    )
     system = CS2LI.example((5, 6, 4, 8))
     assert system.forward(P).shape == (5, 6, 8)
 
@@ -362,8 +399,11 @@ def test_backends_agree(factory, backend):
     H = system.matrix()
     np.testing.assert_allclose(vec(fwd), H @ vec(F), atol=tol * np.abs(H @ vec(F)).max())
     np.testing.assert_allclose(vec(adj), H.T @ vec(G), atol=tol * np.abs(H.T @ vec(G)).max())
-    assert tl.is_tensor(system.panchromatic(B.as_tensor(np.asarray(H @ vec(F)).reshape(system.measurement_shape, order="F"), dtype)))
-
+    assert tl.is_tensor(
+        system.panchromatic(
+            B.as_tensor(np.asarray(H @ vec(F)).reshape(system.measurement_shape, order="F"), dtype)
+        )
+    )
 
 
 @pytest.mark.parametrize("factory", [s[1] for s in SYSTEMS], ids=IDS)

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._registry import Registry
+
 __all__ = ["Glass", "GLASSES", "register_glass", "refractive_index"]
 
 
@@ -51,36 +53,45 @@ class Glass:
         return float(out) if out.ndim == 0 else out
 
 
-GLASSES: dict[str, Glass] = {}
+GLASSES = Registry("glass")
+"""``NAME → Glass`` (upper-case names), read-only; add yours with :func:`register_glass`."""
 
 
-def register_glass(name: str, B, C) -> Glass:
+def register_glass(name: str, B, C, *, replace: bool = False, _builtin: bool = False) -> Glass:
     """Add a glass (Sellmeier ``B``, ``C`` with ``λ`` in µm) under ``name`` and return it.
+
+    Names are case-insensitive; a name that exists needs ``replace=True`` and
+    the catalogue glasses of the library (N-SK2, SF4, N-BK7) cannot be replaced.
 
     Examples
     --------
-    >>> g = register_glass("N-BK7", (1.03961212, 0.231792344, 1.01046945),
-    ...                    (0.00600069867, 0.0200179144, 103.560653))
+    >>> g = register_glass("my-BK7", (1.03961212, 0.231792344, 1.01046945),
+    ...                    (0.00600069867, 0.0200179144, 103.560653), replace=True)
     >>> round(g.index(587.6), 4)
     1.5168
     """
     if not isinstance(name, str) or not name:
         raise ValueError(f"a glass needs a non-empty name, got {name!r}")
+    for what, coeffs in (("B", B), ("C", C)):
+        vals = np.asarray(coeffs, dtype=np.float64)
+        if vals.shape != (3,) or not np.isfinite(vals).all():
+            raise ValueError(
+                f"glass {name!r}: Sellmeier {what} must be 3 finite numbers, got {coeffs!r}"
+            )
     glass = Glass(name, tuple(float(b) for b in B), tuple(float(c) for c in C))
-    GLASSES[name.upper()] = glass
+    GLASSES.register(name.upper(), glass, replace=replace, builtin=_builtin)
     return glass
 
 
 # Thesis Eq. 188 (first and third prisms) and Eq. 189 (middle prism); the Schott catalogue values.
-register_glass(
-    "N-SK2", (1.28189012, 0.257738258, 0.96818604), (0.0072719164, 0.0242823527, 110.377773)
-)
-register_glass(
-    "SF4", (1.61957826, 0.339493189, 1.02566931), (0.0125502104, 0.0544559822, 117.652222)
-)
-register_glass(
-    "N-BK7", (1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)
-)
+_CATALOGUE = {
+    "N-SK2": ((1.28189012, 0.257738258, 0.96818604), (0.0072719164, 0.0242823527, 110.377773)),
+    "SF4": ((1.61957826, 0.339493189, 1.02566931), (0.0125502104, 0.0544559822, 117.652222)),
+    "N-BK7": ((1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)),
+}
+for _name, (_b, _c) in _CATALOGUE.items():
+    register_glass(_name, _b, _c, _builtin=True)
+del _name, _b, _c
 
 
 def _glass(glass) -> Glass:
@@ -88,7 +99,7 @@ def _glass(glass) -> Glass:
         return glass
     try:
         return GLASSES[str(glass).upper()]
-    except KeyError:
+    except KeyError:  # UnknownNameError; reworded with the hint
         raise ValueError(
             f"unknown glass {glass!r}; known glasses: {sorted(g.name for g in GLASSES.values())} "
             "(add one with register_glass)"

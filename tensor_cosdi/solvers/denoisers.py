@@ -14,10 +14,12 @@ from typing import Callable
 import numpy as np
 
 from .. import _backend as B
+from .._registry import Registry
 
-__all__ = ["denoise", "register_denoiser", "denoisers", "tv", "wavelet"]
+__all__ = ["DENOISERS", "denoise", "register_denoiser", "denoisers", "tv", "wavelet"]
 
-_DENOISERS: dict[str, Callable] = {}
+DENOISERS = Registry("denoiser")
+"""``name → denoise(x, sigma)``, read-only; add yours with :func:`register_denoiser`."""
 
 
 def _host(x):
@@ -53,16 +55,20 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
     return B.tensor_like(out.reshape(shape), x)
 
 
-def register_denoiser(name: str, func: Callable) -> None:
-    """Make ``func(x, sigma)`` available to PnP methods as ``denoiser=name``."""
+def register_denoiser(name: str, func: Callable, *, replace: bool = False) -> None:
+    """Make ``func(x, sigma)`` available to PnP methods as ``denoiser=name``.
+
+    A name that exists needs ``replace=True``; ``"tv"`` and ``"wavelet"`` cannot be replaced.
+    """
     if not callable(func):
         raise ValueError(f"a denoiser must be callable (x, sigma) -> x, got {func!r}")
-    _DENOISERS[name] = func
+    builtin = getattr(func, "__module__", "") == __name__
+    DENOISERS.register(name, func, replace=replace, builtin=builtin)
 
 
 def denoisers() -> tuple[str, ...]:
     """Names of the registered denoisers."""
-    return tuple(sorted(_DENOISERS))
+    return DENOISERS.names()
 
 
 def denoise(name_or_callable, x, sigma):
@@ -74,8 +80,8 @@ def resolve(name_or_callable) -> Callable:
     if callable(name_or_callable):
         return name_or_callable
     try:
-        return _DENOISERS[name_or_callable]
-    except (KeyError, TypeError):
+        return DENOISERS[name_or_callable]
+    except KeyError:
         raise ValueError(
             f"unknown denoiser {name_or_callable!r}; registered: {list(denoisers())} "
             "(or pass a callable (x, sigma) -> x)"

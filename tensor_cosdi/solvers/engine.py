@@ -63,8 +63,17 @@ class Loop:
     :attr:`converged`.
     """
 
-    def __init__(self, max_iter: int, tol: float, *, progress: bool = False, desc: str = ""):
+    def __init__(
+        self,
+        max_iter: int,
+        tol: float,
+        *,
+        progress: bool = False,
+        desc: str = "",
+        objective: bool = True,
+    ):
         self.max_iter = check_int("max_iter", max_iter, 1)
+        self.objective = bool(objective)  # False: internal stages skip the prior term (NaN)
         self.tol = float(tol)
         self.progress = bool(progress)
         self.desc = desc
@@ -107,6 +116,7 @@ def admm(
     normal_solve=None,
     progress: bool = False,
     desc: str = "ADMM",
+    objective: bool = True,
 ):
     """ADMM for ``min ½‖A x − g‖² + R(x)`` with the split ``z = x``.  Returns ``(z, history,
     converged)``.
@@ -123,6 +133,9 @@ def admm(
     normal_solve : callable ``(b, x_prev) -> x``, optional
         Replaces ``(AᵀA + ρI)⁻¹ b`` (coupled problems; default the
         operator's structured ``solve_normal``).
+    objective : bool
+        Record the prior term of the objective (``False``: NaN, for internal
+        stages whose history is discarded; TV costs a pass over the cube).
     """
     r = rho * sensing_gain(op, g)
     solve = normal_solve if normal_solve is not None else (lambda b, x0: op.solve_normal(b, r))
@@ -131,7 +144,7 @@ def admm(
     prior.setup(x, penalty=r, gain=r / rho)
     z = prior.prox(x)
     u = tl.zeros_like(z)
-    loop = Loop(max_iter, tol, progress=progress, desc=desc)
+    loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
     for it in loop:
         x_new = solve(atg + r * (z - u), x)
@@ -144,7 +157,7 @@ def admm(
             residual_norm=float(tl.norm(op._forward(z) - g)),
             gnorm=gnorm,
             change=change,
-            prior_term=prior.objective(z),
+            prior_term=prior.objective(z) if loop.objective else float("nan"),
         ):
             break
         if it + 1 < loop.max_iter:
@@ -164,6 +177,7 @@ def gap(
     tol: float = 1e-4,
     progress: bool = False,
     desc: str = "GAP",
+    objective: bool = True,
 ):
     """(Accelerated) generalised alternating projection.  Returns ``(x, history, converged)``.
 
@@ -176,7 +190,7 @@ def gap(
     prior.setup(x, penalty=1.0, gain=lam / eps)
     g_hat = g
     ax = op._forward(x)
-    loop = Loop(max_iter, tol, progress=progress, desc=desc)
+    loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
     for it in loop:
         if accelerate:
@@ -190,7 +204,7 @@ def gap(
             residual_norm=float(tl.norm(ax - g)),
             gnorm=gnorm,
             change=change,
-            prior_term=prior.objective(x),
+            prior_term=prior.objective(x) if loop.objective else float("nan"),
         ):
             break
         if it + 1 < loop.max_iter:
@@ -219,6 +233,7 @@ def fista(
     L: float | None = None,
     progress: bool = False,
     desc: str = "FISTA",
+    objective: bool = True,
 ):
     """FISTA for ``min ½‖A x − g‖² + R(x)`` from ``start``; ``project(x)`` (optional) after each
     prox.
@@ -228,7 +243,7 @@ def fista(
     L = lipschitz(op, g) if L is None else float(L)
     prior.setup(start, penalty=L, gain=L)
     x, y, t = start, start, 1.0
-    loop = Loop(max_iter, tol, progress=progress, desc=desc)
+    loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
     for it in loop:
         x_new = prior.prox(y + op._adjoint(g - op._forward(y)) / L)
@@ -243,7 +258,7 @@ def fista(
             residual_norm=float(tl.norm(op._forward(x) - g)),
             gnorm=gnorm,
             change=change,
-            prior_term=prior.objective(x),
+            prior_term=prior.objective(x) if loop.objective else float("nan"),
         ):
             break
         if it + 1 < loop.max_iter:

@@ -173,6 +173,7 @@ def subspace_gap_tv(
         eps=eps,
         max_iter=max_iter,
         desc="panchromatic",
+        objective=False,  # an internal stage: its history is not returned
     )
     return x
 

@@ -66,10 +66,17 @@ def _peak(x) -> float:
 
 def total_variation(x) -> float:
     """Isotropic 2-D TV over axes 0 and 1, summed over every other index."""
-    a = np.asarray(B.to_numpy(x), dtype=np.float64)
-    dx = np.diff(a, axis=0, append=a[-1:])
-    dy = np.diff(a, axis=1, append=a[:, -1:])
-    return float(np.sqrt(dx * dx + dy * dy).sum())
+    a = np.asarray(B.to_numpy(x))
+    dx = a[1:, :-1] - a[:-1, :-1]  # forward differences, the last row/column has one neighbour
+    dy = a[:-1, 1:] - a[:-1, :-1]
+    np.multiply(dx, dx, out=dx)
+    np.multiply(dy, dy, out=dy)
+    np.add(dx, dy, out=dx)
+    inner = float(np.sqrt(dx, out=dx).sum(dtype=np.float64))
+    edge = np.abs(a[-1, 1:] - a[-1, :-1]).sum(dtype=np.float64) + np.abs(
+        a[1:, -1] - a[:-1, -1]
+    ).sum(dtype=np.float64)
+    return inner + float(edge)
 
 
 class Prior:

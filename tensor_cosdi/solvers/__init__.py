@@ -14,6 +14,7 @@ from .avsi import avsi
 from .dfa import multiresolution_dfa
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
+from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
 
@@ -37,4 +38,5 @@ __all__ = [
     "pnp_admm_operator",
     "denoisers",
     "multiresolution_dfa",
+    "nonlocal_tucker",
 ]

@@ -1,0 +1,141 @@
+"""Real hyperspectral scenes for tuning and evaluating reconstruction (not shipped with the
+package).
+
+The project's tests and benchmarks read the CAVE scenes of
+``../shared/data/hsi_train`` (research use; see that folder's README); a user
+points :func:`data_dir` at their own copy with the ``TENSOR_COSDI_DATA``
+environment variable or passes a path.  Each scene is a ``NAME.npz`` with a
+``cube`` (rows, columns, bands; uint16 reflectance × 65535) and
+``wavelengths_nm``.
+
+:data:`KAIST_WAVELENGTHS` are the 28 band centres (453–648 nm) of the
+standard 256×256×28 CASSI simulation protocol (TSA-Net, MST, DAUHST);
+:func:`load_hsi` resamples a scene onto them (linear interpolation along the
+band axis, never dropping bands).  :data:`TUNE_SCENES` / :data:`REPORT_SCENES`
+is the fixed split of the project: tune on the first, report on the second,
+never the other way round.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "KAIST_WAVELENGTHS",
+    "HSI_SCENES",
+    "TUNE_SCENES",
+    "REPORT_SCENES",
+    "data_dir",
+    "load_hsi",
+]
+
+#: Band centres (nm) of the 28-band KAIST / TSA-Net CASSI protocol.
+KAIST_WAVELENGTHS = np.array(
+    [453.3, 457.6, 462.1, 466.8, 471.6, 476.5, 481.6, 486.9, 492.4, 498.0, 503.9, 509.9, 516.2,
+     522.7, 529.5, 536.5, 543.8, 551.4, 558.6, 567.5, 575.3, 584.3, 594.4, 604.2, 614.4, 625.1,
+     636.3, 648.1]
+)  # fmt: skip
+
+#: The eleven CAVE scenes of ``hsi_train`` (2×2-averaged to 256×256, 31 bands 400–700 nm).
+HSI_SCENES = (
+    "balloons", "beads", "cd", "chart_and_stuffed_toy", "clay", "face", "fake_and_real_peppers",
+    "feathers", "flowers", "real_and_fake_apples", "thread_spools",
+)  # fmt: skip
+#: Held back: every figure the project reports on real spectra is a mean over these.
+REPORT_SCENES = ("beads", "face", "real_and_fake_apples")
+#: Used to tune defaults and train networks; never reported on.
+TUNE_SCENES = tuple(s for s in HSI_SCENES if s not in REPORT_SCENES)
+
+
+def data_dir(path=None) -> Path:
+    """The folder holding the ``NAME.npz`` scenes.
+
+    ``path`` if given, else ``$TENSOR_COSDI_DATA/hsi_train`` (or
+    ``$TENSOR_COSDI_DATA`` itself when it holds the scenes), else
+    ``../shared/data/hsi_train`` next to a source checkout.  Raises
+    ``FileNotFoundError`` saying where it looked.
+    """
+    tried = []
+    if path is not None:
+        candidates = [Path(path)]
+    else:
+        candidates = []
+        env = os.environ.get("TENSOR_COSDI_DATA")
+        if env:
+            candidates += [Path(env) / "hsi_train", Path(env)]
+        candidates.append(
+            Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "hsi_train"
+        )
+    for c in candidates:
+        tried.append(str(c))
+        if c.is_dir() and any(c.glob("*.npz")):
+            return c
+    raise FileNotFoundError(
+        "no hyperspectral scenes (NAME.npz) found; looked in "
+        + ", ".join(tried)
+        + " — set TENSOR_COSDI_DATA to the folder of the CAVE hsi_train scenes"
+    )
+
+
+def load_hsi(
+    name, wavelengths=None, *, shape=None, folder=None, dtype="float64"
+) -> tuple[np.ndarray, np.ndarray]:
+    """A real scene as ``(cube, wavelengths)``: reflectance in [0, 1], ``(rows, columns, bands)``.
+
+    Parameters
+    ----------
+    name : str or path
+        A scene of :data:`HSI_SCENES` (looked up in :func:`data_dir`) or a
+        path to an ``.npz`` with ``cube`` and ``wavelengths_nm``.
+    wavelengths : array of nm, optional
+        Resample onto these band centres by linear interpolation (each must
+        lie inside the scene's range); default the scene's own bands.
+        ``"kaist"`` means :data:`KAIST_WAVELENGTHS`.
+    shape : (rows, columns), optional
+        A centred crop of this size.
+    """
+    p = Path(name)
+    if p.suffix != ".npz":
+        if name not in HSI_SCENES:
+            raise ValueError(
+                f"unknown scene {name!r}; the hsi_train scenes are {list(HSI_SCENES)} "
+                "(or pass a path to an .npz)"
+            )
+        p = data_dir(folder) / f"{name}.npz"
+    if not p.is_file():
+        raise FileNotFoundError(f"scene file not found: {p}")
+    with np.load(p, allow_pickle=False) as d:
+        if "cube" not in d or "wavelengths_nm" not in d:
+            raise ValueError(
+                f"{p}: expected arrays 'cube' and 'wavelengths_nm', found {sorted(d.files)}"
+            )
+        raw, wl = d["cube"], np.asarray(d["wavelengths_nm"], dtype=np.float64)
+    if raw.ndim != 3 or raw.shape[2] != wl.size:
+        raise ValueError(f"{p}: cube of shape {raw.shape} does not match {wl.size} wavelengths")
+    scale = float(np.iinfo(raw.dtype).max) if raw.dtype.kind == "u" else 1.0
+    cube = raw.astype(np.float64) / scale
+    if shape is not None:
+        h, w = (int(v) for v in shape)
+        if h > cube.shape[0] or w > cube.shape[1]:
+            raise ValueError(f"crop {shape} is larger than the scene's {cube.shape[:2]}")
+        r0, c0 = (cube.shape[0] - h) // 2, (cube.shape[1] - w) // 2
+        cube = cube[r0 : r0 + h, c0 : c0 + w]
+    if wavelengths is not None:
+        target = (
+            KAIST_WAVELENGTHS
+            if isinstance(wavelengths, str) and wavelengths == "kaist"
+            else np.asarray(wavelengths, dtype=np.float64)
+        )
+        if target.min() < wl.min() or target.max() > wl.max():
+            raise ValueError(
+                f"wavelengths {target.min():g}–{target.max():g} nm lie outside the scene's "
+                f"{wl.min():g}–{wl.max():g} nm"
+            )
+        idx = np.clip(np.searchsorted(wl, target) - 1, 0, wl.size - 2)
+        t = (target - wl[idx]) / (wl[idx + 1] - wl[idx])
+        cube = cube[:, :, idx] * (1 - t) + cube[:, :, idx + 1] * t
+        wl = target
+    return np.ascontiguousarray(cube, dtype=dtype), wl

@@ -1,0 +1,62 @@
+"""Real hyperspectral scenes: loading, resampling onto the KAIST bands, the fixed split, errors."""
+
+import numpy as np
+import pytest
+
+from tensor_cosdi import datasets
+
+
+def _scene(tmp_path, name="s.npz"):
+    rng = np.random.default_rng(0)
+    cube = rng.integers(0, 65535, size=(20, 30, 31), dtype=np.uint16)
+    wl = np.arange(400, 701, 10, dtype=np.float32)
+    np.savez_compressed(tmp_path / name, cube=cube, wavelengths_nm=wl)
+    return cube, wl, tmp_path / name
+
+
+def test_load_resamples_linearly_and_scales_to_reflectance(tmp_path):
+    raw, wl, path = _scene(tmp_path)
+    cube, got = datasets.load_hsi(path)
+    np.testing.assert_allclose(cube, raw / 65535.0)
+    np.testing.assert_array_equal(got, wl)
+    k, kw = datasets.load_hsi(path, "kaist")
+    assert k.shape == (20, 30, 28) and np.array_equal(kw, datasets.KAIST_WAVELENGTHS)
+    # 453.3 nm lies between 450 and 460: linear interpolation of those two bands
+    t = (453.3 - 450.0) / 10.0
+    np.testing.assert_allclose(
+        k[..., 0], (1 - t) * raw[..., 5] / 65535 + t * raw[..., 6] / 65535, rtol=1e-12
+    )
+    crop, _ = datasets.load_hsi(path, [500.0], shape=(10, 10))
+    np.testing.assert_allclose(crop[..., 0], raw[5:15, 10:20, 10] / 65535.0)
+
+
+def test_errors_name_what_was_wrong(tmp_path):
+    _, _, path = _scene(tmp_path)
+    with pytest.raises(ValueError, match="lie outside the scene's 400–700 nm"):
+        datasets.load_hsi(path, [350.0, 500.0])
+    with pytest.raises(ValueError, match="larger than the scene's"):
+        datasets.load_hsi(path, shape=(64, 64))
+    with pytest.raises(ValueError, match="unknown scene 'lena'"):
+        datasets.load_hsi("lena")
+    np.savez(tmp_path / "bad.npz", cube=np.zeros((2, 2, 3)))
+    with pytest.raises(ValueError, match="expected arrays 'cube' and 'wavelengths_nm'"):
+        datasets.load_hsi(tmp_path / "bad.npz")
+    with pytest.raises(FileNotFoundError, match="looked in"):
+        datasets.data_dir(tmp_path / "nowhere")
+
+
+def test_split_is_fixed_and_disjoint():
+    assert len(datasets.KAIST_WAVELENGTHS) == 28 and np.all(np.diff(datasets.KAIST_WAVELENGTHS) > 0)
+    assert set(datasets.REPORT_SCENES).isdisjoint(datasets.TUNE_SCENES)
+    assert sorted(datasets.REPORT_SCENES + datasets.TUNE_SCENES) == sorted(datasets.HSI_SCENES)
+    assert len(datasets.TUNE_SCENES) == 8
+
+
+def test_real_scene_when_the_data_is_present():
+    try:
+        datasets.data_dir()
+    except FileNotFoundError:
+        pytest.skip("../shared/data/hsi_train not present (set TENSOR_COSDI_DATA)")
+    cube, wl = datasets.load_hsi("balloons", "kaist")
+    assert cube.shape == (256, 256, 28) and 0 <= cube.min() and cube.max() <= 1
+    assert cube.std(axis=(0, 1)).min() > 0.01  # no band is flat

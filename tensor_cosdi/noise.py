@@ -6,7 +6,7 @@ import numpy as np
 
 from . import _backend as B
 
-__all__ = ["add_noise", "snr_db"]
+__all__ = ["add_noise", "snr_db", "estimate_sigma", "estimate_snr_db", "auto_weight"]
 
 
 def snr_db(clean, noisy) -> float:
@@ -48,3 +48,53 @@ def add_noise(measurement, snr_db: float | None, *, rng=None):
     sigma = np.sqrt(power / 10.0 ** (snr_db / 10.0))
     noise = B.default_rng(rng).standard_normal(g.shape) * sigma
     return measurement + B.tensor_like(noise, measurement)
+
+
+def estimate_sigma(measurement) -> float:
+    """Robust estimate of the white-noise standard deviation of a measurement.
+
+    The median absolute deviation of the finest diagonal wavelet detail
+    (``skimage.restoration.estimate_sigma``), averaged over the frames of a
+    stack (axes after the first two).  Coded-aperture texture leaks into that
+    subband too, so a noise-free CASSI measurement reads as ≈ 40-46 dB SNR,
+    not infinity; at 30 and 20 dB the estimate was within 15 % of the true σ
+    on real scenes (TSA mask).
+    """
+    from skimage.restoration import estimate_sigma as _mad_sigma
+
+    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    if g.ndim < 2 or min(g.shape[:2]) < 4:
+        raise ValueError(f"estimate_sigma needs frames of at least 4×4 pixels, got shape {g.shape}")
+    if not np.isfinite(g).all():
+        raise ValueError("estimate_sigma: the measurement contains NaN or inf")
+    frames = g.reshape(g.shape[:2] + (-1,))
+    return float(np.mean([_mad_sigma(frames[..., k]) for k in range(frames.shape[2])]))
+
+
+def estimate_snr_db(measurement) -> float:
+    """``10 log10(mean g² / σ̂²)`` with :func:`estimate_sigma` (``inf`` when σ̂ = 0)."""
+    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    power = float(np.mean(g * g))
+    if power == 0.0:
+        raise ValueError("the measurement is all zero: there is no signal to reconstruct")
+    sigma = estimate_sigma(g)
+    return float("inf") if sigma == 0 else 10.0 * np.log10(power / sigma**2)
+
+
+def auto_weight(
+    measurement, *, at_30db: float, at_20db: float, floor: float | None = None
+) -> float:
+    """A regularisation weight that follows the measurement's estimated SNR.
+
+    Log-linear through ``(30 dB, at_30db)`` and ``(20 dB, at_20db)``, never
+    below ``floor`` (default ``at_30db``): noisier data get more
+    regularisation; clean data keep the 30 dB value (on real scenes the best
+    noise-free weight depends on the scene more than on the noise, so it is
+    not extrapolated).
+    """
+    snr = estimate_snr_db(measurement)
+    lo = at_30db if floor is None else floor
+    if not np.isfinite(snr):
+        return float(lo)
+    w = at_30db * (at_20db / at_30db) ** ((30.0 - snr) / 10.0)
+    return float(min(max(w, lo), 10 * at_20db))

@@ -29,6 +29,7 @@ def gap_tv(
     accelerate: bool = True,
     tol: float = 1e-4,
     eps: float = 1e-6,
+    tv_iter: int = 50,
     progress: bool = False,
 ):
     """GAP-TV (Yuan 2016) for any system: ``x ← D_TV(x + Aᵀ (AAᵀ + εI)⁻¹ (ĝ − A x))``.
@@ -39,7 +40,8 @@ def gap_tv(
     the measurement is replaced by the running ``ĝ ← ĝ + (g − A x)`` of
     accelerated GAP.  ``tv_weight`` is relative to the largest value of the
     first (least-norm) estimate.  Stops when the relative change of ``x`` is
-    below ``tol`` or after ``max_iter`` iterations.  Registered as ``"gap_tv"``.
+    below ``tol`` or after ``max_iter`` iterations; ``tv_iter`` Chambolle
+    iterations per TV step.  Registered as ``"gap_tv"``.
     """
     return gap_tv_operator(
         system.operator,
@@ -49,6 +51,7 @@ def gap_tv(
         accelerate=accelerate,
         tol=tol,
         eps=eps,
+        tv_iter=tv_iter,
         progress=progress,
     )
 
@@ -65,6 +68,7 @@ def gap_tv_operator(
     progress=False,
     desc="GAP-TV",
     denoiser=None,
+    tv_iter=50,
 ):
     """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1
     spatial).
@@ -76,6 +80,13 @@ def gap_tv_operator(
     eps = check_positive("eps", eps)
     tol = check_positive("tol", tol)
     engine.check_int("max_iter", max_iter, 1)
+    tv_iter = engine.check_int("tv_iter", tv_iter, 1)
+    if denoiser is None:
+        from .denoisers import tv
+
+        def denoiser(x, weight):
+            return tv(x, weight, n_iter=tv_iter)
+
     return engine.gap(
         op,
         measurement,
@@ -98,6 +109,7 @@ register_method(
         "accelerate": True,
         "tol": 1e-4,
         "eps": 1e-6,
+        "tv_iter": 50,
         "progress": False,
     },
     "generalised alternating projection with a TV denoiser",

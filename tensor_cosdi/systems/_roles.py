@@ -104,12 +104,19 @@ class SystemRoles:
     demo_options: ClassVar[dict] = {}
 
     # ---- state (bundles) -------------------------------------------------------------
-    def _state(self) -> tuple[dict, dict]:  # pragma: no cover - every registered system overrides
-        raise NotImplementedError(f"{type(self).__name__} does not describe its state")
+    def _state(self) -> tuple[dict, dict]:
+        """``(params, arrays)``; this default fits the systems built from ``code``, ``shifts``,
+        ``n_bands``."""
+        return {"n_bands": int(self.n_bands)}, {
+            "code": np.asarray(self.code),
+            "shifts": np.asarray(self.shifts),
+        }
 
     @classmethod
-    def _from_state(cls, params: dict, arrays: dict):  # pragma: no cover - see _state
-        raise NotImplementedError
+    def _from_state(cls, params: dict, arrays: dict):
+        return cls(
+            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
+        )
 
     def to_state(self) -> dict:
         """``{"system", "class", "params", "arrays"}``: JSON-able parameters and named NumPy arrays.

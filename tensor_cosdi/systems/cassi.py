@@ -14,7 +14,6 @@ from ._base import (
     System,
     as_code,
     coded_shear_sum_matrix,
-    coded_state,
     count,
     dual_disperser,
     dual_disperser_matrix,
@@ -84,15 +83,6 @@ class SDCASSI(System):
     demo_scene = "colorchecker"
     example_options = {"code": None}
 
-    def _state(self):
-        return coded_state(self)
-
-    @classmethod
-    def _from_state(cls, params, arrays):
-        return cls(
-            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
-        )
-
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
         nl = count(n_bands, "n_bands")
@@ -153,15 +143,6 @@ class DDCASSI(System):
     """
 
     name = "dd_cassi"
-
-    def _state(self):
-        return coded_state(self)
-
-    @classmethod
-    def _from_state(cls, params, arrays):
-        return cls(
-            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
-        )
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
@@ -225,15 +206,6 @@ class DualCameraCASSI(System):
 
     name = "dual_camera_cassi"
     example_options = {"code": None}
-
-    def _state(self):
-        return coded_state(self)
-
-    @classmethod
-    def _from_state(cls, params, arrays):
-        return cls(
-            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
-        )
 
     @property
     def frame_count(self) -> int:

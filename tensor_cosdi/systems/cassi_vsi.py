@@ -82,12 +82,6 @@ class CASSIVSI(System):
         params, arrays = coded_state(self)
         return {**params, "alpha_t": float(self.alpha_t), "beta": int(self.beta)}, arrays
 
-    @classmethod
-    def _from_state(cls, params, arrays):
-        return cls(
-            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
-        )
-
     def __init__(self, code, *, n_bands, alpha_t=0.7, beta=None, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2,))
         nl = count(n_bands, "n_bands")

@@ -76,12 +76,6 @@ class CS2LI(System):
         params, arrays = coded_state(self)
         return {**params, "n_patterns": int(self.cube_shape[3])}, arrays
 
-    @classmethod
-    def _from_state(cls, params, arrays):
-        return cls(
-            arrays["code"], shifts=arrays["shifts"], wavelengths=arrays["wavelengths"], **params
-        )
-
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
         """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums (N-step PSA, ``K
         = n_steps``)."""

@@ -124,9 +124,8 @@ def score_depth(problem: Problem, depth) -> dict:
 
     * depth planes (CASSDI-DFA): ``"planes_right"``, the fraction of pixels on the right plane;
     * disparity (C3SLFI): ``"disparity_mae"``, mean absolute error (px per view step);
-    * fringe phase (CS2LI / Mu-CoSDI): ``"phase_mae"``, mean absolute wrapped-phase error (rad) of
-    the
-      first frequency.
+    * fringe phase (CS2LI / Mu-CoSDI): ``"phase_mae"``, mean absolute wrapped-phase error (rad)
+      of the first frequency.
     """
     return problem.system.score_depth(depth, problem)
 

@@ -289,7 +289,7 @@ def nonlocal_tucker(
         tol=tol,
         progress=progress,
         desc="GAP non-local Tucker",
-        objective=False,
+        objective=True,  # the prior is implicit: its term is 0
     )
     if hist is not None:
         hist.extend(h2)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numbers
 import warnings
+from functools import cached_property
 
 import numpy as np
 import scipy.fft
@@ -210,24 +211,11 @@ class ModeTransform:
     def matrix(self) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def _analysis(self, x, axis):
-        return _dense_along(x, self._typed(self.matrix.T, x.dtype), axis)
+    def _analysis(self, x, axis):  # pragma: no cover - abstract
+        raise NotImplementedError
 
-    def _synthesis(self, x, axis):
-        return _dense_along(x, self._typed(self.matrix, x.dtype), axis)
-
-    def _typed(self, m, dtype):
-        cache = self.__dict__.setdefault("_typed_cache", {})
-        key = (
-            id(m) if m is not self.matrix else "m",
-            m.shape,
-            np.dtype(dtype).str,
-            m is self.matrix,
-        )
-        hit = cache.get(key)
-        if hit is None:
-            hit = cache[key] = np.ascontiguousarray(m, dtype=dtype)
-        return hit
+    def _synthesis(self, x, axis):  # pragma: no cover - abstract
+        raise NotImplementedError
 
     def __repr__(self):
         return f"{type(self).__name__}(n={self.n})"
@@ -248,7 +236,7 @@ def _dense_along(x: np.ndarray, m: np.ndarray, axis: int) -> np.ndarray:
 
 
 class Dense(ModeTransform):
-    """A given orthonormal matrix (learned bases: SVD / HOSVD), applied as a GEMM."""
+    """A given orthonormal matrix (learned bases: SVD / HOSVD), applied as one GEMM."""
 
     def __init__(self, matrix):
         m = np.asarray(B.to_numpy(matrix), dtype=np.float64)
@@ -256,21 +244,27 @@ class Dense(ModeTransform):
             raise ValueError(f"a basis matrix must be square, got shape {m.shape}")
         super().__init__(m.shape[0])
         self._m = m
+        self._typed_cache: dict = {}
 
     @property
     def matrix(self):
         return self._m
 
-    def _analysis(self, x, axis):
-        return _dense_along(x, self._typed(self._m.T, x.dtype), axis)
-
-    def _typed(self, m, dtype):
-        cache = self.__dict__.setdefault("_typed_cache", {})
-        key = (m is self._m, np.dtype(dtype).str)
-        hit = cache.get(key)
+    def _typed(self, transpose: bool, dtype):
+        """``Ψ`` or ``Ψᵀ`` as a contiguous array of ``dtype`` (converted once)."""
+        key = (transpose, np.dtype(dtype).str)
+        hit = self._typed_cache.get(key)
         if hit is None:
-            hit = cache[key] = np.ascontiguousarray(m, dtype=dtype)
+            hit = self._typed_cache[key] = np.ascontiguousarray(
+                self._m.T if transpose else self._m, dtype=dtype
+            )
         return hit
+
+    def _analysis(self, x, axis):
+        return _dense_along(x, self._typed(True, x.dtype), axis)
+
+    def _synthesis(self, x, axis):
+        return _dense_along(x, self._typed(False, x.dtype), axis)
 
 
 class DCT(ModeTransform):
@@ -279,7 +273,7 @@ class DCT(ModeTransform):
 
     kind = "dct"
 
-    @property
+    @cached_property
     def matrix(self):
         return dct(self.n)
 
@@ -290,7 +284,7 @@ class DCT(ModeTransform):
         return scipy.fft.idct(x, type=2, axis=axis, norm="ortho")
 
 
-class Wavelet(ModeTransform):
+class Wavelet(Dense):
     """Periodised orthogonal DWT along an axis (PyWavelets builds it; :func:`wavelet` is its
     matrix).
 
@@ -304,13 +298,8 @@ class Wavelet(ModeTransform):
     kind = "wavelet"
 
     def __init__(self, n: int, name: str = "sym8", *, level: int | None = None):
-        super().__init__(n)
+        super().__init__(wavelet(n, name, level=level))  # validates n, name and level
         self.name = name
-        self._m = wavelet(self.n, name, level=level)  # validates name and level
-
-    @property
-    def matrix(self):
-        return self._m
 
     def __repr__(self):
         return f"Wavelet(n={self.n}, {self.name!r})"

@@ -33,7 +33,7 @@ from .. import _backend as B
 from ..bases import DCT, Dense, Wavelet, dct, tucker_bases
 from . import engine
 from ._base import check_positive, register_method
-from .priors import TV, FixedBasis, TuckerDictionary, soft
+from .priors import TV, FixedBasis, TuckerDictionary, omega_step
 
 __all__ = [
     "online_tucker_admm",
@@ -178,9 +178,6 @@ def subspace_gap_tv(
     return x
 
 
-_soft = soft
-
-
 def theta_step(operator, basis, atg, w, mu):
     """Θ-step (Eq. 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg =
     AᵀG``.
@@ -191,18 +188,6 @@ def theta_step(operator, basis, atg, w, mu):
     """
     f = operator.solve_normal(atg + mu * basis.synthesis(w), mu)
     return f, basis.analysis(f)  # basis: a tensor_cosdi.bases.KroneckerBasis
-
-
-def omega_step(theta, nu, prev, thresh, mu, beta):
-    """Ω-step, exact (SPEC §12): ``argmin_Ω β‖Ω − Ω_prev‖² + λ‖Ω‖₁ + μ‖Θ − Ω − ν‖²``.
-
-    ``= soft((βΩ_prev + μ(Θ − ν)) / (β + μ), λ / (2(β + μ)))``; here
-    ``thresh`` is that threshold, ``λ / (2(β + μ))``, already.
-    """
-    v = theta - nu
-    if beta > 0:
-        v = (beta * prev + mu * v) / (beta + mu)
-    return _soft(v, thresh)
 
 
 def tucker_admm(

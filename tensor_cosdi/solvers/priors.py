@@ -43,6 +43,7 @@ __all__ = [
     "TV",
     "Denoiser",
     "soft",
+    "omega_step",
     "rms",
     "total_variation",
 ]
@@ -52,6 +53,18 @@ def soft(x, t):
     """Soft thresholding ``sign(x) · max(|x| − t, 0)`` (``t`` a scalar or a tensor of ``x``'s
     shape)."""
     return tl.sign(x) * tl.clip(tl.abs(x) - t, 0, None)
+
+
+def omega_step(theta, nu, prev, thresh, mu, beta):
+    """Ω-step, exact (SPEC §12): ``argmin_Ω β‖Ω − Ω_prev‖² + λ‖Ω‖₁ + μ‖Θ − Ω − ν‖²``.
+
+    ``= soft((βΩ_prev + μ(Θ − ν)) / (β + μ), λ / (2(β + μ)))``; here
+    ``thresh`` is that threshold, ``λ / (2(β + μ))``, already.
+    """
+    v = theta - nu
+    if beta > 0:
+        v = (beta * prev + mu * v) / (beta + mu)
+    return soft(v, thresh)
 
 
 def rms(x) -> float:
@@ -149,11 +162,10 @@ class SparseInBasis(Prior):
 
     def prox(self, v):
         theta = self.basis.analysis(v)
-        if self.beta > 0 and self._prev_cube is not None:
-            if self._prev is None:
-                self._prev = self.basis.analysis(self._prev_cube)
-            theta = (self.beta * self._prev + self.mu * theta) / (self.beta + self.mu)
-        omega = soft(theta, self.thresh)
+        beta = self.beta if self._prev_cube is not None else 0.0  # the first step: plain soft
+        if beta > 0 and self._prev is None:
+            self._prev = self.basis.analysis(self._prev_cube)
+        omega = omega_step(theta, 0.0, self._prev, self.thresh, self.mu, beta)
         self._omega_l1 = float(tl.sum(tl.abs(omega if self._w is None else self._w * omega)))
         z = self.basis.synthesis(omega)
         if self._prev_cube is None:

@@ -24,6 +24,22 @@ def test_glass_errors_name_the_problem():
         optics.refractive_index("SF4", -1)
 
 
+def test_register_glass_never_replaces_a_catalogue_glass_and_checks_coefficients():
+    b, c = (1.03961212, 0.231792344, 1.01046945), (0.00600069867, 0.0200179144, 103.560653)
+    with pytest.raises(ValueError, match="'N-BK7' is a built-in glass and cannot be replaced"):
+        optics.register_glass("n-bk7", b, c, replace=True)
+    with pytest.raises(ValueError, match="Sellmeier B must be 3 finite numbers"):
+        optics.register_glass("test-glass", (1.0, np.nan, 1.0), c)
+    optics.register_glass("test-glass", b, c)
+    try:
+        with pytest.raises(ValueError, match="already registered; pass replace=True"):
+            optics.register_glass("TEST-GLASS", b, c)
+        optics.register_glass("test-glass", b, c, replace=True)
+        assert optics.refractive_index("test-glass", 587.6) == pytest.approx(1.5168, abs=1e-4)
+    finally:
+        optics.GLASSES.unregister("TEST-GLASS")
+
+
 def test_thesis_prism_deviation_and_shear():
     prism = DoubleAmiciPrism(phi1=85.9, phi3=73.7)
     wl = np.linspace(450, 650, 41)

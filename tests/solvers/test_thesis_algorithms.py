@@ -62,6 +62,16 @@ def test_pnp_denoisers_plug_in():
     assert calls and q_mine == pytest.approx(q_tv) and np.isfinite(q_wav)
     with pytest.raises(ValueError, match="unknown denoiser 'bm4d'.*tv.*wavelet"):
         tc.reconstruct(p.system, p.measurement, "pnp_admm", denoiser="bm4d")
+    den = tc.solvers.denoisers
+    with pytest.raises(ValueError, match="'tv' is a built-in denoiser"):
+        den.register_denoiser("tv", mine, replace=True)
+    den.register_denoiser("mine_test", mine)
+    try:
+        with pytest.raises(ValueError, match="already registered"):
+            den.register_denoiser("mine_test", mine)
+        assert "mine_test" in den.denoisers()
+    finally:
+        den.DENOISERS.unregister("mine_test")
 
 
 @pytest.mark.parametrize(

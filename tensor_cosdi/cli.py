@@ -303,7 +303,65 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
     rec.set_defaults(func=run_reconstruct)
+
+    tr = sub.add_parser(
+        "train-denoiser",
+        help="train the learned spectral denoiser (needs torch) on the tuning scenes",
+    )
+    tr.add_argument("--out", required=True, help="weights file to write (.pt)")
+    tr.add_argument("--steps", type=_positive_int, default=6000, help="optimiser steps")
+    tr.add_argument("--batch", type=_positive_int, default=16, help="patches per step")
+    tr.add_argument("--patch", type=_positive_int, default=64, help="patch side (even)")
+    tr.add_argument("--width", type=_positive_int, default=64, help="convolution channels")
+    tr.add_argument("--blocks", type=_positive_int, default=4, help="residual blocks")
+    tr.add_argument("--seed", type=int, default=0, help="seed of patches and noise (default 0)")
+    tr.add_argument("--data", help="folder of the NAME.npz scenes (default: datasets.data_dir())")
+    tr.add_argument("--device", help="cpu, cuda, … (default: cuda when available)")
+    tr.add_argument("--threads", type=_positive_int, help="CPU threads for torch")
+    tr.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
+    tr.add_argument(
+        "--stop-after", type=_positive_int, help="stop this run after N steps (resume later)"
+    )
+    tr.add_argument("--force", action="store_true", help="overwrite OUT and start over")
+    tr.add_argument("--quiet", action="store_true", help="no progress bar")
+    tr.set_defaults(func=run_train_denoiser)
     return parser
+
+
+def run_train_denoiser(args) -> int:
+    from .learn import require_torch
+    from .learn.train import TrainConfig, train_denoiser
+
+    torch = require_torch()
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    cfg = TrainConfig(
+        steps=args.steps,
+        batch=args.batch,
+        patch=args.patch,
+        width=args.width,
+        blocks=args.blocks,
+        seed=args.seed,
+    )
+    summary = train_denoiser(
+        args.out,
+        cfg,
+        resume=args.resume,
+        force=args.force,
+        device=args.device,
+        folder=args.data,
+        progress=not args.quiet,
+        command="tensor-cosdi " + " ".join(sys.argv[1:]) if sys.argv else None,
+        stop_after=args.stop_after,
+    )
+    if not summary["finished"]:
+        print(f"stopped at step {summary['steps']}; continue with the same command and --resume")
+        return 0
+    print(
+        f"wrote {args.out}: {summary['steps']} steps, loss {summary['final_loss']:.3e}, "
+        f"{summary['seconds']:.0f} s on {summary['device']}"
+    )
+    return 0
 
 
 def _positive_int(text: str) -> int:
@@ -321,7 +379,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+    except (ValueError, FileExistsError, FileNotFoundError, ImportError) as exc:
         print(f"tensor-cosdi {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -6,7 +6,14 @@ import numpy as np
 
 from . import _backend as B
 
-__all__ = ["add_noise", "snr_db", "estimate_sigma", "estimate_snr_db", "auto_weight"]
+__all__ = [
+    "add_noise",
+    "snr_db",
+    "estimate_sigma",
+    "estimate_snr_db",
+    "snr_schedule",
+    "auto_weight",
+]
 
 
 def snr_db(clean, noisy) -> float:
@@ -79,6 +86,31 @@ def estimate_snr_db(measurement) -> float:
         raise ValueError("the measurement is all zero: there is no signal to reconstruct")
     sigma = estimate_sigma(g)
     return float("inf") if sigma == 0 else 10.0 * np.log10(power / sigma**2)
+
+
+def snr_schedule(snr_db: float, anchors: dict) -> float:
+    """A weight from ``anchors = {SNR dB: weight}``: log-linear between them, constant beyond.
+
+    ``snr_schedule(35, {40: 0.3, 30: 1.0})`` is ``√(0.3 · 1.0)``; an
+    infinite SNR takes the weight of the highest anchor.
+    """
+    if not anchors:
+        raise ValueError("snr_schedule needs at least one (SNR dB, weight) anchor")
+    pts = sorted((float(k), float(v)) for k, v in anchors.items())
+    if any(v <= 0 for _, v in pts):
+        raise ValueError(f"anchor weights must be > 0, got {anchors}")
+    snr = float(snr_db)
+    if np.isnan(snr):
+        raise ValueError("snr_db is NaN")
+    if snr <= pts[0][0]:
+        return pts[0][1]
+    if snr >= pts[-1][0]:
+        return pts[-1][1]
+    for (s0, w0), (s1, w1) in zip(pts, pts[1:]):
+        if s0 <= snr <= s1:
+            t = (snr - s0) / (s1 - s0)
+            return float(w0 * (w1 / w0) ** t)
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 def auto_weight(

@@ -5,6 +5,7 @@ floors with margin under the values the examples print (seeded), so a broken
 operator, solver or depth estimator fails here, not only a crash.
 """
 
+import importlib.util
 import runpy
 from pathlib import Path
 
@@ -118,6 +119,8 @@ def _real_spectra(ns):
     p = ns["psnr"]
     for name in ("gap_tv", "otd", "otd_nl"):
         assert p[name] > p["lsq"] + 1.5, p
+    if importlib.util.find_spec("torch") is not None:  # the learned prior runs where torch is
+        assert p["pnp_gap"] > p["lsq"] + 1.5, p
 
 
 CHECKS = {

@@ -17,6 +17,7 @@ from .lsq import regularised_lsq
 from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
+from .pnp_gap import pnp_gap
 
 __all__ = [
     "Result",
@@ -36,6 +37,7 @@ __all__ = [
     "avsi",
     "pnp_admm",
     "pnp_admm_operator",
+    "pnp_gap",
     "denoisers",
     "multiresolution_dfa",
     "nonlocal_tucker",

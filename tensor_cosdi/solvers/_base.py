@@ -74,12 +74,23 @@ class Result:
 
 @dataclass(frozen=True)
 class Method:
-    """A registered reconstruction method: the function, every option with its default, one line."""
+    """A registered reconstruction method: the function, every option with its default, one line.
+
+    ``requires`` names the optional modules its *defaults* need (``("torch",)``
+    for the learned prior); :attr:`available` says whether they import.
+    """
 
     func: Callable
     defaults: dict = field(default_factory=dict)
     summary: str = ""
     name: str = ""
+    requires: tuple = ()
+
+    @property
+    def available(self) -> bool:
+        import importlib.util
+
+        return all(importlib.util.find_spec(m) is not None for m in self.requires)
 
     def __call__(self, system, measurement, **options):
         return reconstruct(system, measurement, self.name, **options)
@@ -91,7 +102,13 @@ METHODS = Registry("method")
 
 
 def register_method(
-    name: str, func: Callable, defaults: dict, summary: str = "", *, replace: bool = False
+    name: str,
+    func: Callable,
+    defaults: dict,
+    summary: str = "",
+    *,
+    replace: bool = False,
+    requires: tuple = (),
 ) -> None:
     """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
 
@@ -103,7 +120,10 @@ def register_method(
         raise ValueError(f"a method must be callable, got {func!r}")
     builtin = getattr(func, "__module__", "").startswith("tensor_cosdi.")
     METHODS.register(
-        name, Method(func, dict(defaults), summary, name), replace=replace, builtin=builtin
+        name,
+        Method(func, dict(defaults), summary, name, tuple(requires)),
+        replace=replace,
+        builtin=builtin,
     )
 
 

@@ -16,7 +16,15 @@ import numpy as np
 from .. import _backend as B
 from .._registry import Registry
 
-__all__ = ["DENOISERS", "denoise", "register_denoiser", "denoisers", "tv", "wavelet"]
+__all__ = [
+    "DENOISERS",
+    "denoise",
+    "register_denoiser",
+    "denoisers",
+    "tv",
+    "wavelet",
+    "spectral_net",
+]
 
 DENOISERS = Registry("denoiser")
 """``name → denoise(x, sigma)``, read-only; add yours with :func:`register_denoiser`."""
@@ -58,6 +66,21 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
     return B.tensor_like(out.reshape(shape), x)
 
 
+_NETS: dict = {}
+
+
+def spectral_net(x, sigma: float, *, weights=None, rank=None):
+    """The learned spectral denoiser (:class:`tensor_cosdi.learn.spectral_net.SpectralDenoiser`,
+    needs torch): a small CNN on the eigen-images of the cube's spectral subspace, for any band
+    count, noise ``sigma``.  ``weights`` default: the shipped ones (loaded once)."""
+    from ..learn.spectral_net import SpectralDenoiser
+
+    key = (None if weights is None else str(weights), rank)
+    if key not in _NETS:
+        _NETS[key] = SpectralDenoiser(weights, rank=rank)
+    return _NETS[key](x, sigma)
+
+
 def register_denoiser(name: str, func: Callable, *, replace: bool = False) -> None:
     """Make ``func(x, sigma)`` available to PnP methods as ``denoiser=name``.
 
@@ -93,3 +116,4 @@ def resolve(name_or_callable) -> Callable:
 
 register_denoiser("tv", tv)
 register_denoiser("wavelet", wavelet)
+register_denoiser("spectral_net", spectral_net)

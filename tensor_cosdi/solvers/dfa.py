@@ -59,7 +59,8 @@ def fista_tv(
 
     :func:`tensor_cosdi.solvers.engine.fista` with the
     :class:`~tensor_cosdi.solvers.priors.TV` prior; ``tv_weight / 10`` is
-    relative to the largest value of ``start``.  Returns ``(x, history, converged)``.
+    relative to the robust peak of ``start`` (its 99.9th percentile).  Returns
+    ``(x, history, converged)``.
     """
     return engine.fista(
         op,

@@ -26,8 +26,9 @@ per-iteration history and timing — is :class:`Loop`, written once.
 relative to the data, in one place, :meth:`~priors.Prior.setup`: a sparsity
 weight ``lam`` is a threshold of ``lam · RMS(start)`` cube units at the
 engine's penalty (``λ = lam · RMS(start) · s`` for ADMM with ``ρ = mu · s``),
-a TV or denoiser weight ``w`` a denoising strength of ``w · max|start|``;
-penalties (``ρ``, ``ε``) are relative to the sensing gain
+a TV or denoiser weight ``w`` a denoising strength of ``w · P₉₉.₉|start|``
+(the 99.9th percentile, :func:`~priors.robust_peak` — not the maximum, which
+one noisy pixel of the start sets); penalties (``ρ``, ``ε``) are relative to the sensing gain
 ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`),
 so no option depends on the measurement's scale.
 """

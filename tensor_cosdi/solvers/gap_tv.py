@@ -24,12 +24,12 @@ def gap_tv(
     system,
     measurement,
     *,
-    max_iter: int = 60,
-    tv_weight: float = 0.05,
+    max_iter: int = 80,
+    tv_weight: float = 0.3,
     accelerate: bool = True,
     tol: float = 1e-4,
     eps: float = 1e-6,
-    tv_iter: int = 50,
+    tv_iter: int = 10,
     progress: bool = False,
 ):
     """GAP-TV (Yuan 2016) for any system: ``x ← D_TV(x + Aᵀ (AAᵀ + εI)⁻¹ (ĝ − A x))``.
@@ -38,10 +38,15 @@ def gap_tv(
     for diagonal ``A Aᵀ``; per-pixel blocks, banded rows or CG otherwise) with
     ``ε = eps · s`` relative to the sensing gain ``s``.  With ``accelerate``
     the measurement is replaced by the running ``ĝ ← ĝ + (g − A x)`` of
-    accelerated GAP.  ``tv_weight`` is relative to the largest value of the
-    first (least-norm) estimate.  Stops when the relative change of ``x`` is
-    below ``tol`` or after ``max_iter`` iterations; ``tv_iter`` Chambolle
-    iterations per TV step.  Registered as ``"gap_tv"``.
+    accelerated GAP.  ``tv_weight`` is relative to the robust peak (99.9th
+    percentile) of the first (least-norm) estimate.  Stops when the relative
+    change of ``x`` is below ``tol`` or after ``max_iter`` iterations;
+    ``tv_iter`` Chambolle iterations per TV step.  Registered as ``"gap_tv"``.
+
+    The defaults (80 iterations, weight 0.3, 10 Chambolle steps) were
+    chosen on the tuning scenes of :mod:`tensor_cosdi.datasets` (balloons,
+    flowers, clay; SD-CASSI, TSA mask): 27.35 / 25.91 dB noiseless / 30 dB,
+    against 27.24 / 25.88 at weight 0.2 and 26.29 / 25.15 at 0.1.
     """
     return gap_tv_operator(
         system.operator,
@@ -104,12 +109,12 @@ register_method(
     "gap_tv",
     gap_tv,
     {
-        "max_iter": 60,
-        "tv_weight": 0.05,
+        "max_iter": 80,
+        "tv_weight": 0.3,
         "accelerate": True,
         "tol": 1e-4,
         "eps": 1e-6,
-        "tv_iter": 50,
+        "tv_iter": 10,
         "progress": False,
     },
     "generalised alternating projection with a TV denoiser",

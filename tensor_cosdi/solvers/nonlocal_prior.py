@@ -24,7 +24,8 @@ step of :class:`NonlocalTucker` on a cube ``v (Nx, Ny, Nλ)``:
    ``v' = E' ×₃ U``.
 
 ``σ`` anneals geometrically from ``sigma`` to ``sigma_end`` (relative to the
-start's peak) over the iterations, as in plug-and-play GAP.  The method
+start's robust peak, :func:`~.priors.robust_peak`) over the iterations, as in
+plug-and-play GAP.  The method
 ``"otd_nl"`` is the GAP engine with this prior, started from OTD's subspace
 GAP-TV estimate.
 """
@@ -35,7 +36,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .. import _backend as B
-from .priors import Prior
+from .priors import Prior, robust_peak
 
 __all__ = ["NonlocalTucker", "block_match", "group_low_rank", "nonlocal_tucker"]
 
@@ -145,7 +146,7 @@ class NonlocalTucker(Prior):
 
     def setup(self, start, *, penalty, gain):
         super().setup(start, penalty=penalty, gain=gain)
-        self.peak = max(float(np.max(np.abs(B.to_numpy(start)))), np.finfo(float).tiny)
+        self.peak = robust_peak(start)
         self.calls = 0
         self.groups = None
 

@@ -58,7 +58,7 @@ def pnp_admm_operator(
     :func:`tensor_cosdi.solvers.engine.admm` with a
     :class:`~tensor_cosdi.solvers.priors.Denoiser` prior.  ``rho`` is
     relative to the sensing gain of ``op``; ``sigma`` (the denoiser
-    strength) relative to the largest value of the start.  ``tie`` =
+    strength) relative to the robust peak (99.9th percentile) of the start.  ``tie`` =
     ``(T, t, weight)`` adds ``weight/2 ‖T x − t‖²`` (the hierarchical
     coupling); then the x-step runs on the stacked normal equations by
     warm-started CG.  Returns ``(x, history, converged)``.
@@ -196,7 +196,7 @@ def pnp_admm(
     rho : float
         ADMM penalty, relative to the sensing gain.
     sigma : float
-        Denoiser strength relative to the largest value of the first estimate.
+        Denoiser strength relative to the robust peak of the first estimate.
     tie_weight : float
         Weight of the coupling "band sum of F = mean fringe image" in stage 2.
     n_steps : int or None

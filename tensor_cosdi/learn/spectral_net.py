@@ -1,0 +1,220 @@
+"""A learned spectral denoiser for plug-and-play reconstruction with any system (optional torch).
+
+The denoiser is band-count agnostic because it works in a spectral subspace:
+
+1. the cube ``x (rows, columns, channels)`` (any trailing axes are folded
+   into ``channels``) is scaled by its robust peak ``s`` (the 99.9th
+   percentile of ``|x|``: a plug-and-play iterate has outliers);
+2. its ``r`` leading spectral eigenvectors ``U (channels, r)`` (the Tucker /
+   HOSVD factor of the band mode, from the ``channels × channels`` Gram
+   matrix) give ``r`` eigen-images ``Y = x ×₃ Uᵀ``; each eigenvector's sign
+   makes its eigen-image sum non-negative, and ranks below the network's
+   ``r_max`` are zero-padded;
+3. a small convolutional network at half resolution (pixel-unshuffle by 2
+   and a noise map ``σ/s`` as in FFDNet; a linear 3×3 path plus residual
+   blocks; pixel-shuffle back) predicts the noise of ``Y``;
+4. the denoised cube is ``(Y − N̂) ×₃ U · s`` — the orthogonal complement of
+   the subspace, mostly noise on real spectra, is dropped.
+
+White Gaussian noise of level ``σ`` stays white with level ``σ`` on the
+eigen-images (``U`` is orthonormal), so one network trained on additive
+Gaussian noise serves every band count, every system and every noise level
+in its training range.  Trained by :mod:`tensor_cosdi.learn.train` on the
+tuning scenes of :mod:`tensor_cosdi.datasets` (never the report scenes);
+the shipped weights and the command that produced them are described in
+``tensor_cosdi/learn/weights/README.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .. import _backend as B
+from . import require_torch
+
+__all__ = ["SubspaceDenoiserNet", "SpectralDenoiser", "subspace", "default_weights"]
+
+WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
+DEFAULT_WEIGHTS = WEIGHTS_DIR / "spectral_denoiser.pt"
+
+
+def default_weights() -> Path:
+    """The shipped weights file (``FileNotFoundError`` naming the training command if absent)."""
+    if not DEFAULT_WEIGHTS.is_file():
+        raise FileNotFoundError(
+            f"no shipped denoiser weights at {DEFAULT_WEIGHTS}; train them with "
+            "`tensor-cosdi train-denoiser --out weights.pt` and pass weights='weights.pt'"
+        )
+    return DEFAULT_WEIGHTS
+
+
+def _build_net(torch, r_max: int, width: int, blocks: int):
+    nn = torch.nn
+
+    class _Block(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.a = nn.Conv2d(width, width, 3, padding=1)
+            self.b = nn.Conv2d(width, width, 3, padding=1)
+            nn.init.kaiming_normal_(self.a.weight, nonlinearity="relu")
+            nn.init.zeros_(self.a.bias)
+            nn.init.zeros_(self.b.weight)  # each block starts as the identity
+            nn.init.zeros_(self.b.bias)
+
+        def forward(self, x):
+            return x + self.b(torch.relu(self.a(x)))
+
+    class SubspaceDenoiserNet(nn.Module):
+        """Noise of ``r_max`` eigen-images ``(batch, r_max, H, W)`` given ``σ`` ``(batch,)``.
+
+        Half resolution (pixel-unshuffle) with a noise-level map; a linear
+        3×3 path (zero at the start) plus head, ``blocks`` residual blocks and
+        tail — the linear path learns the bulk of the noise in the first
+        hundred steps, the blocks the rest.
+        """
+
+        def __init__(self):
+            super().__init__()
+            self.r_max, self.width, self.blocks = r_max, width, blocks
+            cin, cout = 4 * r_max + 1, 4 * r_max
+            self.linear = nn.Conv2d(cin, cout, 3, padding=1)
+            nn.init.zeros_(self.linear.weight)
+            nn.init.zeros_(self.linear.bias)
+            self.head = nn.Conv2d(cin, width, 3, padding=1)
+            self.body = nn.Sequential(*[_Block() for _ in range(blocks)])
+            self.tail = nn.Conv2d(width, cout, 3, padding=1)
+            nn.init.zeros_(self.tail.weight)  # the network starts as "no noise"
+            nn.init.zeros_(self.tail.bias)
+            self.down = nn.PixelUnshuffle(2)
+            self.up = nn.PixelShuffle(2)
+
+        def forward(self, y, sigma):
+            h, w = y.shape[-2:]
+            ph, pw = h % 2, w % 2
+            if ph or pw:  # odd sizes: repeat one row / column, crop after
+                y = torch.nn.functional.pad(y, (0, pw, 0, ph), mode="replicate")
+            d = self.down(y)
+            smap = sigma.reshape(-1, 1, 1, 1).to(d.dtype).expand(-1, 1, *d.shape[-2:])
+            d = torch.cat([d, smap], dim=1)
+            noise = self.up(self.linear(d) + self.tail(self.body(self.head(d))))
+            return noise[..., :h, :w]
+
+    return SubspaceDenoiserNet()
+
+
+def SubspaceDenoiserNet(r_max: int = 12, width: int = 64, blocks: int = 4):  # noqa: N802
+    """The network (a ``torch.nn.Module``) of the module docstring, untrained."""
+    torch = require_torch()
+    return _build_net(torch, int(r_max), int(width), int(blocks))
+
+
+def subspace(x, r: int, r_max: int):
+    """``(Y, U)`` for a torch batch ``x (batch, P, C)``: eigen-images ``Y (batch, r_max, P)``
+    (zero rows beyond ``min(r, C)``) and orthonormal ``U (batch, C, min(r, C))``.
+
+    Signs: each eigen-image sums to ≥ 0.  The Gram matrix is formed in float64.
+    """
+    torch = require_torch()
+    k = min(int(r), x.shape[-1], int(r_max))
+    gram = torch.matmul(x.transpose(1, 2).double(), x.double())
+    _, vec = torch.linalg.eigh(gram)
+    u = vec.flip(-1)[..., :k].to(x.dtype)
+    y = torch.matmul(x, u)  # (batch, P, k)
+    sign = torch.where(y.sum(dim=1, keepdim=True) < 0, -1.0, 1.0).to(x.dtype)
+    u, y = u * sign, y * sign
+    out = torch.zeros(x.shape[0], int(r_max), x.shape[1], dtype=x.dtype, device=x.device)
+    out[:, :k] = y.transpose(1, 2)
+    return out, u
+
+
+def _robust_peak(t, q: float = 0.999) -> float:
+    """The ``q`` quantile of ``|t|`` (as :func:`tensor_cosdi.solvers.priors.robust_peak`): the
+    scale the network sees its input at.  Not the maximum, which one outlier of a plug-and-play
+    iterate sets."""
+    flat = t.detach().abs().reshape(-1)
+    k = min(int(math.ceil(q * (flat.numel() - 1))), flat.numel() - 1)
+    p = float(flat.kthvalue(k + 1).values)
+    return p if p > 0 else float(flat.max())
+
+
+class SpectralDenoiser:
+    """The learned denoiser as a plug-in ``denoise(x, sigma) -> x``.
+
+    Parameters
+    ----------
+    weights : path, optional
+        A checkpoint written by :func:`tensor_cosdi.learn.train.train_denoiser`
+        (default: the shipped one).
+    rank : int, optional
+        Spectral subspace size (default and maximum: the network's ``r_max``).
+    device : str, optional
+        ``"cpu"``, ``"cuda"``…; default: the input's device for torch
+        tensors, else CUDA when available, else CPU.
+    """
+
+    def __init__(self, weights=None, *, rank: int | None = None, device=None):
+        torch = require_torch()
+        path = Path(weights) if weights is not None else default_weights()
+        if not path.is_file():
+            raise FileNotFoundError(f"denoiser weights not found: {path}")
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+        try:
+            cfg = ckpt["config"]
+            self.net = _build_net(torch, int(cfg["r_max"]), int(cfg["width"]), int(cfg["blocks"]))
+            self.net.load_state_dict(ckpt["model"])
+        except (KeyError, TypeError, RuntimeError) as exc:
+            raise ValueError(
+                f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
+                f"({exc})"
+            ) from None
+        self.net.eval()
+        self.r_max = int(cfg["r_max"])
+        if rank is None:
+            rank = self.r_max
+        if isinstance(rank, bool) or not isinstance(rank, (int, np.integer)) or rank < 1:
+            raise ValueError(f"rank must be a positive integer, got {rank!r}")
+        if rank > self.r_max:
+            raise ValueError(f"rank {rank} exceeds the network's r_max {self.r_max}")
+        self.rank = int(rank)
+        self.device = device
+        self.path = path
+
+    def _device(self, x):
+        torch = require_torch()
+        if self.device is not None:
+            return torch.device(self.device)
+        if isinstance(x, torch.Tensor):
+            return x.device
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+    def __call__(self, x, sigma):
+        torch = require_torch()
+        sigma = float(sigma)
+        if not np.isfinite(sigma) or sigma < 0:
+            raise ValueError(f"sigma must be a finite noise level ≥ 0, got {sigma!r}")
+        shape = tuple(x.shape)
+        if len(shape) < 3:
+            raise ValueError(f"expected a cube (rows, columns, channels…), got shape {shape}")
+        dev = self._device(x)
+        t = x if isinstance(x, torch.Tensor) else torch.from_numpy(np.asarray(B.to_numpy(x)))
+        work_dtype = torch.float32
+        t = t.to(device=dev, dtype=work_dtype).reshape(shape[0], shape[1], -1)
+        scale = _robust_peak(t)
+        if scale <= 0 or not np.isfinite(scale):
+            return x
+        self.net.to(dev)
+        flat = (t / scale).reshape(1, shape[0] * shape[1], -1)
+        with torch.no_grad():
+            y, u = subspace(flat, self.rank, self.r_max)
+            y = y.reshape(1, self.r_max, shape[0], shape[1])
+            s = torch.tensor([sigma / scale], dtype=work_dtype, device=dev)
+            clean = y - self.net(y, s)
+            k = u.shape[-1]
+            out = torch.matmul(clean[:, :k].reshape(1, k, -1).transpose(1, 2), u.transpose(1, 2))
+        out = (out.reshape(shape) * scale).to(dtype=t.dtype)
+        if isinstance(x, torch.Tensor):
+            return out.to(device=x.device, dtype=x.dtype)
+        return B.tensor_like(out.cpu().numpy().astype(np.asarray(x).dtype, copy=False), x)

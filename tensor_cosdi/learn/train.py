@@ -1,0 +1,316 @@
+"""Training the learned spectral denoiser (``tensor-cosdi train-denoiser``).
+
+Patches of the tuning scenes (:data:`tensor_cosdi.datasets.TUNE_SCENES`; the
+report scenes are never read) at their native 31 bands or resampled to the
+28 KAIST bands, with random band ranges and strides (3 to 31 channels, so
+that the network serves any band count), random subspace ranks, flips and
+rotations, plus white Gaussian noise of a log-uniform level — for half of
+the batches (``coded_fraction``) with its projection onto the row space of a
+random SD-CASSI operator removed, which is the structured error a
+plug-and-play GAP step hands the denoiser (a network trained on white noise
+alone denoised white noise by 16 dB on a real scene but left that error
+untouched, and lost 5 dB to GAP-TV inside PnP-GAP).  Each sample is
+normalised as the denoiser normalises its input (by the noisy patch's
+peak); the loss is the squared error of the predicted eigen-image noise as
+a fraction of the noise energy (so every level weighs the same).  Adam (gradients
+clipped to norm 1) with a linear warm-up and a cosine-decayed step.
+
+Checkpoints (model, optimiser, step, random states) are written atomically
+to ``OUT.ckpt`` every ``checkpoint_every`` steps; ``resume=True`` continues
+from it with the same random stream, so an interrupted run ends with the
+weights an uninterrupted one would have written (on the same device and
+thread count).  The final weights (model, configuration, provenance) go to
+``OUT`` and are never written over without ``force=True``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import require_torch
+
+__all__ = ["TrainConfig", "train_denoiser", "training_data"]
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Every option of a training run (stored with the weights)."""
+
+    steps: int = 6000
+    batch: int = 16
+    patch: int = 64
+    lr: float = 1e-3
+    lr_end: float = 1e-5
+    sigma_min: float = 0.005
+    sigma_max: float = 0.25
+    warmup: int = 200
+    coded_fraction: float = 0.5
+    r_max: int = 12
+    width: int = 64
+    blocks: int = 4
+    seed: int = 0
+    checkpoint_every: int = 200
+
+    def check(self):
+        for name in ("steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        if self.patch < 8 or self.patch % 2:
+            raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
+        if not 0 <= self.coded_fraction <= 1:
+            raise ValueError(f"coded_fraction must lie in [0, 1], got {self.coded_fraction}")
+        if not 0 < self.sigma_min < self.sigma_max:
+            raise ValueError(
+                f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
+            )
+        if isinstance(self.warmup, bool) or not isinstance(self.warmup, int) or self.warmup < 0:
+            raise ValueError(f"warmup must be an integer ≥ 0, got {self.warmup!r}")
+        if not 0 < self.lr_end <= self.lr:
+            raise ValueError(f"need 0 < lr_end ≤ lr, got {self.lr_end}, {self.lr}")
+        return self
+
+
+def training_data(folder=None):
+    """The tuning scenes as float32 cubes: native bands and KAIST-resampled (a list)."""
+    from ..datasets import TUNE_SCENES, load_hsi
+
+    cubes = []
+    for name in TUNE_SCENES:
+        for wl in (None, "kaist"):
+            cubes.append(load_hsi(name, wl, folder=folder, dtype="float32")[0])
+    return cubes
+
+
+def _batch(rng, cubes, cfg: TrainConfig):
+    """One batch ``(clean (B, P, C), rank, (H, W))`` as NumPy, from the random stream ``rng``."""
+    cube = cubes[int(rng.integers(len(cubes)))]  # one band set per batch
+    nb = cube.shape[2]
+    if rng.random() < 0.2:
+        n = int(rng.integers(3, 13))
+        stride = 1
+    else:
+        stride = int(rng.choice([1, 1, 1, 2]))
+        n = int(rng.integers(max(3, nb // (2 * stride)), nb // stride + 1))
+    start = int(rng.integers(0, nb - (n - 1) * stride))
+    bands = start + stride * np.arange(n)
+    rank = cfg.r_max if rng.random() < 0.7 else int(rng.integers(3, cfg.r_max + 1))
+    p = cfg.patch
+    out = np.empty((cfg.batch, p, p, n), dtype=np.float32)
+    for i in range(cfg.batch):
+        c = cubes[int(rng.integers(len(cubes)))] if i else cube
+        if c.shape[2] != nb:
+            c = cube
+        r0 = int(rng.integers(0, c.shape[0] - p + 1))
+        c0 = int(rng.integers(0, c.shape[1] - p + 1))
+        patch = c[r0 : r0 + p, c0 : c0 + p][:, :, bands]
+        patch = np.rot90(patch, int(rng.integers(4)))
+        if rng.random() < 0.5:
+            patch = patch[::-1]
+        out[i] = patch
+    return out.reshape(cfg.batch, p * p, n), rank
+
+
+def _nullspace_noise(torch, noise, rng, p: int):
+    """White noise ``(B, p², n)`` minus its projection onto the row space of a random SD-CASSI
+    operator: ``(I − Aᵀ(AAᵀ)⁻¹A) n``, the error a plug-and-play GAP step leaves.
+
+    A random binary code per sample (density ½) and a random shift of 1 or 2
+    pixels per band; ``AAᵀ`` is diagonal (the code sums ``Φ``), so the
+    projection is one shear-sum, a division and the transposed shear.
+    """
+    b, _, n = noise.shape
+    step = int(rng.choice([1, 2]))
+    x = noise.reshape(b, p, p, n)
+    code = torch.from_numpy((rng.random((b, p, p)) < 0.5).astype(np.float32)).to(noise.device)
+    width = p + step * (n - 1)
+    g = torch.zeros(b, p, width, dtype=noise.dtype, device=noise.device)
+    phi = torch.zeros_like(g)
+    for band in range(n):
+        sl = slice(step * band, step * band + p)
+        g[:, :, sl] += code * x[..., band]
+        phi[:, :, sl] += code
+    r = torch.where(phi > 0, g / phi.clamp_min(1.0), torch.zeros_like(g))
+    proj = torch.stack([code * r[:, :, step * k : step * k + p] for k in range(n)], dim=-1)
+    return (x - proj).reshape(noise.shape)
+
+
+def _atomic_save(torch, obj, path: Path):
+    tmp = path.with_name(path.name + ".tmp")
+    torch.save(obj, tmp)
+    os.replace(tmp, path)
+
+
+def train_denoiser(
+    out,
+    config: TrainConfig | None = None,
+    *,
+    resume: bool = False,
+    force: bool = False,
+    device: str | None = None,
+    folder=None,
+    progress: bool = True,
+    command: str | None = None,
+    stop_after: int | None = None,
+):
+    """Train the spectral denoiser; write its weights to ``out``.  Returns a summary dict.
+
+    ``resume`` continues from ``OUT.ckpt`` (its configuration must be the
+    same; ``config=None`` takes the checkpoint's).  ``device``: ``"cpu"``,
+    ``"cuda"``… (default CUDA when available).  ``stop_after`` ends this run
+    after that many steps with a checkpoint and no weights (a time-boxed
+    session; resume later); the summary's ``finished`` says which happened.
+    ``command`` is stored as provenance.
+    """
+    torch = require_torch()
+    from tqdm import tqdm
+
+    from .spectral_net import _build_net, subspace
+
+    out = Path(out)
+    ckpt_path = out.with_name(out.name + ".ckpt")
+    if out.exists() and not force:
+        raise FileExistsError(f"{out} exists; pass force=True (--force) to write over it")
+    if not out.parent.is_dir():
+        raise FileNotFoundError(f"output folder {out.parent} does not exist")
+    dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
+    state = None
+    if resume:
+        if not ckpt_path.is_file():
+            raise FileNotFoundError(f"--resume: no checkpoint {ckpt_path}")
+        state = torch.load(ckpt_path, map_location="cpu", weights_only=True)
+        saved = TrainConfig(**json.loads(state["config"]))
+        if config is not None and config != saved:
+            raise ValueError(
+                f"--resume: the checkpoint was made with {saved}, not {config}; "
+                "resume without changing options"
+            )
+        config = saved
+    elif ckpt_path.exists() and not force:
+        raise FileExistsError(
+            f"{ckpt_path} (an earlier run's checkpoint) exists; pass resume=True (--resume) "
+            "to continue it or force=True (--force) to start over"
+        )
+    cfg = (config or TrainConfig()).check()
+    cubes = training_data(folder)
+    torch.manual_seed(cfg.seed)
+    rng = np.random.default_rng(cfg.seed)
+    net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks).to(dev)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    warm = min(cfg.warmup, cfg.steps - 1) if cfg.steps > 1 else 0
+
+    def lr_at(i):  # linear warm-up, then cosine decay to lr_end (a factor of lr)
+        if i < warm:
+            return (i + 1) / warm
+        t = (i - warm) / max(cfg.steps - warm, 1)
+        end = cfg.lr_end / cfg.lr
+        # a Python float: NumPy scalars in the scheduler state would not load with weights_only
+        return float(end + (1 - end) * 0.5 * (1 + math.cos(math.pi * t)))
+
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, lr_at)
+    step, losses, elapsed = 0, [], 0.0
+    if state is not None:
+        net.load_state_dict(state["model"])
+        opt.load_state_dict(state["optimizer"])
+        sched.load_state_dict(state["scheduler"])
+        step, losses = int(state["step"]), list(state["losses"])
+        elapsed = float(state["elapsed"])
+        rng.bit_generator.state = json.loads(state["rng"])
+        torch.set_rng_state(state["torch_rng"])
+
+    def checkpoint():
+        _atomic_save(
+            torch,
+            {
+                "model": net.state_dict(),
+                "optimizer": opt.state_dict(),
+                "scheduler": sched.state_dict(),
+                "step": step,
+                "losses": losses,
+                "elapsed": elapsed + time.perf_counter() - t0,
+                "rng": json.dumps(rng.bit_generator.state),
+                "torch_rng": torch.get_rng_state(),
+                "config": json.dumps(asdict(cfg)),
+            },
+            ckpt_path,
+        )
+
+    if stop_after is not None and (
+        isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 1
+    ):
+        raise ValueError(f"stop_after must be a positive integer, got {stop_after!r}")
+    last = cfg.steps if stop_after is None else min(cfg.steps, step + stop_after)
+    t0 = time.perf_counter()
+    bar = tqdm(total=cfg.steps, initial=step, desc="train-denoiser", disable=not progress)
+    log_lo, log_hi = np.log(cfg.sigma_min), np.log(cfg.sigma_max)
+    net.train()
+    while step < last:
+        clean_np, rank = _batch(rng, cubes, cfg)
+        sig_np = np.exp(rng.uniform(log_lo, log_hi, cfg.batch)).astype(np.float32)
+        clean = torch.from_numpy(clean_np).to(dev)
+        sig = torch.from_numpy(sig_np).to(dev)
+        noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
+        if rng.random() < cfg.coded_fraction:
+            noise = _nullspace_noise(torch, noise, rng, cfg.patch)
+        noisy = clean + noise
+        scale = noisy.abs().amax(dim=(1, 2)).clamp_min(1e-6)
+        noisy, clean = noisy / scale[:, None, None], clean / scale[:, None, None]
+        y, u = subspace(noisy, rank, cfg.r_max)
+        k = u.shape[-1]
+        target = torch.zeros_like(y)
+        target[:, :k] = torch.matmul(clean, u).transpose(1, 2)
+        p = cfg.patch
+        y = y.reshape(cfg.batch, cfg.r_max, p, p)
+        target = target.reshape(cfg.batch, cfg.r_max, p, p)
+        rel = sig / scale
+        pred = net(y, rel)
+        # noise energy left, as a fraction of the input's (every level weighs the same)
+        loss = torch.mean(torch.mean((pred - (y - target)) ** 2, dim=(1, 2, 3)) / rel**2) * (
+            cfg.r_max / min(rank, clean.shape[-1])
+        )
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
+        opt.step()
+        sched.step()
+        step += 1
+        losses.append(loss.item())
+        bar.update(1)
+        if step % 20 == 0:
+            bar.set_postfix(loss=f"{np.mean(losses[-20:]):.2e}")
+        if step % cfg.checkpoint_every == 0 or step == last:
+            checkpoint()
+    bar.close()
+    if step < cfg.steps:
+        return {"steps": step, "finished": False, "checkpoint": str(ckpt_path)}
+    total = elapsed + time.perf_counter() - t0
+    summary = {
+        "steps": step,
+        "finished": True,
+        "final_loss": float(np.mean(losses[-100:])),
+        "seconds": total,
+        "device": str(dev),
+        "threads": torch.get_num_threads(),
+        "torch": torch.__version__,
+        "command": command,
+        "scenes": "datasets.TUNE_SCENES",
+    }
+    net_cpu = {k: v.detach().cpu() for k, v in net.state_dict().items()}
+    _atomic_save(
+        torch,
+        {
+            "model": net_cpu,
+            "config": {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},
+            "train_config": json.dumps(asdict(cfg)),
+            "summary": json.dumps(summary),
+        },
+        out,
+    )
+    return summary

@@ -1,0 +1,179 @@
+"""The learned spectral denoiser: errors without torch, the shipped weights on a real crop, any
+band count, training with checkpoints and an exact resume, and PnP-GAP with it."""
+
+import importlib.util
+import sys
+
+import numpy as np
+import pytest
+
+import tensor_cosdi as tc
+from tensor_cosdi import datasets, metrics
+
+HAS_TORCH = importlib.util.find_spec("torch") is not None
+needs_torch = pytest.mark.skipif(not HAS_TORCH, reason="PyTorch is not installed")
+
+
+def _real(name="face", shape=(64, 64)):
+    try:
+        return datasets.load_hsi(name, "kaist", shape=shape, dtype="float32")[0]
+    except FileNotFoundError:
+        pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
+
+
+def test_without_torch_the_error_names_the_extra(monkeypatch):
+    from tensor_cosdi.learn import require_torch
+
+    monkeypatch.setitem(sys.modules, "torch", None)  # import torch now raises ImportError
+    with pytest.raises(ImportError, match=r"tensor_cosdi\[torch\]"):
+        require_torch()
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
+    with pytest.raises(ImportError, match="pip install"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap")
+
+
+def test_pnp_gap_runs_without_torch_with_a_classical_denoiser():
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30, rng=0)
+    lsq = tc.studies.score(p, tc.reconstruct(p.system, p.measurement, "lsq").cube)["psnr"]
+    res = tc.reconstruct(
+        p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=20, warm="gap_tv"
+    )
+    assert tc.studies.score(p, res.cube)["psnr"] > lsq + 1.0
+    assert res.iterations == 80 + 20  # warm start + PnP iterations, one history
+    with pytest.raises(ValueError, match="warm must be one of"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="wdct")
+    with pytest.raises(ValueError, match="accelerate must be"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", accelerate=1)
+    with pytest.raises(ValueError, match="eps must be 'auto'"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", eps="big")
+    with pytest.raises(ValueError, match="sigma_end must be"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", sigma_end=0)
+
+
+@needs_torch
+def test_shipped_weights_denoise_a_real_crop_beyond_the_subspace_projection():
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    den = SpectralDenoiser()
+    clean = _real("face")
+    rng = np.random.default_rng(0)
+    for sigma, gain in ((0.05, 3.0), (0.1, 3.0)):
+        noisy = clean + sigma * rng.standard_normal(clean.shape).astype(np.float32)
+        out = den(noisy, sigma)
+        assert out.shape == clean.shape and out.dtype == np.float32
+        flat = noisy.reshape(-1, clean.shape[2]).astype(np.float64)
+        _, u = np.linalg.eigh(flat.T @ flat)
+        u = u[:, ::-1][:, : den.rank]
+        proj = (flat @ u @ u.T).reshape(clean.shape)
+        p_proj = metrics.psnr(clean, proj, data_range=1.0)
+        p_net = metrics.psnr(clean, out, data_range=1.0)
+        # the network's own share: it must beat the bare spectral projection clearly
+        assert p_net > p_proj + gain, (sigma, p_net, p_proj)
+
+
+@needs_torch
+def test_any_band_count_and_extra_axes_and_torch_tensors():
+    import torch
+
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    den = SpectralDenoiser()
+    clean = _real("face", (33, 30))  # odd size on purpose
+    rng = np.random.default_rng(1)
+    for bands in (clean[..., :4], clean, clean[..., ::3]):
+        noisy = bands + 0.05 * rng.standard_normal(bands.shape).astype(np.float32)
+        out = den(noisy, 0.05)
+        assert out.shape == bands.shape
+        assert metrics.psnr(bands, out, data_range=1.0) > metrics.psnr(bands, noisy, data_range=1)
+    four = np.stack([clean[..., :8], 0.5 * clean[..., :8]], axis=-1)  # (x, y, λ, t)
+    out4 = den(four, 0.01)
+    assert out4.shape == four.shape
+    t = torch.from_numpy(clean.astype(np.float64))
+    out_t = den(t, 0.01)
+    assert isinstance(out_t, torch.Tensor) and out_t.dtype == torch.float64
+    np.testing.assert_allclose(out_t.numpy(), den(clean, 0.01), atol=1e-5)
+
+
+@needs_torch
+def test_bad_inputs_are_clear_errors(tmp_path):
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    den = SpectralDenoiser()
+    with pytest.raises(ValueError, match="sigma must be"):
+        den(np.ones((8, 8, 3), np.float32), -1.0)
+    with pytest.raises(ValueError, match="expected a cube"):
+        den(np.ones((8, 8), np.float32), 0.1)
+    with pytest.raises(ValueError, match="exceeds the network's r_max"):
+        SpectralDenoiser(rank=99)
+    with pytest.raises(FileNotFoundError, match="not found"):
+        SpectralDenoiser(tmp_path / "missing.pt")
+    import torch
+
+    torch.save({"something": 1}, tmp_path / "other.pt")
+    with pytest.raises(ValueError, match="not a spectral-denoiser checkpoint"):
+        SpectralDenoiser(tmp_path / "other.pt")
+
+
+@needs_torch
+def test_training_checkpoints_resume_exactly_and_never_overwrite(tmp_path):
+    import torch
+
+    from tensor_cosdi.learn.train import TrainConfig, train_denoiser
+
+    _real()  # skips without the scenes
+    cfg = TrainConfig(steps=4, batch=2, patch=16, width=8, blocks=1, r_max=4, checkpoint_every=1)
+    a = train_denoiser(tmp_path / "a.pt", cfg, progress=False, device="cpu")
+    assert a["finished"] and a["steps"] == 4
+    part = train_denoiser(tmp_path / "b.pt", cfg, progress=False, device="cpu", stop_after=2)
+    assert not part["finished"] and not (tmp_path / "b.pt").exists()
+    with pytest.raises(FileExistsError, match="--resume"):
+        train_denoiser(tmp_path / "b.pt", cfg, progress=False, device="cpu")
+    with pytest.raises(ValueError, match="resume without changing"):
+        train_denoiser(
+            tmp_path / "b.pt", TrainConfig(steps=5), resume=True, progress=False, device="cpu"
+        )
+    b = train_denoiser(tmp_path / "b.pt", cfg, resume=True, progress=False, device="cpu")
+    assert b["finished"] and b["steps"] == 4
+    wa = torch.load(tmp_path / "a.pt", weights_only=True)["model"]
+    wb = torch.load(tmp_path / "b.pt", weights_only=True)["model"]
+    for k in wa:
+        torch.testing.assert_close(wa[k], wb[k], rtol=0, atol=0)
+    with pytest.raises(FileExistsError, match="--force"):
+        train_denoiser(tmp_path / "a.pt", cfg, progress=False, device="cpu")
+    with pytest.raises(ValueError, match="patch must be"):
+        TrainConfig(patch=15).check()
+    # the trained file is a denoiser
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    out = SpectralDenoiser(tmp_path / "a.pt")(np.random.default_rng(0).random((16, 16, 5)), 0.1)
+    assert out.shape == (16, 16, 5)
+
+
+@needs_torch
+def test_cli_train_denoiser(tmp_path, capsys):
+    from tensor_cosdi import cli
+
+    _real()
+    out = tmp_path / "w.pt"
+    args = ["train-denoiser", "--out", str(out), "--steps", "2", "--batch", "2", "--patch", "16"]
+    args += ["--width", "8", "--blocks", "1", "--quiet", "--device", "cpu"]
+    assert cli.main(args + ["--stop-after", "1"]) == 0
+    assert "--resume" in capsys.readouterr().out and not out.exists()
+    assert cli.main(args + ["--resume"]) == 0
+    assert out.exists()
+    assert cli.main(args) == 2  # exists: refuses without --force
+    assert "--force" in capsys.readouterr().err
+
+
+@needs_torch
+def test_pnp_gap_with_the_learned_denoiser_beats_gap_tv_on_a_real_crop():
+    cube = _real("real_and_fake_apples", (64, 64))
+    rng = np.random.default_rng(3)
+    code = (rng.random((64, 64)) < 0.5).astype(np.float64)
+    system = tc.systems.SDCASSI(code, n_bands=28, shifts=2)
+    g = system.simulate(cube.astype(np.float64), snr_db=30, rng=0)
+    tv = tc.reconstruct(system, g, "gap_tv").cube
+    net = tc.reconstruct(system, g, "pnp_gap").cube
+    p_tv = metrics.psnr(cube, np.asarray(tv), data_range=1.0)
+    p_net = metrics.psnr(cube, np.asarray(net), data_range=1.0)
+    assert p_net > p_tv + 1.5, (p_net, p_tv)

@@ -115,3 +115,17 @@ def test_result_depth_of_mu_cosdi_modalities():
     assert calls == []  # nothing estimated until the depth is asked for
     assert res.depth.shape == (16, 16) and calls == [(16, 16, 4)]
     assert res.depth.shape == (16, 16) and len(calls) == 1  # computed once
+
+
+def test_threaded_tv_equals_one_scikit_image_call(monkeypatch):
+    from skimage.restoration import denoise_tv_chambolle
+
+    from tensor_cosdi.solvers import denoisers
+
+    x = np.random.default_rng(4).random((24, 20, 7)).astype(np.float32)
+    want = denoise_tv_chambolle(x, weight=0.1, max_num_iter=10, channel_axis=2)
+    for workers in (1, 2, 3):
+        monkeypatch.setattr(denoisers, "_workers", lambda c, w=workers: w)
+        got = denoisers.tv(x, 0.1, n_iter=10)
+        assert got.dtype == np.float32
+        np.testing.assert_array_equal(got, want)

@@ -32,6 +32,30 @@ ACCELERATE_ABOVE_DB = 38.0
 EPS = {30.0: 0.1, 20.0: 0.3}
 
 
+def gap_settings(measurement, accelerate, eps, *, need_snr: bool = False):
+    """``(accelerate, eps, snr)`` with ``"auto"`` values resolved from the estimated SNR.
+
+    ``accelerate="auto"``: only above :data:`ACCELERATE_ABOVE_DB`;
+    ``eps="auto"``: 1e-6 with acceleration, else :data:`EPS`.  ``snr`` is
+    ``None`` unless something needed it (or ``need_snr``).
+    """
+    for name, v in (("eps", eps), ("accelerate", accelerate)):
+        if isinstance(v, str) and v != "auto":
+            raise ValueError(f"{name} must be 'auto' or a value, got {v!r}")
+    snr = None
+    if need_snr or accelerate == "auto" or eps == "auto":
+        from ..noise import estimate_snr_db
+
+        snr = estimate_snr_db(measurement)
+    if accelerate == "auto":
+        accelerate = bool(snr >= ACCELERATE_ABOVE_DB)
+    elif not isinstance(accelerate, bool):
+        raise ValueError(f"accelerate must be True, False or 'auto', got {accelerate!r}")
+    if eps == "auto":
+        eps = 1e-6 if accelerate else snr_schedule(snr, EPS)
+    return accelerate, check_positive("eps", eps), snr
+
+
 def pnp_gap(
     system,
     measurement,
@@ -86,21 +110,9 @@ def pnp_gap(
     """
     for name, v in (("sigma", sigma), ("tol", tol)):
         check_positive(name, v)
-    for name, v in (("sigma_end", sigma_end), ("eps", eps), ("accelerate", accelerate)):
-        if isinstance(v, str) and v != "auto":
-            raise ValueError(f"{name} must be 'auto' or a value, got {v!r}")
-    snr = None
-    if "auto" in [v for v in (sigma_end, eps, accelerate) if isinstance(v, str)]:
-        from ..noise import estimate_snr_db
-
-        snr = estimate_snr_db(measurement)
-    if accelerate == "auto":
-        accelerate = bool(snr >= ACCELERATE_ABOVE_DB)
-    elif not isinstance(accelerate, bool):
-        raise ValueError(f"accelerate must be True, False or 'auto', got {accelerate!r}")
-    if eps == "auto":
-        eps = 1e-6 if accelerate else snr_schedule(snr, EPS)
-    eps = check_positive("eps", eps)
+    if isinstance(sigma_end, str) and sigma_end != "auto":
+        raise ValueError(f"sigma_end must be 'auto' or a value, got {sigma_end!r}")
+    accelerate, eps, snr = gap_settings(measurement, accelerate, eps, need_snr=sigma_end == "auto")
     if sigma_end == "auto":
         sigma_end = snr_schedule(snr, SIGMA_END)
     sigma_end = check_positive("sigma_end", sigma_end)

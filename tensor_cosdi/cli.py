@@ -209,6 +209,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tensor-cosdi", description="Compressive spectral and spectral-depth imaging"
     )
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"tensor-cosdi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
         "demo",

@@ -60,3 +60,12 @@ def test_demo_rejects_bad_sizes(capsys):
     assert "positive integer" in capsys.readouterr().err
     assert main(["demo", "--size", "18", "--quiet"]) == 2
     assert "multiple of 4" in capsys.readouterr().err
+
+
+def test_version_flag(capsys):
+    import tensor_cosdi
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"tensor-cosdi {tensor_cosdi.__version__}"

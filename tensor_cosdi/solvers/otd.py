@@ -53,10 +53,12 @@ _check_int = engine.check_int
 
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
-#: (:func:`tensor_cosdi.noise.snr_schedule`), chosen on the tuning scenes (balloons, flowers, clay;
-#: SD-CASSI, TSA mask): OTD 28.23 dB noiseless at 0.3 (27.78 at 0.1), 27.23 dB at 30 dB with 1.0
-#: (24.81 at 0.3, 26.73 at 0.6).  A noise-free TSA measurement estimates at 40-47 dB.
-PAN_WEIGHTS = {40.0: 0.3, 30.0: 1.0, 20.0: 2.0}
+#: (:func:`tensor_cosdi.noise.snr_schedule`), chosen on the tuning scenes (SD-CASSI, TSA mask):
+#: noiseless (balloons, flowers, clay) 28.23 dB at 0.3 (27.78 at 0.1, 27.69 at 0.6); 30 dB
+#: (balloons, clay) 27.19 dB at 2.0 (26.95 at 1.0, 27.02 at 1.5); 20 dB (balloons, clay, lam 0.3)
+#: 26.55 dB at 4.0 (24.82 at 2.0, 26.48 at 8.0).  A noise-free TSA measurement estimates at
+#: 40-47 dB.
+PAN_WEIGHTS = {40.0: 0.3, 30.0: 2.0, 20.0: 4.0}
 
 
 def _check_pan_weight(pan_weight):

@@ -1,13 +1,15 @@
-"""Plug-and-play GAP for every system: accelerated GAP with any denoiser, its level annealed.
+"""Plug-and-play GAP for every system: GAP with any denoiser, its level annealed.
 
-``ĝ ← ĝ + (g − A x)``, ``x ← D_σₜ(x + Aᵀ(AAᵀ + εI)⁻¹(ĝ − A x))`` —
+``ĝ ← ĝ + (g − A x)`` (accelerated GAP, on clean data),
+``x ← D_σₜ(x + Aᵀ(AAᵀ + εI)⁻¹(ĝ − A x))`` —
 :func:`tensor_cosdi.solvers.engine.gap` with a
 :class:`~tensor_cosdi.solvers.priors.Denoiser` prior whose ``σ`` falls
-geometrically from ``sigma`` to ``sigma_end`` (relative to the start's peak)
-over the iterations.  The default denoiser is the learned spectral one
-(``"spectral_net"``, needs torch: ``pip install "tensor_cosdi[torch]"``);
-``"tv"``, ``"wavelet"`` or any registered denoiser or callable
-``(x, sigma) -> x`` work without it.
+geometrically from ``sigma`` to ``sigma_end`` (relative to the start's
+robust peak) over the iterations, started from OTD.  Acceleration, ``ε``
+and ``sigma_end`` follow the measurement's estimated SNR unless given.
+The default denoiser is the learned spectral one (``"spectral_net"``, needs
+torch: ``pip install "tensor_cosdi[torch]"``); ``"tv"``, ``"wavelet"`` or
+any registered denoiser or callable ``(x, sigma) -> x`` work without it.
 """
 
 from __future__ import annotations

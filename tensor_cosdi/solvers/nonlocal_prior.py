@@ -36,7 +36,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .. import _backend as B
-from .priors import Prior, robust_peak
+from .priors import Prior, annealed, robust_peak
 
 __all__ = ["NonlocalTucker", "block_match", "group_low_rank", "nonlocal_tucker"]
 
@@ -151,8 +151,7 @@ class NonlocalTucker(Prior):
         self.groups = None
 
     def current_sigma(self) -> float:
-        t = min(self.calls / max(self.n_steps - 1, 1), 1.0)
-        return self.peak * self.sigma * (self.sigma_end / self.sigma) ** t
+        return self.peak * annealed(self.sigma, self.sigma_end, self.calls, self.n_steps)
 
     def prox(self, v):
         x = np.asarray(B.to_numpy(v))
@@ -194,7 +193,6 @@ class NonlocalTucker(Prior):
         return B.tensor_like(res, v)
 
 
-WARM_STARTS = ("otd", "gap_tv", "none")
 
 
 def nonlocal_tucker(
@@ -217,10 +215,10 @@ def nonlocal_tucker(
     tol: float = 1e-5,
     progress: bool = False,
 ):
-    """Accelerated GAP with the :class:`NonlocalTucker` prior.  Registered as ``"otd_nl"``.
+    """GAP with the :class:`NonlocalTucker` prior.  Registered as ``"otd_nl"``.
 
     Starts from the ``warm`` estimate (``"otd"``: the online Tucker
-    dictionary at its defaults; ``"gap_tv"``: 20 GAP-TV iterations;
+    dictionary at its defaults; ``"gap_tv"``: 20 GAP-TV iterations at its defaults;
     ``"none"``: the least-norm solution), then runs ``max_iter`` GAP
     iterations with the non-local prior, ``σ`` annealed from ``sigma`` to
     ``sigma_end`` (relative to the start's peak).  Works for any system whose
@@ -233,7 +231,6 @@ def nonlocal_tucker(
     """
     from . import engine
     from ._base import check_positive
-    from .priors import TV
 
     for name, v in (
         ("sigma", sigma),
@@ -252,25 +249,14 @@ def nonlocal_tucker(
         ("regroup_every", regroup_every, 1),
     ):
         engine.check_int(name, v, low)
-    if warm not in WARM_STARTS:
-        raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
-    from .pnp_gap import gap_settings
+    from .pnp_gap import gap_settings, warm_started_gap
 
     accelerate, eps, _ = gap_settings(measurement, accelerate, eps)
-    op, g = system.operator, measurement
+    g = measurement
     shape = system.cube_shape
     if min(shape[:2]) < patch:
         raise ValueError(
             f"otd_nl: patch {patch} is larger than the cube's spatial size {shape[:2]}"
-        )
-    start, hist = None, None
-    if warm == "otd":
-        from .otd import online_tucker_admm
-
-        start, hist, _ = online_tucker_admm(system, g, progress=progress)
-    elif warm == "gap_tv":
-        start, hist, _ = engine.gap(
-            op, g, TV(0.05), eps=eps, max_iter=20, progress=progress, desc="GAP-TV warm start"
         )
     prior = NonlocalTucker(
         sigma=sigma,
@@ -286,23 +272,19 @@ def nonlocal_tucker(
     )
     if len(shape) > 3:  # fold extra axes into the band axis for the prior
         prior = _Folded(prior, shape)
-    x, h2, conv = engine.gap(
-        op,
+    return warm_started_gap(
+        system,
         g,
         prior,
-        eps=eps,
+        warm=warm,
+        warm_iter=20,
         accelerate=accelerate,
-        start=start,
+        eps=eps,
         max_iter=max_iter,
         tol=tol,
         progress=progress,
         desc="GAP non-local Tucker",
-        objective=True,  # the prior is implicit: its term is 0
     )
-    if hist is not None:
-        hist.extend(h2)
-        h2 = hist
-    return x, h2, conv
 
 
 class _Folded(Prior):

@@ -120,14 +120,36 @@ def pnp_gap(
     sigma_end = check_positive("sigma_end", sigma_end)
     max_iter = engine.check_int("max_iter", max_iter, 1)
     warm_iter = engine.check_int("warm_iter", warm_iter, 1)
-    if warm not in WARM_STARTS:
-        raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
 
         require_torch()
-    op, g = system.operator, measurement
+    prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter)
+    return warm_started_gap(
+        system,
+        measurement,
+        prior,
+        warm=warm,
+        warm_iter=warm_iter,
+        accelerate=accelerate,
+        eps=eps,
+        max_iter=max_iter,
+        tol=tol,
+        progress=progress,
+        desc="PnP-GAP",
+    )
+
+
+def warm_started_gap(
+    system, g, prior, *, warm, warm_iter, accelerate, eps, max_iter, tol, progress, desc
+):
+    """:func:`~tensor_cosdi.solvers.engine.gap` with ``prior`` from a ``warm`` start
+    (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its defaults, OTD at its defaults,
+    or the least-norm solution); one history for both stages.  Returns ``(x, history,
+    converged)``."""
+    if warm not in WARM_STARTS:
+        raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -137,9 +159,8 @@ def pnp_gap(
         from .otd import online_tucker_admm
 
         start, hist, _ = online_tucker_admm(system, g, progress=progress)
-    prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter)
     x, h2, conv = engine.gap(
-        op,
+        system.operator,
         g,
         prior,
         eps=eps,
@@ -148,7 +169,7 @@ def pnp_gap(
         max_iter=max_iter,
         tol=tol,
         progress=progress,
-        desc="PnP-GAP",
+        desc=desc,
     )
     if hist is not None:
         hist.extend(h2)

@@ -100,6 +100,12 @@ def robust_peak(x) -> float:
 _peak = robust_peak
 
 
+def annealed(start: float, end: float, step: int, n_steps: int) -> float:
+    """Geometric annealing: ``start`` at step 0, ``end`` at step ``n_steps − 1`` and after."""
+    t = min(step / max(n_steps - 1, 1), 1.0)
+    return start * (end / start) ** t
+
+
 def total_variation(x) -> float:
     """Isotropic 2-D TV over axes 0 and 1, summed over every other index."""
     a = np.asarray(B.to_numpy(x))
@@ -309,8 +315,7 @@ class Denoiser(Prior):
 
     def current_sigma(self) -> float:
         """The level of the next call, in cube units."""
-        t = min(self.calls / max(self.n_steps - 1, 1), 1.0)
-        return self.peak * self.sigma * (self.sigma_end / self.sigma) ** t
+        return self.peak * annealed(self.sigma, self.sigma_end, self.calls, self.n_steps)
 
     def prox(self, v):
         self.strength = self.current_sigma()

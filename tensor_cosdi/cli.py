@@ -311,42 +311,57 @@ def build_parser() -> argparse.ArgumentParser:
         "train-denoiser",
         help="train the learned spectral denoiser (needs torch) on the tuning scenes",
     )
-    tr.add_argument("--out", required=True, help="weights file to write (.pt)")
-    tr.add_argument("--steps", type=_positive_int, default=6000, help="optimiser steps")
-    tr.add_argument("--batch", type=_positive_int, default=16, help="patches per step")
+    _training_options(tr, steps=6000, batch=16)
     tr.add_argument("--patch", type=_positive_int, default=64, help="patch side (even)")
     tr.add_argument("--width", type=_positive_int, default=64, help="convolution channels")
     tr.add_argument("--blocks", type=_positive_int, default=4, help="residual blocks")
-    tr.add_argument("--seed", type=int, default=0, help="seed of patches and noise (default 0)")
-    tr.add_argument("--data", help="folder of the NAME.npz scenes (default: datasets.data_dir())")
-    tr.add_argument("--device", help="cpu, cuda, … (default: cuda when available)")
-    tr.add_argument("--threads", type=_positive_int, help="CPU threads for torch")
-    tr.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
-    tr.add_argument(
-        "--stop-after", type=_positive_int, help="stop this run after N steps (resume later)"
-    )
-    tr.add_argument("--force", action="store_true", help="overwrite OUT and start over")
-    tr.add_argument("--quiet", action="store_true", help="no progress bar")
     tr.set_defaults(func=run_train_denoiser)
+
+    dc = sub.add_parser(
+        "train-dcosnet",
+        help="train D-CoSNet (thesis §7, needs torch) for one system on the tuning scenes",
+    )
+    _training_options(dc, steps=3000, batch=8)
+    dc.add_argument("--system", default="sd_cassi", help="sd_cassi or mu_cosdi (default sd_cassi)")
+    dc.add_argument("--bands", type=_positive_int, default=28, help="spectral bands (default 28)")
+    dc.add_argument("--shift", type=_positive_int, default=2, help="pixels per band (default 2)")
+    dc.add_argument("--stages", type=_positive_int, default=2, help="unfolded ADMM stages")
+    dc.add_argument("--width", type=_positive_int, default=32, help="channels of the arms' convs")
+    dc.add_argument("--unet-width", type=_positive_int, default=32, help="U-Net base channels")
+    dc.add_argument(
+        "--loss", default="l1+ssim", help="l1+ssim (Eq. 152), l1 or ssim (Table 2's ablation)"
+    )
+    dc.add_argument(
+        "--mask", default="tsa", help="tsa (crops of the real TSA mask), random, or a .npy/.mat"
+    )
+    dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
+    dc.set_defaults(func=run_train_dcosnet)
     return parser
 
 
-def run_train_denoiser(args) -> int:
+def _training_options(p, *, steps: int, batch: int):
+    p.add_argument("--out", required=True, help="weights file to write (.pt)")
+    p.add_argument("--steps", type=_positive_int, default=steps, help="optimiser steps")
+    p.add_argument("--batch", type=_positive_int, default=batch, help="samples per step")
+    p.add_argument("--seed", type=int, default=0, help="seed of samples and noise (default 0)")
+    p.add_argument("--data", help="folder of the NAME.npz scenes (default: datasets.data_dir())")
+    p.add_argument("--device", help="cpu, cuda, … (default: cuda when available)")
+    p.add_argument("--threads", type=_positive_int, help="CPU threads for torch")
+    p.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
+    p.add_argument(
+        "--stop-after", type=_positive_int, help="stop this run after N steps (resume later)"
+    )
+    p.add_argument("--force", action="store_true", help="overwrite OUT and start over")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _run_training(args, train, cfg) -> int:
     from .learn import require_torch
-    from .learn.train import TrainConfig, train_denoiser
 
     torch = require_torch()
     if args.threads:
         torch.set_num_threads(args.threads)
-    cfg = TrainConfig(
-        steps=args.steps,
-        batch=args.batch,
-        patch=args.patch,
-        width=args.width,
-        blocks=args.blocks,
-        seed=args.seed,
-    )
-    summary = train_denoiser(
+    summary = train(
         args.out,
         cfg,
         resume=args.resume,
@@ -365,6 +380,40 @@ def run_train_denoiser(args) -> int:
         f"{summary['seconds']:.0f} s on {summary['device']}"
     )
     return 0
+
+
+def run_train_denoiser(args) -> int:
+    from .learn.train import TrainConfig, train_denoiser
+
+    cfg = TrainConfig(
+        steps=args.steps,
+        batch=args.batch,
+        patch=args.patch,
+        width=args.width,
+        blocks=args.blocks,
+        seed=args.seed,
+    )
+    return _run_training(args, train_denoiser, cfg)
+
+
+def run_train_dcosnet(args) -> int:
+    from .learn.dcosnet import DCoSNetConfig, train_dcosnet
+
+    cfg = DCoSNetConfig(
+        system=args.system,
+        n_bands=args.bands,
+        shift=args.shift,
+        stages=args.stages,
+        width=args.width,
+        unet_width=args.unet_width,
+        loss=args.loss,
+        mask=args.mask,
+        steps=args.steps,
+        batch=args.batch,
+        patch=args.patch,
+        seed=args.seed,
+    )
+    return _run_training(args, train_dcosnet, cfg.check())
 
 
 def _positive_int(text: str) -> int:

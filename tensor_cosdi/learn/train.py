@@ -27,16 +27,9 @@ thread count).  The final weights (model, configuration, provenance) go to
 
 from __future__ import annotations
 
-import json
-import math
-import os
-import time
-from dataclasses import asdict, dataclass
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
-
-from . import require_torch
 
 __all__ = ["TrainConfig", "train_denoiser", "training_data"]
 
@@ -144,10 +137,33 @@ def _nullspace_noise(torch, noise, rng, p: int):
     return (x - proj).reshape(noise.shape)
 
 
-def _atomic_save(torch, obj, path: Path):
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(obj, tmp)
-    os.replace(tmp, path)
+def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes):
+    """One batch's loss (see the module docstring)."""
+    from .spectral_net import subspace
+
+    clean_np, rank = _batch(rng, cubes, cfg)
+    sig_np = np.exp(rng.uniform(np.log(cfg.sigma_min), np.log(cfg.sigma_max), cfg.batch))
+    clean = torch.from_numpy(clean_np).to(dev)
+    sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
+    noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
+    if rng.random() < cfg.coded_fraction:
+        noise = _nullspace_noise(torch, noise, rng, cfg.patch)
+    noisy = clean + noise
+    scale = noisy.abs().amax(dim=(1, 2)).clamp_min(1e-6)
+    noisy, clean = noisy / scale[:, None, None], clean / scale[:, None, None]
+    y, u = subspace(noisy, rank, cfg.r_max)
+    k = u.shape[-1]
+    target = torch.zeros_like(y)
+    target[:, :k] = torch.matmul(clean, u).transpose(1, 2)
+    p = cfg.patch
+    y = y.reshape(cfg.batch, cfg.r_max, p, p)
+    target = target.reshape(cfg.batch, cfg.r_max, p, p)
+    rel = sig / scale
+    pred = net(y, rel)
+    # noise energy left, as a fraction of the input's (every level weighs the same)
+    return torch.mean(torch.mean((pred - (y - target)) ** 2, dim=(1, 2, 3)) / rel**2) * (
+        cfg.r_max / min(rank, clean.shape[-1])
+    )
 
 
 def train_denoiser(
@@ -171,148 +187,22 @@ def train_denoiser(
     session; resume later); the summary's ``finished`` says which happened.
     ``command`` is stored as provenance.
     """
-    torch = require_torch()
-    from tqdm import tqdm
+    from ._loop import run
+    from .spectral_net import _build_net
 
-    from .spectral_net import _build_net, subspace
-
-    out = Path(out)
-    ckpt_path = out.with_name(out.name + ".ckpt")
-    if out.exists() and not force:
-        raise FileExistsError(f"{out} exists; pass force=True (--force) to write over it")
-    if not out.parent.is_dir():
-        raise FileNotFoundError(f"output folder {out.parent} does not exist")
-    dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
-    state = None
-    if resume:
-        if not ckpt_path.is_file():
-            raise FileNotFoundError(f"--resume: no checkpoint {ckpt_path}")
-        state = torch.load(ckpt_path, map_location="cpu", weights_only=True)
-        saved = TrainConfig(**json.loads(state["config"]))
-        if config is not None and config != saved:
-            raise ValueError(
-                f"--resume: the checkpoint was made with {saved}, not {config}; "
-                "resume without changing options"
-            )
-        config = saved
-    elif ckpt_path.exists() and not force:
-        raise FileExistsError(
-            f"{ckpt_path} (an earlier run's checkpoint) exists; pass resume=True (--resume) "
-            "to continue it or force=True (--force) to start over"
-        )
-    cfg = (config or TrainConfig()).check()
-    cubes = training_data(folder)
-    torch.manual_seed(cfg.seed)
-    rng = np.random.default_rng(cfg.seed)
-    net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks).to(dev)
-    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
-    warm = min(cfg.warmup, cfg.steps - 1) if cfg.steps > 1 else 0
-
-    def lr_at(i):  # linear warm-up, then cosine decay to lr_end (a factor of lr)
-        if i < warm:
-            return (i + 1) / warm
-        t = (i - warm) / max(cfg.steps - warm, 1)
-        end = cfg.lr_end / cfg.lr
-        # a Python float: NumPy scalars in the scheduler state would not load with weights_only
-        return float(end + (1 - end) * 0.5 * (1 + math.cos(math.pi * t)))
-
-    sched = torch.optim.lr_scheduler.LambdaLR(opt, lr_at)
-    step, losses, elapsed = 0, [], 0.0
-    if state is not None:
-        net.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        sched.load_state_dict(state["scheduler"])
-        step, losses = int(state["step"]), list(state["losses"])
-        elapsed = float(state["elapsed"])
-        rng.bit_generator.state = json.loads(state["rng"])
-        torch.set_rng_state(state["torch_rng"])
-
-    def checkpoint():
-        _atomic_save(
-            torch,
-            {
-                "model": net.state_dict(),
-                "optimizer": opt.state_dict(),
-                "scheduler": sched.state_dict(),
-                "step": step,
-                "losses": losses,
-                "elapsed": elapsed + time.perf_counter() - t0,
-                "rng": json.dumps(rng.bit_generator.state),
-                "torch_rng": torch.get_rng_state(),
-                "config": json.dumps(asdict(cfg)),
-            },
-            ckpt_path,
-        )
-
-    if stop_after is not None and (
-        isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 1
-    ):
-        raise ValueError(f"stop_after must be a positive integer, got {stop_after!r}")
-    last = cfg.steps if stop_after is None else min(cfg.steps, step + stop_after)
-    t0 = time.perf_counter()
-    bar = tqdm(total=cfg.steps, initial=step, desc="train-denoiser", disable=not progress)
-    log_lo, log_hi = np.log(cfg.sigma_min), np.log(cfg.sigma_max)
-    net.train()
-    while step < last:
-        clean_np, rank = _batch(rng, cubes, cfg)
-        sig_np = np.exp(rng.uniform(log_lo, log_hi, cfg.batch)).astype(np.float32)
-        clean = torch.from_numpy(clean_np).to(dev)
-        sig = torch.from_numpy(sig_np).to(dev)
-        noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
-        if rng.random() < cfg.coded_fraction:
-            noise = _nullspace_noise(torch, noise, rng, cfg.patch)
-        noisy = clean + noise
-        scale = noisy.abs().amax(dim=(1, 2)).clamp_min(1e-6)
-        noisy, clean = noisy / scale[:, None, None], clean / scale[:, None, None]
-        y, u = subspace(noisy, rank, cfg.r_max)
-        k = u.shape[-1]
-        target = torch.zeros_like(y)
-        target[:, :k] = torch.matmul(clean, u).transpose(1, 2)
-        p = cfg.patch
-        y = y.reshape(cfg.batch, cfg.r_max, p, p)
-        target = target.reshape(cfg.batch, cfg.r_max, p, p)
-        rel = sig / scale
-        pred = net(y, rel)
-        # noise energy left, as a fraction of the input's (every level weighs the same)
-        loss = torch.mean(torch.mean((pred - (y - target)) ** 2, dim=(1, 2, 3)) / rel**2) * (
-            cfg.r_max / min(rank, clean.shape[-1])
-        )
-        opt.zero_grad(set_to_none=True)
-        loss.backward()
-        torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
-        opt.step()
-        sched.step()
-        step += 1
-        losses.append(loss.item())
-        bar.update(1)
-        if step % 20 == 0:
-            bar.set_postfix(loss=f"{np.mean(losses[-20:]):.2e}")
-        if step % cfg.checkpoint_every == 0 or step == last:
-            checkpoint()
-    bar.close()
-    if step < cfg.steps:
-        return {"steps": step, "finished": False, "checkpoint": str(ckpt_path)}
-    total = elapsed + time.perf_counter() - t0
-    summary = {
-        "steps": step,
-        "finished": True,
-        "final_loss": float(np.mean(losses[-100:])),
-        "seconds": total,
-        "device": str(dev),
-        "threads": torch.get_num_threads(),
-        "torch": torch.__version__,
-        "command": command,
-        "scenes": "datasets.TUNE_SCENES",
-    }
-    net_cpu = {k: v.detach().cpu() for k, v in net.state_dict().items()}
-    _atomic_save(
-        torch,
-        {
-            "model": net_cpu,
-            "config": {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},
-            "train_config": json.dumps(asdict(cfg)),
-            "summary": json.dumps(summary),
-        },
-        out,
+    return run(
+        desc="train-denoiser",
+        out=out,
+        config=config,
+        config_cls=TrainConfig,
+        prepare=lambda cfg: training_data(folder),
+        build=lambda torch, cfg, data: _build_net(torch, cfg.r_max, cfg.width, cfg.blocks),
+        batch_loss=_denoiser_loss,
+        weights_config=lambda cfg: {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},
+        resume=resume,
+        force=force,
+        device=device,
+        progress=progress,
+        command=command,
+        stop_after=stop_after,
     )
-    return summary

@@ -11,6 +11,7 @@ squares (``"lsq"``).
 from . import denoisers, engine, priors
 from ._base import METHODS, Method, Result, methods, reconstruct, register_method
 from .avsi import avsi
+from .dcosnet import dcosnet
 from .dfa import multiresolution_dfa
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
@@ -38,6 +39,7 @@ __all__ = [
     "pnp_admm",
     "pnp_admm_operator",
     "pnp_gap",
+    "dcosnet",
     "denoisers",
     "multiresolution_dfa",
     "nonlocal_tucker",

@@ -193,8 +193,6 @@ class NonlocalTucker(Prior):
         return B.tensor_like(res, v)
 
 
-
-
 def nonlocal_tucker(
     system,
     measurement,

@@ -1,0 +1,56 @@
+"""D-CoSNet as a reconstruction method (``method="dcosnet"``; needs the ``torch`` extra).
+
+The network and its training live in :mod:`tensor_cosdi.learn.dcosnet`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import tensorly as tl
+
+from ._base import register_method, relative_residual
+
+__all__ = ["dcosnet"]
+
+_LOADED: dict = {}
+
+
+def dcosnet(system, measurement, *, weights=None, device=None):
+    """One pass of a trained D-CoSNet (thesis §7.2).  Registered as ``"dcosnet"``.
+
+    ``weights``: a file written by ``tensor-cosdi train-dcosnet`` (default:
+    the shipped weights for the system's kind — SD-CASSI, 28 bands, 2 px per
+    band).  The weights must match the system's kind, channel count and
+    shift (a ``ValueError`` says what to train otherwise).  ``device``:
+    ``"cpu"``, ``"cuda"``… (default CUDA when available).  Not iterative:
+    the history has one entry.
+    """
+    from ..learn import require_torch
+
+    require_torch()
+    from ..learn.dcosnet import DCoSNet
+
+    key = (None if weights is None else str(weights), device)
+    if key not in _LOADED:
+        _LOADED.clear()  # keep one network in memory
+        _LOADED[key] = DCoSNet(weights, device=device)
+    t0 = time.perf_counter()
+    cube = _LOADED[key](system, measurement)
+    res = relative_residual(system, cube, measurement)
+    history = {
+        "objective": [0.5 * (res * float(tl.norm(measurement))) ** 2],
+        "residual": [res],
+        "change": [1.0],
+        "seconds": [time.perf_counter() - t0],
+    }
+    return cube, history, True
+
+
+register_method(
+    "dcosnet",
+    dcosnet,
+    {"weights": None, "device": None},
+    "D-CoSNet: unfolded ADMM with the Woodbury x-step and a U-Net (thesis §7; torch)",
+    requires=("torch",),
+)

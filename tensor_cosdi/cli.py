@@ -325,8 +325,8 @@ def build_parser() -> argparse.ArgumentParser:
     dc.add_argument("--system", default="sd_cassi", help="sd_cassi or mu_cosdi (default sd_cassi)")
     dc.add_argument("--bands", type=_positive_int, default=28, help="spectral bands (default 28)")
     dc.add_argument("--shift", type=_positive_int, default=2, help="pixels per band (default 2)")
-    dc.add_argument("--stages", type=_positive_int, default=2, help="unfolded ADMM stages")
-    dc.add_argument("--width", type=_positive_int, default=32, help="channels of the arms' convs")
+    dc.add_argument("--stages", type=_positive_int, default=3, help="unfolded ADMM stages")
+    dc.add_argument("--width", type=_positive_int, default=16, help="channels of the arms' convs")
     dc.add_argument("--unet-width", type=_positive_int, default=32, help="U-Net base channels")
     dc.add_argument(
         "--loss", default="l1+ssim", help="l1+ssim (Eq. 152), l1 or ssim (Table 2's ablation)"

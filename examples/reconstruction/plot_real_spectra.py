@@ -11,7 +11,8 @@ bands, measures a 96×96 crop with SD-CASSI at 30 dB, and compares GAP-TV,
 OTD at its default and with ``lam="auto"`` (the weight follows the estimated
 noise), the experimental non-local Tucker prior ``"otd_nl"`` and, where
 PyTorch is installed, plug-and-play GAP with the learned spectral denoiser
-(``"pnp_gap"``).
+(``"pnp_gap"``) and the unfolded network D-CoSNet (``"dcosnet"``, thesis §7;
+one forward pass).
 
 Without the data folder it says so and uses the measured ColorChecker
 reflectances instead (still real spectra, but a flat, patchy scene); without
@@ -63,10 +64,11 @@ runs = {
     "otd, lam=auto": tc.reconstruct(system, g, "otd", lam="auto"),
     "otd_nl": tc.reconstruct(system, g, "otd_nl"),
 }
-if tc.solvers.METHODS["pnp_gap"].available:  # the learned denoiser needs torch
+if tc.solvers.METHODS["pnp_gap"].available:  # the learned methods need torch
     runs["pnp_gap"] = tc.reconstruct(system, g, "pnp_gap")
+    runs["dcosnet"] = tc.reconstruct(system, g, "dcosnet")  # weights for SD-CASSI, 28 bands, 2 px
 else:
-    print("PyTorch is not installed: skipping pnp_gap (pip install 'tensor_cosdi[torch]')")
+    print("PyTorch is not installed: skipping pnp_gap, dcosnet (pip install 'tensor_cosdi[torch]')")
 psnr = {k: tc.metrics.psnr(cube, r.cube, data_range=1.0) for k, r in runs.items()}
 for k, r in runs.items():
     sam = tc.metrics.sam(cube, r.cube)

@@ -7,6 +7,9 @@
 * :mod:`~tensor_cosdi.learn.train` — its training on the tuning scenes
   (``tensor-cosdi train-denoiser``: progress bar, checkpoints, resume, CPU or
   CUDA).
+* :mod:`~tensor_cosdi.learn.dcosnet` — D-CoSNet (thesis §7): unfolded ADMM
+  whose sensing layers are the system's own operator, trained per system
+  (``tensor-cosdi train-dcosnet``) and used by the method ``"dcosnet"``.
 
 Importing this package does not import torch; the functions that need it
 raise an ``ImportError`` naming the extra to install.

@@ -371,8 +371,8 @@ class DCoSNetConfig:
     system: str = "sd_cassi"
     n_bands: int = 28
     shift: int = 2
-    stages: int = 2
-    width: int = 32
+    stages: int = 3
+    width: int = 16
     unet_width: int = 32
     loss: str = "l1+ssim"
     mask: str = "tsa"

@@ -19,6 +19,7 @@ from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
 from .pnp_gap import pnp_gap
+from .twist import twist_tv
 
 __all__ = [
     "Result",
@@ -40,6 +41,7 @@ __all__ = [
     "pnp_admm_operator",
     "pnp_gap",
     "dcosnet",
+    "twist_tv",
     "denoisers",
     "multiresolution_dfa",
     "nonlocal_tucker",

@@ -1,5 +1,7 @@
 """The adapter to the lab: capture files, calibration, bundles and serial device triggers.
 
+* :func:`read_cube`, :func:`read_array`, :func:`write_cube` — cubes and arrays in MATLAB (v5 and
+  v7.3), HDF5, NumPy, ENVI and multi-page TIFF files, by extension (:mod:`~tensor_cosdi.io.files`).
 * :func:`load_frames`, :func:`read_frame` — TIFF / PNG / JPEG / NPY / NPZ / MAT frames, dark and
 flat
   correction, region of interest, binning, gap detection.
@@ -18,6 +20,7 @@ provenance.
 
 from .bundle import Bundle, file_digest, load_bundle, save_bundle, system_from_state, system_state
 from .calibration import code_from_monochromator, shifts_from_line_frames
+from .files import read_array, read_cube, split_key, write_cube
 from .frames import (
     FRAME_SUFFIXES,
     bin_frame,
@@ -41,6 +44,10 @@ from .triggers import (
 )
 
 __all__ = [
+    "read_cube",
+    "read_array",
+    "write_cube",
+    "split_key",
     "read_frame",
     "write_frames",
     "load_frames",

@@ -27,15 +27,14 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
-import os
 import platform
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .. import _backend as B
+from ._atomic import atomic_write
 
 __all__ = [
     "save_bundle",
@@ -252,26 +251,7 @@ def save_bundle(
     )
     doc["arrays"] = sorted(store)
     store["__bundle__"] = np.array(json.dumps(doc))
-    fd, tmp = tempfile.mkstemp(suffix=".npz", dir=p.parent, prefix=f".{p.name}.")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **store)
-            f.flush()
-            os.fsync(f.fileno())
-        if overwrite:
-            os.replace(tmp, p)
-        else:
-            os.link(tmp, p)  # atomic: fails if someone created p meanwhile
-            os.unlink(tmp)
-    except FileExistsError:
-        os.unlink(tmp)
-        raise FileExistsError(
-            f"{p} exists; pass overwrite=True (CLI: --force) to replace it"
-        ) from None
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(p, lambda tmp: np.savez(tmp, **store), overwrite=overwrite, suffix=".npz")
     return p
 
 

@@ -22,7 +22,7 @@ from .priors import Denoiser
 
 __all__ = ["pnp_gap"]
 
-WARM_STARTS = ("gap_tv", "otd", "none")
+WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 SIGMA_END = {40.0: 0.01, 30.0: 0.03, 20.0: 0.08}
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
@@ -85,9 +85,11 @@ def pnp_gap(
         start's robust peak.  ``sigma_end="auto"`` follows the measurement's
         estimated SNR (:data:`SIGMA_END`; :func:`tensor_cosdi.noise.snr_schedule`):
         the noisier the data, the higher the floor.
-    warm : ``"gap_tv"``, ``"otd"`` or ``"none"``
+    warm : ``"gap_tv"``, ``"otd"``, ``"dcosnet"`` or ``"none"``
         Start from ``warm_iter`` iterations of :func:`~.gap_tv.gap_tv` at its
-        defaults, from OTD at its defaults, or from the least-norm solution.
+        defaults, from OTD at its defaults, from one pass of the shipped
+        D-CoSNet (:func:`~.dcosnet.dcosnet`; SD-CASSI, 28 bands, 2 px per
+        band), or from the least-norm solution.
         The denoiser refines a good start; from the least-norm one it climbs
         slowly (a learned denoiser removes what looks like noise, not the
         coded-aperture pattern's large-scale errors).
@@ -146,8 +148,8 @@ def warm_started_gap(
 ):
     """:func:`~tensor_cosdi.solvers.engine.gap` with ``prior`` from a ``warm`` start
     (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its defaults, OTD at its defaults,
-    or the least-norm solution); one history for both stages.  Returns ``(x, history,
-    converged)``."""
+    the shipped D-CoSNet, or the least-norm solution); one history for both stages.
+    Returns ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     start, hist = None, None
@@ -159,6 +161,13 @@ def warm_started_gap(
         from .otd import online_tucker_admm
 
         start, hist, _ = online_tucker_admm(system, g, progress=progress)
+    elif warm == "dcosnet":  # one pass of the shipped network (torch; weights for this system)
+        from ._base import History
+        from .dcosnet import dcosnet
+
+        start, first, _ = dcosnet(system, g)
+        hist = History()
+        hist.extend(first)
     x, h2, conv = engine.gap(
         system.operator,
         g,

@@ -1,0 +1,54 @@
+"""Atomic, durable file writes: a temporary file in the same folder, written, flushed and
+fsynced, then linked (refusing an existing name) or renamed over the target, and the folder
+fsynced — a reader sees the old file or the new one, never a torn one."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+
+def _fsync_path(path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = None) -> Path:
+    """Write ``path`` through ``write(tmp_path)`` atomically; returns ``path``.
+
+    ``write`` receives the path of a fresh temporary file in the target's
+    folder (with the target's suffix, or ``suffix``) and must write the whole
+    file there.  Without ``overwrite`` an existing ``path`` is a
+    ``FileExistsError`` (checked before writing and, atomically, at the end);
+    with it, the old file is replaced only once the new one is complete.
+    """
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise FileNotFoundError(f"output folder {p.parent} does not exist")
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+    fd, tmp = tempfile.mkstemp(suffix=suffix or p.suffix, dir=p.parent, prefix=f".{p.name}.")
+    os.close(fd)
+    try:
+        write(tmp)
+        _fsync_path(tmp)
+        if overwrite:
+            os.replace(tmp, p)
+        else:
+            os.link(tmp, p)  # atomic: fails if someone created p meanwhile
+            os.unlink(tmp)
+        _fsync_path(p.parent)
+    except FileExistsError:
+        os.unlink(tmp)
+        raise FileExistsError(
+            f"{p} exists; pass overwrite=True (CLI: --force) to replace it"
+        ) from None
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return p

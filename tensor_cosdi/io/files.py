@@ -1,0 +1,409 @@
+"""Read and write cubes and arrays in the formats labs use, chosen by extension.
+
+========================  =================================  ===============================
+extension                 read (:func:`read_array`, cube)    write (:func:`write_cube`)
+========================  =================================  ===============================
+``.mat``                  MATLAB v5 (SciPy) and v7.3 (HDF5,  MATLAB v5 (SciPy)
+                          h5py; transposed to NumPy order)
+``.h5``, ``.hdf5``        h5py (any dataset, by path)        datasets ``cube``,
+                                                             ``wavelengths``; gzip
+``.npy``, ``.npz``        NumPy (no pickles)                 ``.npz`` (compressed);
+                                                             ``.npy`` without wavelengths
+``.hdr`` (ENVI)           ``spectral`` (extra ``.[envi]``)   ``spectral``
+``.tif``, ``.tiff``       tifffile (pages = bands)           tifffile (one page per band)
+========================  =================================  ===============================
+
+``key`` picks a variable (a MATLAB variable, an NPZ member, an HDF5 dataset
+path); without it the one candidate array is taken, and several candidates
+are an error listing each with its shape.  Cubes are ``(rows, columns,
+bands)``; wavelengths are read from a variable named like
+:data:`WAVELENGTH_KEYS` (or ENVI's ``wavelength`` with its units) and
+checked to be nanometres in :data:`WAVELENGTH_RANGE_NM`.
+
+Reads are bounded: declared shapes are checked against ``max_bytes``
+(default :data:`MAX_ARRAY_BYTES`) before anything is allocated.  Writes
+are atomic (temporary file, fsync, rename; :mod:`tensor_cosdi.io._atomic`)
+and never replace an existing file without ``overwrite=True``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ._atomic import atomic_write
+
+__all__ = [
+    "read_array",
+    "read_cube",
+    "write_cube",
+    "split_key",
+    "CUBE_SUFFIXES",
+    "MAX_ARRAY_BYTES",
+    "WAVELENGTH_KEYS",
+    "WAVELENGTH_RANGE_NM",
+]
+
+#: Extensions :func:`read_array` / :func:`read_cube` / :func:`write_cube` know.
+CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".npy", ".npz", ".hdr", ".tif", ".tiff")
+#: Largest array a reader allocates unless told otherwise (``max_bytes``): 4 GiB.
+MAX_ARRAY_BYTES = 4 * 2**30
+#: Variable names taken as the band centres of a cube (case-insensitive).
+WAVELENGTH_KEYS = ("wavelengths", "wavelengths_nm", "wavelength", "wl", "lambda", "bands_nm")
+#: Plausible band centres in nm (200 nm UV to 20 µm thermal infrared).
+WAVELENGTH_RANGE_NM = (200.0, 20000.0)
+
+
+def split_key(spec: str) -> tuple[str, str | None]:
+    """``"file.mat:mask"`` → ``("file.mat", "mask")``; a plain path → ``(path, None)``."""
+    spec = str(spec)
+    head, sep, tail = spec.rpartition(":")
+    if sep and head and tail and "/" not in tail and "\\" not in tail:
+        if Path(head).suffix.lower() in CUBE_SUFFIXES:
+            return head, tail
+    return spec, None
+
+
+def _suffix(path: Path) -> str:
+    s = path.suffix.lower()
+    if s not in CUBE_SUFFIXES:
+        raise ValueError(
+            f"{path}: unknown file type {path.suffix!r}; expected one of {', '.join(CUBE_SUFFIXES)}"
+        )
+    return s
+
+
+def _check_size(path, name, shape, dtype, max_bytes):
+    n = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+    if n > max_bytes:
+        raise ValueError(
+            f"{path}: {name!r} declares shape {tuple(shape)} of {np.dtype(dtype)} = "
+            f"{n / 2**30:.2f} GiB, above the {max_bytes / 2**30:.2f} GiB limit "
+            "(pass max_bytes= to allow it)"
+        )
+
+
+def _require_h5py():
+    try:
+        import h5py
+    except ImportError:  # pragma: no cover - a core dependency
+        raise ImportError("HDF5 and MATLAB v7.3 files need h5py: pip install h5py") from None
+    return h5py
+
+
+# ---- listing: name → (shape, dtype, loader) without reading the data -----------------------------
+def _entries_npy(path):
+    arr = np.load(path, mmap_mode="r", allow_pickle=False)
+    return {"array": (arr.shape, arr.dtype, lambda: np.array(arr))}
+
+
+def _entries_npz(path):
+    out = {}
+    with np.load(path, allow_pickle=False) as z:
+        names = list(z.files)
+    for name in names:
+        with np.load(path, allow_pickle=False) as z, z.zip.open(name + ".npy") as f:
+            version = np.lib.format.read_magic(f)
+            read = (
+                np.lib.format.read_array_header_1_0
+                if version == (1, 0)
+                else np.lib.format.read_array_header_2_0
+            )
+            shape, _, dtype = read(f)
+
+        def load(name=name):
+            with np.load(path, allow_pickle=False) as z:
+                return z[name]
+
+        out[name] = (shape, dtype, load)
+    return out
+
+
+def _is_v73(path) -> bool:
+    with open(path, "rb") as f:
+        head = f.read(128)
+    return b"MATLAB 7.3" in head
+
+
+def _entries_mat(path):
+    if _is_v73(path):
+        return _entries_h5(path, matlab=True)
+    import scipy.io
+
+    out = {}
+    for name, shape, cls in scipy.io.whosmat(path):
+        if cls in ("cell", "struct", "object", "function_handle", "opaque"):
+            continue
+        dtype = {
+            "logical": np.bool_, "char": np.str_, "int8": np.int8, "uint8": np.uint8,
+            "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
+            "int64": np.int64, "uint64": np.uint64, "single": np.float32,
+        }.get(cls, np.float64)  # fmt: skip
+        if dtype is np.str_:
+            continue
+
+        def load(name=name):
+            return np.asarray(scipy.io.loadmat(path, variable_names=[name])[name])
+
+        out[name] = (tuple(shape), np.dtype(dtype), load)
+    return out
+
+
+def _entries_h5(path, *, matlab=False):
+    h5py = _require_h5py()
+    out = {}
+    with h5py.File(path, "r") as f:
+
+        def visit(name, obj):
+            if not isinstance(obj, h5py.Dataset) or name.startswith("#"):
+                return
+            if obj.dtype.kind not in "biuf":
+                return
+            if matlab and obj.attrs.get("MATLAB_class", b"") in (b"char", b"cell", b"struct"):
+                return
+            shape = tuple(reversed(obj.shape)) if matlab else tuple(obj.shape)
+
+            def load(name=name):
+                with h5py.File(path, "r") as g:
+                    a = g[name][()]
+                return np.ascontiguousarray(a.T) if matlab else a
+
+            out[name] = (shape, obj.dtype, load)
+
+        f.visititems(visit)
+    return out
+
+
+def _entries_tiff(path):
+    import tifffile
+
+    with tifffile.TiffFile(path) as t:
+        series = t.series[0]
+        shape, dtype = tuple(series.shape), series.dtype
+    return {"array": (shape, dtype, lambda: tifffile.imread(path))}
+
+
+def _entries(path: Path, suffix: str):
+    if not path.is_file():
+        raise FileNotFoundError(f"file not found: {path}")
+    if suffix == ".npy":
+        return _entries_npy(path)
+    if suffix == ".npz":
+        return _entries_npz(path)
+    if suffix == ".mat":
+        return _entries_mat(path)
+    if suffix in (".h5", ".hdf5"):
+        return _entries_h5(path)
+    if suffix in (".tif", ".tiff"):
+        return _entries_tiff(path)
+    raise AssertionError(suffix)  # pragma: no cover
+
+
+def _pick(path, entries, key, want_ndim=None):
+    if key is not None:
+        if key not in entries:
+            raise KeyError(
+                f"{path}: no array {key!r}; it holds "
+                + (", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays")
+            )
+        return key
+    wl = {k for k in entries if k.lower().rsplit("/", 1)[-1] in WAVELENGTH_KEYS}
+    cands = [k for k, v in entries.items() if k not in wl and len(v[0]) >= 1]
+    if want_ndim is not None:
+        cands = [k for k in cands if len(entries[k][0]) >= want_ndim]
+    if len(cands) == 1:
+        return cands[0]
+    listing = ", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays"
+    what = "no candidate" if not cands else "several candidates"
+    raise ValueError(f"{path}: {what} for the array to read ({listing}); pass key=NAME")
+
+
+def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarray:
+    """One array from ``path`` (see the module table); ``key`` picks a variable.
+
+    The array is returned as stored (MATLAB v7.3 transposed back to the
+    order MATLAB shows); nothing is converted or clipped.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if suffix == ".hdr":
+        cube, _ = _read_envi(path, max_bytes)
+        if key is not None:
+            raise ValueError(f"{path}: an ENVI file holds one cube; key must be None")
+        return cube
+    if suffix == ".npy" and key is not None:
+        raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
+    entries = _entries(path, suffix)
+    name = _pick(path, entries, key)
+    shape, dtype, load = entries[name]
+    _check_size(path, name, shape, dtype, max_bytes)
+    return load()
+
+
+def _check_wavelengths(path, wl, n_bands):
+    wl = np.asarray(wl, dtype=np.float64).reshape(-1)
+    if wl.size != n_bands:
+        raise ValueError(f"{path}: {wl.size} wavelengths for a cube of {n_bands} bands")
+    lo, hi = WAVELENGTH_RANGE_NM
+    if not np.all(np.isfinite(wl)) or wl.min() < lo or wl.max() > hi:
+        hint = " (they look like micrometres: multiply by 1000)" if wl.max() < 30 else ""
+        raise ValueError(
+            f"{path}: wavelengths {wl.min():g}–{wl.max():g} lie outside {lo:g}–{hi:g} nm{hint}"
+        )
+    return wl
+
+
+def _read_envi(path: Path, max_bytes):
+    try:
+        from spectral.io import envi
+    except ImportError:
+        raise ImportError(
+            "reading ENVI files needs the spectral package: pip install 'tensor_cosdi[envi]'"
+        ) from None
+    img = envi.open(str(path))
+    shape = (img.nrows, img.ncols, img.nbands)
+    _check_size(path, "cube", shape, img.dtype, max_bytes)
+    cube = np.asarray(img.load())
+    wl = img.metadata.get("wavelength")
+    if wl is not None:
+        wl = np.asarray([float(v) for v in wl])
+        units = str(img.metadata.get("wavelength units", "nm")).strip().lower()
+        scale = {"nm": 1.0, "nanometers": 1.0, "um": 1e3, "µm": 1e3, "micrometers": 1e3,
+                 "microns": 1e3, "mm": 1e6}.get(units)  # fmt: skip
+        if scale is None:
+            raise ValueError(f"{path}: unknown wavelength units {units!r} (expected nm or µm)")
+        wl = _check_wavelengths(path, wl * scale, cube.shape[2])
+    return cube, wl
+
+
+def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
+    """A cube ``(rows, columns, bands)`` and its wavelengths (nm, or ``None``) from ``path``.
+
+    Multi-page TIFFs are read as one page per band.  Wavelengths come from a
+    variable named like :data:`WAVELENGTH_KEYS` (or ENVI metadata), must
+    match the band count and lie in :data:`WAVELENGTH_RANGE_NM`.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if suffix == ".hdr":
+        return _read_envi(path, max_bytes)
+    if suffix == ".npy" and key is not None:
+        raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
+    entries = _entries(path, suffix)
+    name = _pick(path, entries, key, want_ndim=3)
+    shape, dtype, load = entries[name]
+    _check_size(path, name, shape, dtype, max_bytes)
+    cube = np.asarray(load())
+    if suffix in (".tif", ".tiff") and cube.ndim == 3:
+        cube = np.moveaxis(cube, 0, -1)  # pages are bands
+    if cube.ndim < 3:
+        raise ValueError(f"{path}: {name!r} has shape {cube.shape}; a cube needs 3 axes or more")
+    wl = None
+    for k, (wshape, _, wload) in entries.items():
+        if k != name and k.lower().rsplit("/", 1)[-1] in WAVELENGTH_KEYS:
+            if int(np.prod(wshape)) == cube.shape[2]:
+                wl = _check_wavelengths(path, wload(), cube.shape[2])
+                break
+    if wl is None and suffix in (".tif", ".tiff"):
+        wl = _tiff_wavelengths(path, cube.shape[2])
+    return cube, wl
+
+
+def _tiff_wavelengths(path, n_bands):
+    import tifffile
+
+    with tifffile.TiffFile(path) as t:
+        desc = t.pages[0].description
+    try:
+        meta = json.loads(desc)
+    except (TypeError, ValueError):
+        return None
+    wl = meta.get("wavelengths_nm") if isinstance(meta, dict) else None
+    return None if wl is None else _check_wavelengths(path, wl, n_bands)
+
+
+def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool = False):
+    """Write ``cube (rows, columns, bands)`` and its wavelengths (nm) to ``path`` atomically.
+
+    The format follows the extension (module table).  ``metadata``: a
+    JSON-serialisable dict, stored as an attribute (HDF5), a variable
+    (MATLAB, NPZ), the page description (TIFF) or header fields (ENVI).
+    Never replaces an existing file without ``overwrite=True``.  Returns the path.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    cube = np.asarray(cube)
+    if cube.ndim != 3 or cube.dtype.kind not in "biuf":
+        raise ValueError(
+            f"cube must be a numeric (rows, columns, bands) array, got {cube.dtype} {cube.shape}"
+        )
+    wl = None if wavelengths is None else _check_wavelengths(path, wavelengths, cube.shape[2])
+    try:
+        meta_json = json.dumps(metadata or {}, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"metadata must be JSON-serialisable: {e}") from None
+
+    def write(tmp):
+        if suffix in (".h5", ".hdf5"):
+            h5py = _require_h5py()
+            with h5py.File(tmp, "w") as f:
+                f.create_dataset("cube", data=cube, compression="gzip", shuffle=True)
+                if wl is not None:
+                    f.create_dataset("wavelengths", data=wl)
+                f.attrs["metadata"] = meta_json
+        elif suffix == ".mat":
+            import scipy.io
+
+            d = {"cube": cube, "metadata": meta_json}
+            if wl is not None:
+                d["wavelengths"] = wl
+            scipy.io.savemat(tmp, d, do_compression=True)
+        elif suffix == ".npz":
+            d = {"cube": cube, "metadata": np.array(meta_json)}
+            if wl is not None:
+                d["wavelengths"] = wl
+            np.savez_compressed(tmp, **d)
+        elif suffix == ".npy":
+            np.save(tmp, cube, allow_pickle=False)
+        elif suffix in (".tif", ".tiff"):
+            import tifffile
+
+            desc = {"metadata": metadata or {}}
+            if wl is not None:
+                desc["wavelengths_nm"] = wl.tolist()
+            tifffile.imwrite(tmp, np.moveaxis(cube, -1, 0), description=json.dumps(desc))
+
+    if suffix == ".npy" and (wl is not None or metadata):
+        raise ValueError(f"{path}: .npy holds the cube only; use .npz or .h5 to keep wavelengths")
+    if suffix == ".hdr":
+        return _write_envi_atomic(path, cube, wl, metadata, overwrite)
+    return atomic_write(path, write, overwrite=overwrite)
+
+
+def _write_envi_atomic(path: Path, cube, wl, metadata, overwrite):
+    """ENVI is a pair (``.hdr`` + raw ``.img``): each written atomically, the data first."""
+    try:
+        from spectral.io import envi
+    except ImportError:
+        raise ImportError(
+            "writing ENVI files needs the spectral package: pip install 'tensor_cosdi[envi]'"
+        ) from None
+    import shutil
+    import tempfile
+
+    img_path = path.with_suffix(".img")
+    for p in (path, img_path):
+        if p.exists() and not overwrite:
+            raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+    meta = {"description": json.dumps(metadata or {})}
+    if wl is not None:
+        meta.update({"wavelength": [f"{v:g}" for v in wl], "wavelength units": "nm"})
+    with tempfile.TemporaryDirectory(dir=path.parent, prefix=f".{path.name}.") as tmpdir:
+        hdr = Path(tmpdir) / path.name
+        envi.save_image(str(hdr), cube, metadata=meta, ext=".img", force=True)
+        atomic_write(img_path, lambda t: shutil.copyfile(Path(tmpdir) / img_path.name, t),
+                     overwrite=overwrite)  # fmt: skip
+        atomic_write(path, lambda t: shutil.copyfile(hdr, t), overwrite=overwrite)
+    return path

@@ -1,0 +1,148 @@
+"""read_cube / read_array / write_cube: every format round-trips, MATLAB v7.3 is transposed back,
+keys are found or listed, reads are bounded, writes are atomic and never overwrite unasked."""
+
+import json
+
+import numpy as np
+import pytest
+
+from tensor_cosdi.io import files
+from tensor_cosdi.io.files import read_array, read_cube, split_key, write_cube
+
+WL = np.linspace(450.0, 650.0, 5)
+
+
+def _cube(dtype=np.float32):
+    return np.random.default_rng(0).random((6, 7, 5)).astype(dtype)
+
+
+@pytest.mark.parametrize("suffix", [".h5", ".hdf5", ".mat", ".npz", ".tif", ".hdr"])
+def test_every_format_round_trips_cube_and_wavelengths(tmp_path, suffix):
+    pytest.importorskip("spectral") if suffix == ".hdr" else None
+    cube = _cube()
+    path = write_cube(tmp_path / f"c{suffix}", cube, WL, metadata={"scene": "x"})
+    back, wl = read_cube(path)
+    np.testing.assert_array_equal(back, cube)
+    assert back.dtype == cube.dtype
+    np.testing.assert_allclose(wl, WL)
+
+
+def test_npy_holds_the_cube_only(tmp_path):
+    cube = _cube(np.float64)
+    write_cube(tmp_path / "c.npy", cube)
+    back, wl = read_cube(tmp_path / "c.npy")
+    np.testing.assert_array_equal(back, cube)
+    assert wl is None
+    with pytest.raises(ValueError, match="use .npz or .h5"):
+        write_cube(tmp_path / "d.npy", cube, WL)
+    with pytest.raises(ValueError, match="key must be None"):
+        read_array(tmp_path / "c.npy", key="cube")
+
+
+def test_matlab_v73_is_read_in_matlab_order(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    cube = np.arange(6 * 7 * 5, dtype=np.float64).reshape(6, 7, 5)
+    path = tmp_path / "v73.mat"
+    with h5py.File(path, "w", userblock_size=512) as f:
+        # MATLAB writes column-major: the HDF5 dataset holds the transpose
+        f.create_dataset("meas", data=cube.T).attrs["MATLAB_class"] = np.bytes_("double")
+        f.create_dataset("wavelengths", data=WL.reshape(5, 1))  # a 1×5 row vector in MATLAB
+        f.create_dataset("name", data=np.frombuffer(b"abc", np.uint8)).attrs[
+            "MATLAB_class"
+        ] = np.bytes_("char")
+    with open(path, "r+b") as f:
+        f.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Nov 23 2026 HDF5 schema")
+    back, wl = read_cube(path)
+    np.testing.assert_array_equal(back, cube)
+    np.testing.assert_allclose(wl, WL)
+    np.testing.assert_array_equal(read_array(path, "meas"), cube)
+
+
+def test_keys_are_found_alone_or_listed(tmp_path):
+    np.savez(tmp_path / "two.npz", a=np.zeros((4, 4)), b=np.ones((4, 4, 3)), wavelengths=WL[:3])
+    back, wl = read_cube(tmp_path / "two.npz")  # the only 3-D array is the cube
+    assert back.shape == (4, 4, 3) and wl is not None
+    with pytest.raises(ValueError, match=r"a \(4, 4\).*b \(4, 4, 3\).*pass key=NAME"):
+        read_array(tmp_path / "two.npz")
+    np.testing.assert_array_equal(read_array(tmp_path / "two.npz", "a"), np.zeros((4, 4)))
+    with pytest.raises(KeyError, match="no array 'c'.*a \\(4, 4\\)"):
+        read_array(tmp_path / "two.npz", "c")
+    import scipy.io
+
+    scipy.io.savemat(tmp_path / "m.mat", {"mask": np.eye(3), "meas": np.ones((3, 5))})
+    with pytest.raises(ValueError, match="mask \\(3, 3\\), meas \\(3, 5\\)"):
+        read_array(tmp_path / "m.mat")
+    np.testing.assert_array_equal(read_array(tmp_path / "m.mat", "mask"), np.eye(3))
+    assert split_key(str(tmp_path / "m.mat") + ":mask") == (str(tmp_path / "m.mat"), "mask")
+    assert split_key(str(tmp_path / "m.mat")) == (str(tmp_path / "m.mat"), None)
+
+
+def test_reads_are_bounded_before_allocation(tmp_path):
+    np.save(tmp_path / "big.npy", np.zeros((100, 100)))
+    with pytest.raises(ValueError, match="GiB limit"):
+        read_array(tmp_path / "big.npy", max_bytes=1000)
+    write_cube(tmp_path / "c.h5", _cube())
+    with pytest.raises(ValueError, match="'cube' declares shape \\(6, 7, 5\\)"):
+        read_cube(tmp_path / "c.h5", max_bytes=100)
+
+
+def test_bad_inputs_are_clear_errors(tmp_path):
+    with pytest.raises(ValueError, match="unknown file type '.xyz'"):
+        read_cube(tmp_path / "a.xyz")
+    with pytest.raises(FileNotFoundError, match="file not found"):
+        read_cube(tmp_path / "missing.h5")
+    with pytest.raises(ValueError, match="micrometres"):
+        write_cube(tmp_path / "c.h5", _cube(), WL / 1000)
+    with pytest.raises(ValueError, match="5 wavelengths for a cube of 4 bands"):
+        write_cube(tmp_path / "c.h5", _cube()[:, :, :4], WL)
+    with pytest.raises(ValueError, match="rows, columns, bands"):
+        write_cube(tmp_path / "c.h5", np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="JSON"):
+        write_cube(tmp_path / "c.h5", _cube(), metadata={"x": object()})
+    np.savez(tmp_path / "um.npz", cube=_cube(), wavelengths=WL / 1000)
+    with pytest.raises(ValueError, match="micrometres"):
+        read_cube(tmp_path / "um.npz")
+
+
+def test_writes_never_overwrite_unasked_and_a_failed_write_keeps_the_old_file(
+    tmp_path, monkeypatch
+):
+    path = write_cube(tmp_path / "c.npz", _cube(), WL)
+    before = path.read_bytes()
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        write_cube(path, _cube() * 2, WL)
+
+    def boom(*a, **k):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(np, "savez_compressed", boom)
+    with pytest.raises(OSError, match="No space"):
+        write_cube(path, _cube() * 2, WL, overwrite=True)
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npz"]  # no temporary left behind
+    monkeypatch.undo()
+    write_cube(path, _cube() * 2, WL, overwrite=True)
+    np.testing.assert_array_equal(read_cube(path)[0], _cube() * 2)
+
+
+def test_envi_units_are_converted(tmp_path):
+    pytest.importorskip("spectral")
+    write_cube(tmp_path / "c.hdr", _cube(), WL)
+    hdr = (tmp_path / "c.hdr").read_text()
+    hdr = hdr.replace("wavelength units = nm", "wavelength units = micrometers")
+    hdr = hdr.replace("450", "0.45").replace("500", "0.5").replace("550", "0.55")
+    hdr = hdr.replace("600", "0.6").replace("650", "0.65")
+    (tmp_path / "c.hdr").write_text(hdr)
+    _, wl = read_cube(tmp_path / "c.hdr")
+    np.testing.assert_allclose(wl, WL)
+    with pytest.raises(FileExistsError):
+        write_cube(tmp_path / "c.hdr", _cube(), WL)
+
+
+def test_metadata_is_stored(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    write_cube(tmp_path / "c.h5", _cube(), WL, metadata={"scene": "face"})
+    with h5py.File(tmp_path / "c.h5") as f:
+        assert json.loads(f.attrs["metadata"]) == {"scene": "face"}
+        assert f["cube"].compression == "gzip"
+    assert files.WAVELENGTH_RANGE_NM == (200.0, 20000.0)

@@ -117,6 +117,19 @@ def run_acquire(args) -> int:
 
 
 def run_reconstruct(args) -> int:
+    direct = [n for n in ("system", "mask", "measurement") if getattr(args, n) is not None]
+    if direct:
+        if args.calibration or args.frames:
+            raise ValueError(
+                "give either --system/--mask/--measurement (direct path) or a calibration bundle "
+                "and frames, not both"
+            )
+        return _reconstruct_direct(args)
+    if not args.calibration or not args.frames:
+        raise ValueError(
+            "reconstruct needs --system, --mask and --measurement (direct path) or a calibration "
+            "bundle and frames"
+        )
     from . import reconstruct
     from .colour import reflectance
     from .io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
@@ -186,6 +199,154 @@ def run_reconstruct(args) -> int:
         f"{seconds:.1f} s ({res.iterations} iterations, residual "
         f"{res.history['residual'][-1]:.3g}); written to {out}"
     )
+    return 0
+
+
+def _system_from_args(args, code):
+    import inspect
+
+    from .systems import REGISTRY
+
+    cls = REGISTRY[args.system]  # an unknown name lists the registered ones
+    params = inspect.signature(cls.__init__).parameters
+    kwargs = dict(args.system_option or [])
+    named = {"n_bands": args.bands, "shifts": args.shift}
+    if args.wavelengths:
+        try:
+            lo, hi = (float(v) for v in args.wavelengths.split(":"))
+        except ValueError:
+            raise ValueError(
+                f"--wavelengths must be START:STOP in nm, got {args.wavelengths!r}"
+            ) from None
+        if args.bands is None:
+            raise ValueError("--wavelengths needs --bands")
+        named["wavelengths"] = np.linspace(lo, hi, args.bands)
+    for k, v in named.items():
+        if v is not None:
+            if k not in params:
+                raise ValueError(f"{args.system} takes no {k!r}; its arguments: {list(params)[1:]}")
+            kwargs[k] = int(v) if k == "shifts" and float(v).is_integer() else v
+    takes_kwargs = any(p.kind is p.VAR_KEYWORD for p in params.values())
+    unknown = [k for k in kwargs if k not in params and not takes_kwargs]
+    if unknown:
+        raise ValueError(
+            f"{args.system} takes no argument(s) {unknown}; its arguments: {list(params)[1:]}"
+        )
+    missing = [
+        k
+        for k, p in list(params.items())[2:]
+        if p.default is p.empty and p.kind is p.KEYWORD_ONLY and k not in kwargs
+    ]
+    if missing:
+        flags = {"n_bands": "--bands"}
+        raise ValueError(
+            f"{args.system} needs "
+            + ", ".join(flags.get(k, f"--system-option {k}=…") for k in missing)
+        )
+    return cls(code, **kwargs)
+
+
+def _reconstruct_direct(args) -> int:
+    from . import reconstruct
+    from .io import read_array, save_bundle
+    from .io.files import split_key
+
+    for name in ("system", "mask", "measurement"):
+        if getattr(args, name) is None:
+            raise ValueError(f"the direct path needs --{name}")
+    out = Path(args.out)
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    defaults = _method_defaults(args.method)
+    mask_path, mask_key = split_key(args.mask)
+    meas_path, meas_key = split_key(args.measurement)
+    code = np.asarray(read_array(mask_path, mask_key), dtype=np.float64)
+    g = np.asarray(read_array(meas_path, meas_key))
+    if g.dtype.kind not in "biuf":
+        raise ValueError(f"{args.measurement}: the measurement must be numeric, got {g.dtype}")
+    if not np.all(np.isfinite(g)):
+        raise ValueError(f"{args.measurement}: the measurement holds NaN or infinite values")
+    system = _system_from_args(args, code)
+    if g.shape != tuple(system.measurement_shape):
+        raise ValueError(
+            f"{args.measurement}: measurement shape {g.shape} does not match the system's "
+            f"{tuple(system.measurement_shape)} (code {code.shape}, options as given)"
+        )
+    g = g.astype(np.float32 if g.dtype.itemsize <= 4 else np.float64)
+    options = dict(args.option or [])
+    if "progress" in defaults:
+        options.setdefault("progress", not args.quiet)
+    t0 = time.perf_counter()
+    res = reconstruct(system, g, args.method, **options)
+    seconds = time.perf_counter() - t0
+    depth = res.depth
+    save_bundle(
+        out,
+        system=system,
+        measurement=g,
+        cube=np.asarray(res.cube, dtype=np.float32),
+        depth=None if depth is None else np.asarray(depth),
+        sources=[Path(mask_path), Path(meas_path)],
+        overwrite=args.force,
+        metadata={
+            "method": args.method,
+            "options": {k: v for k, v in res.options.items() if _jsonable(v)},
+            "seconds": seconds,
+            "iterations": res.iterations,
+            "mask": args.mask,
+            "measurement": args.measurement,
+        },
+    )
+    print(
+        f"{type(system).__name__} {tuple(system.cube_shape)} reconstructed with {args.method} in "
+        f"{seconds:.1f} s ({res.iterations} iterations, residual "
+        f"{res.history['residual'][-1]:.3g}); written to {out}"
+    )
+    return 0
+
+
+def run_info(args) -> int:
+    import json
+
+    from .io import files
+
+    path = Path(args.file)
+    suffix = files._suffix(path)
+    print(f"{path} ({path.stat().st_size if path.is_file() else 0} bytes)")
+    if suffix == ".hdr":
+        cube, wl = files.read_cube(path)
+        entries = {"cube": (cube.shape, cube.dtype, None)}
+    else:
+        entries = files._entries(path, suffix)
+    for name, (shape, dtype, _) in entries.items():
+        print(f"  {name}: {tuple(int(n) for n in shape)} {np.dtype(dtype)}")
+    doc = None
+    if suffix in (".h5", ".hdf5"):
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            raw = f.attrs.get("tensor_cosdi_bundle")
+        doc = None if raw is None else json.loads(raw)
+    elif suffix == ".npz" and "__bundle__" in entries:
+        doc = json.loads(str(entries["__bundle__"][2]()))
+    if doc is None and suffix != ".hdr":
+        try:
+            _, wl = files.read_cube(path)
+        except (ValueError, KeyError):
+            wl = None
+    elif doc is not None:
+        wl = None
+    if wl is not None:
+        print(f"  wavelengths: {len(wl)} bands, {wl[0]:g}–{wl[-1]:g} nm")
+    if doc is not None:
+        system = doc.get("system", {})
+        print(f"  bundle: {doc.get('kind')}, created {doc.get('created')}, {doc.get('software')}")
+        if system:
+            print(f"  system: {system.get('class')} {system.get('params')}")
+        for src in doc.get("provenance", []):
+            print(f"  source: {src.get('path')} sha256 {src.get('sha256')}")
+        if doc.get("metadata"):
+            print(f"  metadata: {json.dumps(doc['metadata'])[:400]}")
     return 0
 
 
@@ -275,13 +436,37 @@ def build_parser() -> argparse.ArgumentParser:
     acq.set_defaults(func=run_acquire)
 
     rec = sub.add_parser(
-        "reconstruct", help="capture files + calibration bundle → reconstruction bundle"
+        "reconstruct",
+        help="measurement + mask files → cube (direct), or frames + calibration bundle → bundle",
+        description=(
+            "Direct path: tensor-cosdi reconstruct --system sd_cassi --mask MASK[:KEY] --shift 2 "
+            "--bands 28 --measurement MEAS[:KEY] --out cube.h5.  Bundle path: tensor-cosdi "
+            "reconstruct CALIBRATION FRAMES… --out out.npz."
+        ),
     )
-    rec.add_argument("calibration", help="bundle holding the system (tensor_cosdi.io.save_bundle)")
     rec.add_argument(
-        "frames", nargs="+", help="frame files or a folder, in the system's frame order"
+        "calibration", nargs="?", help="bundle holding the system (tensor_cosdi.io.save_bundle)"
     )
-    rec.add_argument("--out", required=True, help="reconstruction bundle to write (.npz)")
+    rec.add_argument(
+        "frames", nargs="*", help="frame files or a folder, in the system's frame order"
+    )
+    rec.add_argument("--system", help="direct path: a name of systems.REGISTRY (e.g. sd_cassi)")
+    rec.add_argument("--mask", help="direct path: coded aperture file[:variable]")
+    rec.add_argument("--measurement", help="direct path: measurement file[:variable]")
+    rec.add_argument("--bands", type=_positive_int, help="direct path: number of bands")
+    rec.add_argument("--shift", type=float, help="direct path: dispersion in pixels per band")
+    rec.add_argument(
+        "--wavelengths", help="direct path: START:STOP in nm (band centres, evenly spaced)"
+    )
+    rec.add_argument(
+        "--system-option",
+        action="append",
+        type=_option_value,
+        help='direct path: another system argument key=value, e.g. modality="lf" (repeat)',
+    )
+    rec.add_argument(
+        "--out", required=True, help="bundle to write: .h5 (HDF5) or .npz (bundle path: .npz)"
+    )
     rec.add_argument("--method", default="otd", help="reconstruction method (default otd)")
     rec.add_argument(
         "--option", action="append", type=_option_value, help="method option key=value (repeat)"
@@ -306,6 +491,12 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
     rec.set_defaults(func=run_reconstruct)
+
+    info = sub.add_parser(
+        "info", help="arrays, shapes, dtypes, wavelengths and provenance of a data file"
+    )
+    info.add_argument("file", help="a .mat/.h5/.npz/.npy/.hdr/.tif file or a bundle")
+    info.set_defaults(func=run_info)
 
     tr = sub.add_parser(
         "train-denoiser",

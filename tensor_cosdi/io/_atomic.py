@@ -17,6 +17,12 @@ def _fsync_path(path) -> None:
         os.close(fd)
 
 
+def _umask() -> int:
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
+
+
 def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = None) -> Path:
     """Write ``path`` through ``write(tmp_path)`` atomically; returns ``path``.
 
@@ -35,6 +41,7 @@ def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = N
     os.close(fd)
     try:
         write(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; a saved file follows the umask
         _fsync_path(tmp)
         if overwrite:
             os.replace(tmp, p)

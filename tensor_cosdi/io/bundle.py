@@ -1,5 +1,13 @@
 """Bundles: one file holding a measurement or reconstruction with everything needed to use it later.
 
+Two containers with the same content.  HDF5 (``.h5``/``.hdf5``): datasets
+``measurement``, ``cube``, ``depth``, ``wavelengths`` at the root, groups
+``system``, ``calibration`` and ``extra``, gzip-compressed, the JSON
+document below as the root attribute ``tensor_cosdi_bundle`` (with
+``metadata`` and ``provenance`` also as their own attributes) — readable
+from MATLAB (``h5read``), Julia or ``h5py`` without this library.  NumPy
+``.npz`` (the default for any other name):
+
 Format (documented, stable): a NumPy ``.npz`` archive (``numpy.savez``, no
 pickles) whose arrays keep their exact dtype and bits, plus one JSON document
 stored as the string array ``__bundle__``:
@@ -35,6 +43,9 @@ import numpy as np
 
 from .. import _backend as B
 from ._atomic import atomic_write
+
+#: Extensions written and read as HDF5 bundles (everything else: ``.npz``).
+H5_SUFFIXES = (".h5", ".hdf5")
 
 __all__ = [
     "save_bundle",
@@ -154,7 +165,7 @@ def save_bundle(
     Parameters
     ----------
     path : str or Path
-        Target file (``.npz`` is appended if missing).
+        Target file: ``.h5``/``.hdf5`` for HDF5, else ``.npz`` (appended if missing).
     system : System, optional
         Saved by parameters and arrays (rebuilt on load).
     measurement, cube, depth : array or tensor, optional
@@ -190,7 +201,7 @@ def save_bundle(
     from .. import __version__
 
     p = Path(path)
-    if p.suffix != ".npz":
+    if p.suffix.lower() not in (".npz",) + H5_SUFFIXES:
         p = p.with_name(p.name + ".npz")
     if p.exists() and not overwrite:
         raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
@@ -251,25 +262,83 @@ def save_bundle(
     )
     doc["arrays"] = sorted(store)
     store["__bundle__"] = np.array(json.dumps(doc))
-    atomic_write(p, lambda tmp: np.savez(tmp, **store), overwrite=overwrite, suffix=".npz")
+    if p.suffix.lower() in H5_SUFFIXES:
+        store.pop("__bundle__")
+        atomic_write(p, lambda tmp: _write_h5(tmp, store, doc), overwrite=overwrite)
+    else:
+        atomic_write(p, lambda tmp: np.savez(tmp, **store), overwrite=overwrite, suffix=".npz")
     return p
 
 
-def load_bundle(path) -> Bundle:
-    """Read a bundle written by :func:`save_bundle` (arrays bit-identical, system rebuilt)."""
+def _h5_name(key: str) -> str:
+    """``system.code`` → ``system/code`` (groups in HDF5), ``cube`` → ``cube``."""
+    head, sep, tail = key.partition(".")
+    return f"{head}/{tail}" if sep and head in ("system", "calibration", "extra") else key
+
+
+def _write_h5(tmp, store, doc):
+    from .files import _require_h5py
+
+    h5py = _require_h5py()
+    with h5py.File(tmp, "w") as f:
+        for k, v in store.items():
+            big = v.ndim > 0 and v.size > 64
+            kw = {"compression": "gzip", "shuffle": True} if big else {}
+            f.create_dataset(_h5_name(k), data=v, **kw)
+        if "system.wavelengths" in store and "wavelengths" not in store:
+            f["wavelengths"] = f["system/wavelengths"]  # a hard link: readable without the group
+        f.attrs["tensor_cosdi_bundle"] = json.dumps(doc)
+        f.attrs["metadata"] = json.dumps(doc.get("metadata", {}))
+        f.attrs["provenance"] = json.dumps(doc.get("provenance", []))
+
+
+def _read_h5(p: Path, max_bytes: int):
+    from .files import _check_size, _require_h5py
+
+    h5py = _require_h5py()
+    try:
+        f = h5py.File(p, "r")
+    except OSError as e:
+        raise ValueError(f"{p}: not a readable HDF5 bundle ({e})") from e
+    with f:
+        if "tensor_cosdi_bundle" not in f.attrs:
+            raise ValueError(f"{p}: an HDF5 file without the tensor_cosdi_bundle attribute")
+        doc = json.loads(f.attrs["tensor_cosdi_bundle"])
+        data = {}
+        for k in doc.get("arrays", []):
+            name = _h5_name(k)
+            if name not in f or not isinstance(f[name], h5py.Dataset):
+                raise ValueError(f"{p}: the bundle lists {k!r} but the file has no dataset {name}")
+            _check_size(p, k, f[name].shape, f[name].dtype, max_bytes)
+            data[k] = f[name][()]
+    return data, doc
+
+
+def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
+    """Read a bundle written by :func:`save_bundle` (arrays bit-identical, system rebuilt).
+
+    ``.npz`` or HDF5 (``.h5``/``.hdf5``); an HDF5 bundle's declared array
+    sizes are checked against ``max_bytes`` (default
+    :data:`tensor_cosdi.io.files.MAX_ARRAY_BYTES`) before reading.
+    """
+    from .files import MAX_ARRAY_BYTES
+
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"bundle not found: {p}")
-    try:
-        with np.load(p, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except Exception as e:
-        raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
-    if "__bundle__" not in data:
-        raise ValueError(
-            f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"
-        )
-    doc = json.loads(str(data.pop("__bundle__")))
+    if p.suffix.lower() in H5_SUFFIXES:
+        data, doc = _read_h5(p, MAX_ARRAY_BYTES if max_bytes is None else max_bytes)
+    else:
+        try:
+            with np.load(p, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except Exception as e:
+            raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
+        if "__bundle__" not in data:
+            raise ValueError(
+                f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"
+            )
+        doc = json.loads(str(data.pop("__bundle__")))
     if doc.get("format") != FORMAT:
         raise ValueError(f"{p}: unknown format {doc.get('format')!r}")
     if doc.get("format_version", 0) > FORMAT_VERSION:

@@ -217,7 +217,9 @@ def _pick(path, entries, key, want_ndim=None):
         return cands[0]
     listing = ", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays"
     what = "no candidate" if not cands else "several candidates"
-    raise ValueError(f"{path}: {what} for the array to read ({listing}); pass key=NAME")
+    raise ValueError(
+        f"{path}: {what} for the array to read ({listing}); pass key=NAME (CLI: FILE:NAME)"
+    )
 
 
 def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarray:

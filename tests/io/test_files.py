@@ -47,9 +47,9 @@ def test_matlab_v73_is_read_in_matlab_order(tmp_path):
         # MATLAB writes column-major: the HDF5 dataset holds the transpose
         f.create_dataset("meas", data=cube.T).attrs["MATLAB_class"] = np.bytes_("double")
         f.create_dataset("wavelengths", data=WL.reshape(5, 1))  # a 1×5 row vector in MATLAB
-        f.create_dataset("name", data=np.frombuffer(b"abc", np.uint8)).attrs[
-            "MATLAB_class"
-        ] = np.bytes_("char")
+        f.create_dataset("name", data=np.frombuffer(b"abc", np.uint8)).attrs["MATLAB_class"] = (
+            np.bytes_("char")
+        )
     with open(path, "r+b") as f:
         f.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Nov 23 2026 HDF5 schema")
     back, wl = read_cube(path)
@@ -146,3 +146,33 @@ def test_metadata_is_stored(tmp_path):
         assert json.loads(f.attrs["metadata"]) == {"scene": "face"}
         assert f["cube"].compression == "gzip"
     assert files.WAVELENGTH_RANGE_NM == (200.0, 20000.0)
+
+
+def test_hdf5_bundles_round_trip_and_read_without_the_library(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    from tensor_cosdi.io import load_bundle, save_bundle
+    from tensor_cosdi.systems import SDCASSI
+
+    system = SDCASSI(np.random.default_rng(0).random((6, 7)), n_bands=5, shifts=1, wavelengths=WL)
+    g = system.forward(_cube(np.float64))
+    path = save_bundle(
+        tmp_path / "r.h5", system=system, measurement=g, cube=_cube(),
+        calibration={"white": np.ones((6, 7, 5))}, metadata={"exposure_ms": 20},
+    )  # fmt: skip
+    b = load_bundle(path)
+    np.testing.assert_array_equal(b.measurement, g)
+    np.testing.assert_array_equal(b.cube, _cube())
+    assert b.metadata == {"exposure_ms": 20} and b.system.measurement_shape == (6, 11)
+    np.testing.assert_array_equal(b.system.forward(_cube(np.float64)), g)
+    with h5py.File(path) as f:  # plain HDF5: named datasets, groups, attributes
+        assert f["cube"].shape == (6, 7, 5) and f["cube"].compression == "gzip"
+        np.testing.assert_allclose(f["wavelengths"][()], WL)
+        assert "code" in f["system"] and "white" in f["calibration"]
+        assert json.loads(f.attrs["metadata"]) == {"exposure_ms": 20}
+    with pytest.raises(FileExistsError):
+        save_bundle(path, cube=_cube())
+    with pytest.raises(ValueError, match="GiB limit"):
+        load_bundle(path, max_bytes=100)
+    write_cube(tmp_path / "plain.h5", _cube())
+    with pytest.raises(ValueError, match="without the tensor_cosdi_bundle"):
+        load_bundle(tmp_path / "plain.h5")

@@ -1,0 +1,93 @@
+"""`tensor-cosdi reconstruct` from a measurement and a mask file (no Python), and `info`."""
+
+import os
+import stat
+
+import numpy as np
+import pytest
+import scipy.io
+
+import tensor_cosdi as tc
+from tensor_cosdi import cli, metrics
+from tensor_cosdi.io import load_bundle
+
+
+@pytest.fixture
+def files(tmp_path):
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, rng=0)
+    scipy.io.savemat(tmp_path / "mask.mat", {"mask": p.system.code})
+    scipy.io.savemat(tmp_path / "meas.mat", {"meas": np.asarray(p.measurement), "t": np.ones(2)})
+    return tmp_path, p
+
+
+def _args(d, out="cube.h5", *extra):
+    return [
+        "reconstruct", "--system", "sd_cassi", "--mask", str(d / "mask.mat"), "--shift", "1",
+        "--bands", "8", "--wavelengths", "450:650", "--measurement", str(d / "meas.mat") + ":meas",
+        "--out", str(d / out), "--method", "gap_tv", "--quiet", *extra,
+    ]  # fmt: skip
+
+
+def test_direct_path_writes_an_hdf5_bundle_with_provenance(files, capsys):
+    d, p = files
+    assert cli.main(_args(d)) == 0
+    assert "written to" in capsys.readouterr().out
+    b = load_bundle(d / "cube.h5")
+    assert b.cube.dtype == np.float32 and b.cube.shape == (32, 32, 8)
+    lsq = tc.studies.score(p, tc.reconstruct(p.system, p.measurement, "lsq").cube)["psnr"]
+    psnr = metrics.psnr(p.cube, b.cube, data_range=float(np.max(p.cube)))
+    assert psnr > lsq + 1.0, (psnr, lsq)
+    np.testing.assert_allclose(b.system.wavelengths, np.linspace(450, 650, 8))
+    assert [s["path"].endswith(n) for s, n in zip(b.provenance, ("mask.mat", "meas.mat"))] == [
+        True,
+        True,
+    ]
+    assert b.metadata["method"] == "gap_tv"
+    mode = stat.S_IMODE(os.stat(d / "cube.h5").st_mode)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert mode == 0o666 & ~umask  # not mkstemp's 0600
+    # never overwritten without --force; with it, replaced
+    before = (d / "cube.h5").read_bytes()
+    assert cli.main(_args(d)) == 2
+    assert "--force" in capsys.readouterr().err and (d / "cube.h5").read_bytes() == before
+    assert cli.main(_args(d, "cube.h5", "--force")) == 0
+
+
+@pytest.mark.parametrize(
+    "flag, value, message",
+    [
+        ("--measurement", "meas.mat", "several candidates.*meas \\(32, 39\\)"),
+        ("--shift", "2", "does not match the system's"),
+        ("--system", "c3slfi", "c3slfi takes no"),
+        ("--system", "nope", "nope"),
+        ("--wavelengths", "450-650", "START:STOP"),
+        ("--mask", None, "needs --mask"),
+    ],
+)
+def test_direct_path_errors_name_what_is_wrong(files, capsys, flag, value, message):
+    import re
+
+    d, _ = files
+    args = _args(d)
+    i = args.index(flag)
+    if value is None:
+        del args[i : i + 2]
+    else:
+        args[i + 1] = str(d / value) if value.endswith(".mat") else value
+    assert cli.main(args) == 2
+    assert re.search(message, capsys.readouterr().err), message
+    assert not (d / "cube.h5").exists()
+
+
+def test_info_lists_arrays_and_bundle_provenance(files, capsys):
+    d, _ = files
+    assert cli.main(["info", str(d / "meas.mat")]) == 0
+    out = capsys.readouterr().out
+    assert "meas: (32, 39) float64" in out and "t: (1, 2)" in out
+    assert cli.main(_args(d)) == 0
+    capsys.readouterr()
+    assert cli.main(["info", str(d / "cube.h5")]) == 0
+    out = capsys.readouterr().out
+    assert "cube: (32, 32, 8) float32" in out and "system: SDCASSI" in out
+    assert "sha256" in out and "wavelengths" in out

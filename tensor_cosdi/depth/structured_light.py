@@ -241,18 +241,22 @@ def spatial_unwrap(wrapped, *, mask=None, reference=None):
     The result is defined up to ``2πm``; ``reference=(index, absolute_phase)``
     fixes ``m`` so that the pixel ``index`` gets the nearest value to
     ``absolute_phase``.  ``mask`` (True = invalid) excludes unreliable pixels
-    (their output is NaN).
+    (their output is NaN); so are NaN or infinite phase values.
     """
     from skimage.restoration import unwrap_phase
 
     w = np.asarray(wrapped, dtype=np.float64)
     if w.ndim not in (1, 2, 3):
         raise ValueError(f"spatial_unwrap handles 1-D to 3-D phase maps, got shape {w.shape}")
-    if mask is not None:
-        m = np.asarray(mask, dtype=bool)
+    bad = ~np.isfinite(w)  # scikit-image's unwrapper never returns on NaN: mask them
+    if mask is not None or bad.any():
+        m = bad if mask is None else np.asarray(mask, dtype=bool)
         if m.shape != w.shape:
             raise ValueError(f"mask {m.shape} must match the phase {w.shape}")
-        out = unwrap_phase(np.ma.masked_array(w, m))
+        m = m | bad
+        if m.all():
+            raise ValueError("spatial_unwrap: every pixel is masked or non-finite")
+        out = unwrap_phase(np.ma.masked_array(np.where(bad, 0.0, w), m))
         out = np.ma.filled(out.astype(np.float64), np.nan)
     else:
         out = np.asarray(unwrap_phase(w), dtype=np.float64)

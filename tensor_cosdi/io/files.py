@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
 from ._atomic import atomic_write
 
 __all__ = [
@@ -52,8 +53,6 @@ CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".npy", ".npz", ".hdr", ".tif", ".tiff"
 MAX_ARRAY_BYTES = 4 * 2**30
 #: Variable names taken as the band centres of a cube (case-insensitive).
 WAVELENGTH_KEYS = ("wavelengths", "wavelengths_nm", "wavelength", "wl", "lambda", "bands_nm")
-#: Plausible band centres in nm (200 nm UV to 20 µm thermal infrared).
-WAVELENGTH_RANGE_NM = (200.0, 20000.0)
 
 
 def split_key(spec: str) -> tuple[str, str | None]:
@@ -248,13 +247,7 @@ def _check_wavelengths(path, wl, n_bands):
     wl = np.asarray(wl, dtype=np.float64).reshape(-1)
     if wl.size != n_bands:
         raise ValueError(f"{path}: {wl.size} wavelengths for a cube of {n_bands} bands")
-    lo, hi = WAVELENGTH_RANGE_NM
-    if not np.all(np.isfinite(wl)) or wl.min() < lo or wl.max() > hi:
-        hint = " (they look like micrometres: multiply by 1000)" if wl.max() < 30 else ""
-        raise ValueError(
-            f"{path}: wavelengths {wl.min():g}–{wl.max():g} lie outside {lo:g}–{hi:g} nm{hint}"
-        )
-    return wl
+    return check_wavelengths_nm(wl, f"{path}: wavelengths")
 
 
 def _read_envi(path: Path, max_bytes):

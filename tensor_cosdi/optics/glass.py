@@ -39,9 +39,9 @@ class Glass:
 
     def index(self, wavelength_nm):
         """Refractive index at ``wavelength_nm`` (scalar or array, nanometres)."""
-        lam = np.asarray(wavelength_nm, dtype=np.float64)
-        if not np.all(np.isfinite(lam)) or np.any(lam <= 0):
-            raise ValueError(f"wavelengths must be finite and > 0 nm, got {wavelength_nm!r}")
+        from .._units import check_wavelengths_nm
+
+        lam = check_wavelengths_nm(wavelength_nm, "wavelength_nm")
         l2 = (lam / 1000.0) ** 2
         n2 = 1.0 + sum(b * l2 / (l2 - c) for b, c in zip(self.B, self.C))
         if np.any(n2 <= 0):

@@ -194,3 +194,20 @@ def test_depth_from_focus_confidence():
         conf[:, 28:], 1.0
     )  # texture blurs up to column 25
     assert np.all(np.round(est[:, 4:12]) == 1)
+
+
+def test_spatial_unwrap_masks_non_finite_phase_instead_of_hanging():
+    from tensor_cosdi.depth import spatial_unwrap
+
+    yy, xx = np.mgrid[0:32, 0:32]
+    true = 0.4 * xx + 0.2 * yy
+    wrapped = np.angle(np.exp(1j * true))
+    wrapped[5, 7] = np.nan
+    wrapped[20, 3] = np.inf
+    out = spatial_unwrap(wrapped, reference=((0, 0), 0.0))
+    assert np.isnan(out[5, 7]) and np.isnan(out[20, 3])
+    ok = np.isfinite(out)
+    assert ok.sum() == 32 * 32 - 2
+    np.testing.assert_allclose(out[ok], true[ok], atol=1e-9)
+    with pytest.raises(ValueError, match="every pixel"):
+        spatial_unwrap(np.full((4, 4), np.nan))

@@ -20,7 +20,7 @@ def test_sellmeier_matches_catalogue_nd():
 def test_glass_errors_name_the_problem():
     with pytest.raises(ValueError, match="unknown glass 'BK8'.*N-SK2"):
         optics.refractive_index("BK8", 550)
-    with pytest.raises(ValueError, match="> 0 nm"):
+    with pytest.raises(ValueError, match="nanometres in 200–20000, got -1"):
         optics.refractive_index("SF4", -1)
 
 
@@ -190,3 +190,13 @@ def test_fringes_and_gray_codes():
         optics.phase_shift_patterns(phase, 2)
     with pytest.raises(ValueError, match="amplitude"):
         optics.phase_shift_patterns(phase, 4, offset=0.2, amplitude=0.5)
+
+
+def test_wavelengths_in_micrometres_are_an_error_naming_the_unit():
+    from tensor_cosdi.optics import refractive_index
+
+    with pytest.raises(ValueError, match="micrometres"):
+        refractive_index("SF4", 0.55)
+    with pytest.raises(ValueError, match="nanometres in 200–20000"):
+        refractive_index("SF4", [500.0, np.nan])
+    assert refractive_index("SF4", 550.0) > 1.7

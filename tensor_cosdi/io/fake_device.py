@@ -26,6 +26,7 @@ class FakeTriggerDevice:
       (a retry then succeeds);
     * ``silent`` — never answer;
     * ``garbage_once`` — answer garbage the first time;
+    * ``refuse`` — answer ``ERR`` (the device's own refusal);
     * ``echo`` — echo every line first.
 
     ``fired`` lists the frames actually triggered (a repeated ``TRIG n`` is
@@ -41,6 +42,7 @@ class FakeTriggerDevice:
         late_once=None,
         silent=(),
         garbage_once=(),
+        refuse=(),
         echo: bool = False,
         on_trigger=None,
     ):
@@ -55,6 +57,7 @@ class FakeTriggerDevice:
         self.late_once = dict(late_once or {})
         self.silent = set(silent)
         self.garbage_once = set(garbage_once)
+        self.refuse = set(refuse)
         self.echo = echo
         self.on_trigger = on_trigger
         self.fired: list[int] = []
@@ -109,6 +112,9 @@ class FakeTriggerDevice:
             self._send("#$%?!")
             return
         verb, *args = line.split()
+        if self._match(self.refuse, line):
+            self._send(f"ERR {verb} refused")
+            return
         if verb == "TRIG":
             n = int(args[0]) if args and args[0].isdigit() else None
             if n is None:

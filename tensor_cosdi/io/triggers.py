@@ -39,6 +39,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 __all__ = [
     "Step",
     "AcquisitionPlan",
@@ -88,15 +90,62 @@ class Step:
         return {"index": dict(self.index), "commands": list(self.commands), "frame": self.frame}
 
 
+#: Largest deformable-mirror Zernike amplitude (waves) a command may ask for; the device's declared
+#: range.  Larger, NaN or infinite values never reach the hardware.
+DM_MAX_WAVES = 10.0
+
+
 def _check_command(c):
+    """``c`` stripped, or a ``ValueError``: one line, a known verb, arguments of the right kind and
+    range (``DMD``/``PROJ``/``TRIG``: one integer ≥ 0; ``DM``: ``j:a`` pairs, Noll ``j ≥ 1``,
+    finite ``|a| ≤`` :data:`DM_MAX_WAVES`; ``PING``: none)."""
     if not isinstance(c, str) or not c.strip() or "\n" in c or "\r" in c:
         raise ValueError(f"a command is one non-empty line of text, got {c!r}")
-    verb = c.split()[0]
+    verb, *args = c.split()
     if verb not in ("PING", "DMD", "DM", "PROJ", "TRIG"):
         raise ValueError(
             f"unknown command verb {verb!r} in {c!r}; the protocol knows PING, DMD, DM, PROJ, TRIG"
         )
+    if verb == "PING" and args:
+        raise ValueError(f"PING takes no arguments, got {c!r}")
+    if verb in ("DMD", "PROJ", "TRIG"):
+        if len(args) != 1 or not args[0].isdigit():
+            raise ValueError(f"{verb} takes one integer ≥ 0, got {c!r}")
+    if verb == "DM":
+        if not args:
+            raise ValueError(f"DM needs at least one j:a pair, got {c!r}")
+        for pair in args:
+            j, sep, a = pair.partition(":")
+            try:
+                amp = float(a)
+            except ValueError:
+                amp = None
+            if not sep or not j.isdigit() or int(j) < 1 or amp is None:
+                raise ValueError(f"DM takes j:a pairs (Noll j ≥ 1, amplitude a), got {pair!r}")
+            if not np.isfinite(amp) or abs(amp) > DM_MAX_WAVES:
+                raise ValueError(
+                    f"DM amplitude {a} for Zernike {j} is not a finite value within "
+                    f"±{DM_MAX_WAVES:g} waves (DM_MAX_WAVES); not sent"
+                )
     return c.strip()
+
+
+def _check_frame_name(name):
+    """A plan's frame name must be a plain file name: it is joined to the capture folder."""
+    if (
+        not isinstance(name, str)
+        or not name
+        or name in (".", "..")
+        or "/" in name
+        or "\\" in name
+        or "\0" in name
+        or name.startswith(".")
+    ):
+        raise ValueError(
+            f"frame names must be plain file names (no folders, '..', leading dots or absolute "
+            f"paths), got {name!r}"
+        )
+    return name
 
 
 @dataclass(frozen=True)
@@ -120,6 +169,8 @@ class AcquisitionPlan:
         frames = [s.frame for s in steps]
         if any(not f for f in frames) or len(set(frames)) != len(frames):
             raise ValueError("every step needs its own, non-empty frame file name")
+        for f in frames:
+            _check_frame_name(f)
         for s in steps:
             for c in s.commands:
                 _check_command(c)
@@ -153,6 +204,12 @@ class AcquisitionPlan:
         steps = []
         names = cls._frames(len(zernike_steps), suffix)
         for z, coeffs in enumerate(zernike_steps):
+            for j, a in dict(coeffs).items():
+                if not np.isfinite(float(a)) or abs(float(a)) > DM_MAX_WAVES:
+                    raise ValueError(
+                        f"focal step {z}: Zernike {j} amplitude {a!r} is not a finite value "
+                        f"within ±{DM_MAX_WAVES:g} waves"
+                    )
             dm = " ".join(f"{int(j)}:{float(a):.6g}" for j, a in sorted(dict(coeffs).items()))
             steps.append(Step({"z": z}, (f"DMD {z}", f"DM {dm}"), names[z]))
         return cls(tuple(steps), "focal_sweep")

@@ -15,6 +15,7 @@ from tensor_cosdi.io import (
     FakeTriggerDevice,
     SerialDevice,
 )
+from tensor_cosdi.io.triggers import Step
 
 pytestmark = pytest.mark.skipif(
     os.name != "posix", reason="pseudo-terminal fake device needs POSIX"
@@ -158,11 +159,13 @@ def test_truncated_log_line_and_foreign_plan(tmp_path, device):
 
 
 def test_err_reply_is_final(device):
-    dev = device()
+    dev = device(refuse=("DMD 7",))
     with SerialDevice(dev.port, timeout=0.3, retries=3) as host:
-        with pytest.raises(DeviceError, match="device refused 'TRIG x'"):
+        with pytest.raises(DeviceError, match="device refused 'DMD 7'"):
+            host.command("DMD 7")
+        with pytest.raises(ValueError, match="one integer"):  # the host never sends this
             host.command("TRIG x")
-    assert dev.received.count("TRIG x") == 1
+    assert dev.received.count("DMD 7") == 1 and "TRIG x" not in dev.received
 
 
 def test_plans(tmp_path):
@@ -180,3 +183,41 @@ def test_plans(tmp_path):
         AcquisitionPlan(
             ({"index": {"k": 0}, "frame": "a.tif"}, {"index": {"k": 1}, "frame": "a.tif"})
         )
+
+
+@pytest.mark.parametrize(
+    "command, message",
+    [
+        ("DM 6:nan", "not a finite value"),
+        ("DM 4:1e9", "within ±10 waves"),
+        ("DM 0:0.5", "Noll j ≥ 1"),
+        ("DM 4", "j:a pairs"),
+        ("DMD -1", "one integer ≥ 0"),
+        ("PROJ 2 3", "one integer ≥ 0"),
+        ("TRIG x", "one integer ≥ 0"),
+        ("PING 1", "no arguments"),
+    ],
+)
+def test_unsafe_commands_never_reach_the_device(command, message):
+    from tensor_cosdi.io.triggers import _check_command
+
+    with pytest.raises(ValueError, match=message):
+        _check_command(command)
+    with pytest.raises(ValueError, match=message):
+        AcquisitionPlan((Step({"t": 0}, (command,), "f.tif"),))
+
+
+def test_focal_sweep_refuses_nan_and_out_of_range_amplitudes():
+    with pytest.raises(ValueError, match="focal step 1: Zernike 4 amplitude nan"):
+        AcquisitionPlan.focal_sweep([{4: 0.1}, {4: float("nan")}])
+    with pytest.raises(ValueError, match="within ±10 waves"):
+        AcquisitionPlan.focal_sweep([{4: 50.0}])
+    assert (
+        AcquisitionPlan.focal_sweep([{4: -0.5, 6: 0.25}]).steps[0].commands[1] == "DM 4:-0.5 6:0.25"
+    )
+
+
+@pytest.mark.parametrize("name", ["../x.tif", "/etc/passwd", "a/b.tif", "..", ".hidden", "a\\b"])
+def test_frame_names_are_confined_to_the_capture_folder(name):
+    with pytest.raises(ValueError, match="plain file names"):
+        AcquisitionPlan((Step({"t": 0}, ("PROJ 0",), name),))

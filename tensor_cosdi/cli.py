@@ -152,7 +152,7 @@ def run_reconstruct(args) -> int:
     sources = [
         p
         for src in args.frames
-        for p in frame_paths(src, pattern=args.pattern)
+        for p in frame_paths(src, pattern=args.pattern, exclude=refs)
         if p.resolve() not in refs
     ]
     frames = load_frames(

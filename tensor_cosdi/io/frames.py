@@ -10,6 +10,7 @@ monochrome) unless ``channel=`` picks one.  Every error names the file.
 from __future__ import annotations
 
 import re
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -148,29 +149,51 @@ def _natural_key(p: Path):
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", p.name)]
 
 
-def frame_paths(source, *, pattern: str = "*") -> list[Path]:
+def frame_paths(source, *, pattern: str = "*", exclude=()) -> list[Path]:
     """Frame files from a folder (natural sort order: ``f2`` before ``f10``) or a list of paths.
 
-    In a folder, files whose names carry a running number must have no gaps:
-    ``frame_000, frame_001, frame_003`` is an error naming ``frame_002``.
+    A folder's frames must be one numbered sequence (``frame_000, frame_001,
+    …``): a file outside it (another prefix, no number), two files with the
+    same number, or a gap is an error listing them — a stray file must not
+    shift the frame order silently.  ``exclude``: paths to ignore (the dark
+    and flat frames kept beside the frames).  A folder of unnumbered files
+    is taken in natural order.
     """
     if isinstance(source, (str, Path)) and Path(source).is_dir():
         folder = Path(source)
+        skip = {Path(x).resolve() for x in exclude if x is not None and not hasattr(x, "shape")}
         paths = sorted(
-            (p for p in folder.glob(pattern) if p.is_file() and p.suffix.lower() in FRAME_SUFFIXES),
+            (
+                p
+                for p in folder.glob(pattern)
+                if p.is_file() and p.suffix.lower() in FRAME_SUFFIXES and p.resolve() not in skip
+            ),
             key=_natural_key,
         )
         if not paths:
             raise ValueError(
                 f"{folder}: no frame files ({', '.join(FRAME_SUFFIXES)}) matching {pattern!r}"
             )
-        numbered = [re.fullmatch(r"(.*?)(\d+)", p.stem) for p in paths]
-        if all(numbered) and len({m.group(1) for m in numbered}) == 1:
-            idx = [int(m.group(2)) for m in numbered]
-            missing = sorted(set(range(min(idx), max(idx) + 1)) - set(idx))
+        numbered = {p: re.fullmatch(r"(.*?)(\d+)", p.stem) for p in paths}
+        if any(numbered.values()):
+            prefixes = Counter(m.group(1) for m in numbered.values() if m)
+            main = prefixes.most_common(1)[0][0]
+            stray = [p.name for p, m in numbered.items() if not m or m.group(1) != main]
+            if stray:
+                raise ValueError(
+                    f"{folder}: files outside the {main}<number> frame sequence: {stray[:10]}"
+                    + (f" and {len(stray) - 10} more" if len(stray) > 10 else "")
+                    + "; move them, or pick the frames with pattern="
+                )
+            idx = {p: int(m.group(2)) for p, m in numbered.items()}
+            counts = Counter(idx.values())
+            dup = sorted(p.name for p, i in idx.items() if counts[i] > 1)
+            if dup:
+                raise ValueError(f"{folder}: several files share a frame number: {dup[:10]}")
+            missing = sorted(set(range(min(counts), max(counts) + 1)) - set(counts))
             if missing:
-                width = len(numbered[0].group(2))
-                names = [f"{numbered[0].group(1)}{i:0{width}d}" for i in missing[:10]]
+                width = len(next(iter(numbered.values())).group(2))
+                names = [f"{main}{i:0{width}d}" for i in missing[:10]]
                 raise ValueError(
                     f"{folder}: frame sequence has gaps — missing {names}"
                     + (f" and {len(missing) - 10} more" if len(missing) > 10 else "")
@@ -222,7 +245,7 @@ def load_frames(
         a flat with non-positive pixels after dark subtraction, missing
         frames — naming the file.
     """
-    paths = frame_paths(paths_or_folder, pattern=pattern)
+    paths = frame_paths(paths_or_folder, pattern=pattern, exclude=(dark, flat))
     if expected is not None and len(paths) != expected:
         raise ValueError(f"expected {expected} frames, found {len(paths)} ({paths[0].parent})")
 

@@ -219,3 +219,21 @@ def test_monochromator_calibration_recovers_code_and_shifts(shifts):
     assert err < (0.01 if shifts[1] == 1 else 0.15)
     with pytest.raises(ValueError, match="not non-decreasing"):
         io.shifts_from_line_frames(frames[..., ::-1])
+
+
+def test_a_frame_folder_is_one_strict_sequence(tmp_path):
+    from tensor_cosdi.io import frame_paths, load_frames
+
+    for i in range(3):
+        np.save(tmp_path / f"frame_{i:03d}.npy", np.full((4, 4), 10.0 + i))
+    np.save(tmp_path / "dark.npy", np.zeros((4, 4)))
+    with pytest.raises(
+        ValueError, match=r"outside the frame_<number> frame sequence: \['dark.npy'\]"
+    ):
+        frame_paths(tmp_path)
+    # the dark frame beside the frames is excluded, not a frame
+    stack = load_frames(tmp_path, dark=tmp_path / "dark.npy")
+    assert stack.shape == (4, 4, 3) and stack[0, 0, 2] == 12.0
+    np.save(tmp_path / "frame_1.npy", np.zeros((4, 4)))
+    with pytest.raises(ValueError, match="share a frame number.*frame_001.npy.*frame_1.npy"):
+        frame_paths(tmp_path, exclude=[tmp_path / "dark.npy"])

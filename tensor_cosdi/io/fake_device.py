@@ -64,6 +64,10 @@ class FakeTriggerDevice:
         self.received: list[str] = []
         self._seen: set[str] = set()
         self._stop = threading.Event()
+        # the descriptors are used and closed only under this lock, and closed once: a closed
+        # number may be reused by the process for another file at any moment
+        self._fd_lock = threading.Lock()
+        self._closed = False
         self._thread = threading.Thread(target=self._serve, daemon=True)
         self._thread.start()
 
@@ -74,12 +78,20 @@ class FakeTriggerDevice:
         return line in mapping or verb in mapping
 
     def _serve(self):
+        import select
+
         buf = b""
         while not self._stop.is_set():
-            try:
-                chunk = os.read(self.master, 1024)
-            except OSError:
-                return
+            with self._fd_lock:
+                if self._closed:
+                    return
+                try:
+                    ready, _, _ = select.select([self.master], [], [], 0.05)
+                    chunk = os.read(self.master, 1024) if ready else None
+                except OSError:
+                    return
+            if chunk is None:
+                continue
             if not chunk:
                 return
             buf += chunk
@@ -90,10 +102,13 @@ class FakeTriggerDevice:
                     self._answer(line)
 
     def _send(self, text):
-        try:
-            os.write(self.master, (text + "\n").encode("ascii"))
-        except OSError:
-            pass
+        with self._fd_lock:
+            if self._closed:
+                return
+            try:
+                os.write(self.master, (text + "\n").encode("ascii"))
+            except OSError:
+                pass
 
     def _answer(self, line):
         self.received.append(line)
@@ -131,12 +146,19 @@ class FakeTriggerDevice:
             self._send(f"ERR {verb} unknown command")
 
     def disconnect(self):
-        """Close the device end: the host's next read or write fails."""
+        """Close the device end: the host's next read or write fails.  Idempotent; each
+        descriptor is closed exactly once and never used afterwards."""
         self._stop.set()
-        for fd in (self.master, self.slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+        with self._fd_lock:
+            if self._closed:
+                return
+            self._closed = True
+            for fd in (self.master, self.slave):
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+        if self._thread is not threading.current_thread():
+            self._thread.join(timeout=1.0)
 
     close = disconnect

@@ -221,3 +221,18 @@ def test_focal_sweep_refuses_nan_and_out_of_range_amplitudes():
 def test_frame_names_are_confined_to_the_capture_folder(name):
     with pytest.raises(ValueError, match="plain file names"):
         AcquisitionPlan((Step({"t": 0}, ("PROJ 0",), name),))
+
+
+def test_fake_device_never_touches_descriptors_it_closed(tmp_path):
+    dev = FakeTriggerDevice()
+    dev.disconnect()
+    dev.disconnect()  # idempotent
+    # the process reuses the lowest free descriptor numbers for new files
+    fds = [os.open(tmp_path / f"f{i}", os.O_RDWR | os.O_CREAT) for i in range(4)]
+    try:
+        dev._send("OK TRIG 1")
+        for i in range(4):
+            assert (tmp_path / f"f{i}").read_bytes() == b""
+    finally:
+        for fd in fds:
+            os.close(fd)

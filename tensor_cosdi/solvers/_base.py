@@ -7,7 +7,9 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
+import tensorly as tl
 
+from .. import _backend as B
 from .._registry import Registry
 
 __all__ = [
@@ -157,11 +159,39 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
             f"{sorted(entry.defaults)}"
         )
     opts = {**entry.defaults, **options}
-    g = system._check_measurement(measurement, "reconstruct")
+    g = system._check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
+    peak, low = float(tl.max(tl.abs(g))), float(tl.min(g))
+    if peak == 0:
+        raise ValueError(
+            "the measurement is all zero: there is no signal to reconstruct (check the exposure, "
+            "the shutter and the frame files)"
+        )
+    if low == float(tl.max(g)):
+        raise ValueError(
+            f"the measurement is constant (every value {low:g}): a coded aperture cannot give "
+            "that from a real scene — check for a saturated or disconnected sensor"
+        )
     t0 = time.perf_counter()
-    out = entry.func(system, g, **opts)
+    # every method sees the measurement scaled to a peak of 1 and the cube is scaled back: the
+    # result does not depend on the measurement's units (1e-300 … 1e300), whatever constants a
+    # method or library keeps in absolute units (Chambolle's stopping tolerance, ε floors)
+    out = entry.func(system, g / peak, **opts)
     seconds = time.perf_counter() - t0
     cube, history, converged = out[:3]
+    if not B.all_finite(cube):
+        raise FloatingPointError(
+            f"method {method!r} produced NaN or inf from a finite measurement; this is a bug in "
+            "the method or options far outside their range — please report it with the options"
+        )
+    with np.errstate(over="ignore"):
+        cube = cube * peak
+    if not B.all_finite(cube):
+        raise OverflowError(
+            f"the reconstruction overflows the {B.real_dtype_name(cube)} range when scaled back "
+            f"to the measurement's units (peak {peak:g}); rescale the measurement"
+        )
+    if isinstance(history, dict) and "objective" in history:
+        history["objective"] = [v * peak * peak for v in history["objective"]]
     depth = out[3] if len(out) > 3 else None
     return Result(
         cube,

@@ -31,7 +31,7 @@ def test_without_torch_the_method_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "torch", None)
     system = _sd()
     with pytest.raises(ImportError, match="pip install"):
-        tc.reconstruct(system, np.ones(system.measurement_shape), "dcosnet")
+        tc.reconstruct(system, np.random.default_rng(0).random(system.measurement_shape), "dcosnet")
 
 
 @needs_torch
@@ -159,7 +159,7 @@ def test_bad_inputs_are_clear_errors(tmp_path):
         Sensing([vsi.system])
     mu = tc.systems.MuCoSDI(np.ones((8, 11)), n_bands=4, modality="monocular")
     with pytest.raises(FileNotFoundError, match="train-dcosnet --system mu_cosdi"):
-        tc.reconstruct(mu, np.ones(mu.measurement_shape), "dcosnet")
+        tc.reconstruct(mu, np.random.default_rng(0).random(mu.measurement_shape), "dcosnet")
     torch.save({"x": 1}, tmp_path / "other.pt")
     with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
         DCoSNet(tmp_path / "other.pt")(_sd(), np.ones(_sd().measurement_shape))

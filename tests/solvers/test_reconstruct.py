@@ -11,7 +11,7 @@ from tensor_cosdi.systems import C3SLFI, CASSIVSI, SDCASSI, DualCameraCASSI
 def test_registry_lists_methods_and_rejects_unknown_ones():
     assert "lsq" in tc.reconstruct.methods()
     sd = SDCASSI.example((6, 7, 4))
-    g = np.zeros(sd.measurement_shape)
+    g = np.random.default_rng(0).random(sd.measurement_shape)
     with pytest.raises(ValueError, match=r"unknown method 'nope'; valid names: \[.*'lsq'"):
         tc.reconstruct(sd, g, method="nope")
     with pytest.raises(
@@ -114,3 +114,45 @@ def test_gap_tv_on_blocks_and_options(backend):
         tc.reconstruct(system, g, method="gap_tv", max_iter=0)
     with pytest.raises(ValueError, match="tv_weight"):
         tc.reconstruct(system, g, method="gap_tv", tv_weight=-1)
+
+
+def _scale_problem():
+    return tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
+
+
+@pytest.mark.parametrize(
+    "method",
+    [
+        m
+        for m, e in tc.solvers.METHODS.items()
+        if e.available and m not in ("avsi", "dfa", "pnp_admm", "dcosnet")  # other systems/weights
+    ],
+)
+def test_results_do_not_depend_on_the_measurement_units(method):
+    p = _scale_problem()
+    g = np.asarray(p.measurement)
+    ref = np.asarray(tc.reconstruct(p.system, g, method).cube)
+    for scale in (1e-300, 1e-5, 1e300):
+        cube = np.asarray(tc.reconstruct(p.system, g * scale, method).cube)
+        assert np.isfinite(cube).all()
+        rel = np.linalg.norm(cube / scale - ref) / np.linalg.norm(ref)
+        assert rel < 1e-6, (method, scale, rel)
+
+
+def test_zero_constant_and_overflowing_measurements_are_clear_errors():
+    p = _scale_problem()
+    shape = p.system.measurement_shape
+    with pytest.raises(ValueError, match="all zero"):
+        tc.reconstruct(p.system, np.zeros(shape), "gap_tv")
+    with pytest.raises(ValueError, match="constant"):
+        tc.reconstruct(p.system, np.full(shape, 2.0), "lsq")
+    with pytest.raises(ValueError, match="NaN or inf"):
+        tc.reconstruct(p.system, np.full(shape, np.nan), "lsq")
+    # a float32 measurement near the top of its range: the cube (≈ g / code sums · bands) may not
+    # fit; then the error says so instead of returning inf
+    g32 = (np.asarray(p.measurement) / np.max(p.measurement) * 3e38).astype(np.float32)
+    try:
+        cube = tc.reconstruct(p.system, g32, "lsq").cube
+        assert np.isfinite(cube).all()
+    except OverflowError as e:
+        assert "rescale the measurement" in str(e)

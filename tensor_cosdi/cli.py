@@ -202,6 +202,15 @@ def run_reconstruct(args) -> int:
     return 0
 
 
+def _wavelength_range(text: str, n: int) -> np.ndarray:
+    """``"START:STOP"`` (nm) → ``n`` evenly spaced band centres."""
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ValueError(f"--wavelengths must be START:STOP in nm, got {text!r}") from None
+    return np.linspace(lo, hi, n)
+
+
 def _system_from_args(args, code):
     import inspect
 
@@ -212,15 +221,9 @@ def _system_from_args(args, code):
     kwargs = dict(args.system_option or [])
     named = {"n_bands": args.bands, "shifts": args.shift}
     if args.wavelengths:
-        try:
-            lo, hi = (float(v) for v in args.wavelengths.split(":"))
-        except ValueError:
-            raise ValueError(
-                f"--wavelengths must be START:STOP in nm, got {args.wavelengths!r}"
-            ) from None
         if args.bands is None:
             raise ValueError("--wavelengths needs --bands")
-        named["wavelengths"] = np.linspace(lo, hi, args.bands)
+        named["wavelengths"] = _wavelength_range(args.wavelengths, args.bands)
     for k, v in named.items():
         if v is not None:
             if k not in params:
@@ -302,6 +305,74 @@ def _reconstruct_direct(args) -> int:
         f"{seconds:.1f} s ({res.iterations} iterations, residual "
         f"{res.history['residual'][-1]:.3g}); written to {out}"
     )
+    return 0
+
+
+def _cube_and_wavelengths(spec, wavelengths):
+    from .io import files, load_bundle
+
+    path, key = files.split_key(spec)
+    p = Path(path)
+    suffix = files._suffix(p)
+    bundle = None
+    if key is None and suffix in (".h5", ".hdf5"):
+        import h5py
+
+        with h5py.File(p, "r") as f:
+            is_bundle = "tensor_cosdi_bundle" in f.attrs
+        bundle = load_bundle(p) if is_bundle else None
+    elif key is None and suffix == ".npz":
+        with np.load(p, allow_pickle=False) as z:
+            is_bundle = "__bundle__" in z.files
+        bundle = load_bundle(p) if is_bundle else None
+    if bundle is not None:
+        if bundle.cube is None:
+            raise ValueError(f"{p}: the bundle holds no cube (kind {bundle.info.get('kind')!r})")
+        cube = np.asarray(bundle.cube)
+        wl = None if bundle.system is None else getattr(bundle.system, "wavelengths", None)
+        if cube.ndim > 3:  # a spectral view of 4-D cubes (patterns, depth planes)
+            cube = np.asarray(bundle.system.spectral_view(cube))
+    else:
+        cube, wl = files.read_cube(p, key)
+    if wavelengths:
+        wl = _wavelength_range(wavelengths, cube.shape[2])
+    if wl is None:
+        raise ValueError(f"{p} holds no wavelengths; pass --wavelengths START:STOP (nm)")
+    return p, cube, np.asarray(wl, dtype=np.float64)
+
+
+def run_preview(args) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from . import plot
+    from .io._atomic import atomic_write
+
+    path, cube, wl = _cube_and_wavelengths(args.file, args.wavelengths)
+    out = Path(args.out) if args.out else path.with_name(path.stem + "_preview.png")
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    points = []
+    for text in args.points:
+        try:
+            r, c = (int(v) for v in text.split(","))
+        except ValueError:
+            raise ValueError(f"--points takes ROW,COL pairs, got {text!r}") from None
+        points.append((r, c))
+    fig, axes = plt.subplots(
+        1, 2 if points else 1, figsize=(9 if points else 4.5, 4), squeeze=False
+    )
+    ax = plot.preview(cube, wl, ax=axes[0, 0], title=path.name)
+    for k, (r, c) in enumerate(points):
+        ax.plot(c, r, "o", mfc="none", color=f"C{k % 10}", ms=8)
+    if points:
+        plot.spectra(cube, wl, points, ax=axes[0, 1])
+    fig.tight_layout()
+    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=120, format="png"), overwrite=args.force)
+    plt.close(fig)
+    print(f"wrote {out}")
     return 0
 
 
@@ -491,6 +562,18 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
     rec.set_defaults(func=run_reconstruct)
+
+    pv = sub.add_parser(
+        "preview", help="a labelled PNG of a cube: sRGB preview and spectra at chosen pixels"
+    )
+    pv.add_argument("file", help="a bundle or cube file (.h5/.mat/.npz/.npy/.hdr/.tif)[:KEY]")
+    pv.add_argument("--out", help="PNG to write (default: FILE's name + _preview.png)")
+    pv.add_argument(
+        "--points", nargs="*", default=[], metavar="ROW,COL", help="pixels whose spectra to plot"
+    )
+    pv.add_argument("--wavelengths", help="START:STOP in nm when the file holds none")
+    pv.add_argument("--force", action="store_true", help="overwrite an existing PNG")
+    pv.set_defaults(func=run_preview)
 
     info = sub.add_parser(
         "info", help="arrays, shapes, dtypes, wavelengths and provenance of a data file"

@@ -123,7 +123,15 @@ def _real_spectra(ns):
         assert p["pnp_gap"] > p["lsq"] + 1.5, p
 
 
+def _files_and_figures(ns):
+    np.testing.assert_array_equal(ns["cube"], np.asarray(ns["runs"]["otd"].cube))
+    np.testing.assert_allclose(ns["wl_back"], ns["wl"])
+    psnr = ns["psnr"]  # prints lsq 11.6, gap_tv 21.2, otd 22.7
+    assert psnr["gap_tv"] > psnr["lsq"] + 2 and psnr["otd"] > psnr["lsq"] + 2, psnr
+
+
 CHECKS = {
+    "plot_files_and_figures": _files_and_figures,
     "plot_real_spectra": _real_spectra,
     "plot_light_field_depth": _light_field,
     "plot_structured_light_depth": _structured_light,

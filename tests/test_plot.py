@@ -1,0 +1,101 @@
+"""tensor_cosdi.plot: what each function draws (images, titles, labels, lines), not just that it
+ran; the exposure that keeps dark scenes visible; `tensor-cosdi preview`."""
+
+import numpy as np
+import pytest
+
+matplotlib = pytest.importorskip("matplotlib")
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+import tensor_cosdi as tc  # noqa: E402
+from tensor_cosdi import plot  # noqa: E402
+
+WL = np.linspace(450, 650, 6)
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    yield
+    plt.close("all")
+
+
+def _cube(level=1.0):
+    rng = np.random.default_rng(0)
+    return level * rng.random((12, 10, 6))
+
+
+def test_preview_exposes_dark_scenes_instead_of_showing_black():
+    dark = _cube(0.02)
+    ax = plot.preview(dark, WL)
+    img = ax.get_images()[0].get_array()
+    assert img.shape == (12, 10, 3) and float(np.mean(img)) > 0.3
+    assert "÷" in ax.get_title()
+    raw = plot.preview(dark, WL, percentile=None).get_images()[0].get_array()
+    assert float(np.mean(raw)) < float(np.mean(img)) / 2  # what the exposure rescued
+    assert plot.white_point(dark) == pytest.approx(np.percentile(dark.mean(axis=2), 99.5))
+
+
+def test_bands_montage_is_labelled_in_nm_on_one_scale():
+    fig = plot.bands(_cube(), WL)
+    titles = [ax.get_title() for ax in fig.axes if ax.get_images()]
+    assert titles == [f"{w:.0f} nm" for w in WL]
+    clims = {ax.get_images()[0].get_clim() for ax in fig.axes if ax.get_images()}
+    assert len(clims) == 1  # one grey scale for every band
+    assert any(ax.get_ylabel() == "intensity" for ax in fig.axes)  # the colour bar
+
+
+def test_spectra_plot_the_cube_values_and_the_reference():
+    cube, ref = _cube(), _cube() * 0.5
+    ax = plot.spectra(cube, WL, [(1, 2), (5, 6)], reference=ref)
+    lines = ax.get_lines()
+    assert len(lines) == 4 and ax.get_xlabel() == "wavelength (nm)"
+    np.testing.assert_allclose(lines[0].get_ydata(), cube[1, 2])
+    np.testing.assert_allclose(lines[1].get_ydata(), ref[1, 2])
+    np.testing.assert_allclose(lines[2].get_xdata(), WL)
+    with pytest.raises(ValueError, match="not a \\(row, column\\) inside"):
+        plot.spectra(cube, WL, [(50, 0)])
+
+
+def test_compare_titles_carry_psnr_and_error_maps_the_difference():
+    truth = _cube()
+    est = truth + 0.05
+    fig = plot.compare(truth, {"a": est, "b": truth}, WL)
+    titles = [ax.get_title() for ax in fig.axes]
+    psnr = tc.metrics.psnr(truth, est, data_range=float(truth.max()))
+    assert any(t.startswith("a\n") and f"{psnr:.2f} dB" in t for t in titles)
+    err = next(ax for ax in fig.axes if ax.get_title() == "a: |error|").get_images()[0]
+    np.testing.assert_allclose(err.get_array(), np.full((12, 10), 0.05), atol=1e-12)
+    with pytest.raises(ValueError, match="does not match the truth"):
+        plot.compare(truth, {"x": truth[:5]}, WL)
+
+
+def test_depth_and_convergence():
+    d = np.arange(20.0).reshape(4, 5)
+    d[0, 0] = np.nan
+    ax = plot.depth(d, label="height (mm)")
+    img = ax.get_images()[0].get_array()
+    assert img.mask[0, 0] and img[1, 1] == 6.0
+    assert any(a.get_ylabel() == "height (mm)" for a in ax.figure.axes)
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
+    res = tc.reconstruct(p.system, p.measurement, "gap_tv", max_iter=5)
+    ax = plot.convergence(res)
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), res.history["residual"])
+    assert ax.get_xlabel() == "iteration" and ax.get_title() == "gap_tv"
+
+
+def test_cli_preview_writes_a_labelled_png_and_never_overwrites(tmp_path, capsys):
+    from tensor_cosdi import cli
+    from tensor_cosdi.io import write_cube
+
+    write_cube(tmp_path / "c.h5", _cube(0.05).astype(np.float32), WL)
+    assert cli.main(["preview", str(tmp_path / "c.h5"), "--points", "1,2", "3,4"]) == 0
+    png = tmp_path / "c_preview.png"
+    img = plt.imread(png)
+    assert img.shape[0] > 200 and img.shape[1] > 2 * img.shape[0] * 0.9  # preview + spectra
+    assert cli.main(["preview", str(tmp_path / "c.h5")]) == 2
+    assert "--force" in capsys.readouterr().err
+    np.save(tmp_path / "n.npy", _cube())
+    assert cli.main(["preview", str(tmp_path / "n.npy")]) == 2
+    assert "pass --wavelengths" in capsys.readouterr().err
+    assert cli.main(["preview", str(tmp_path / "n.npy"), "--wavelengths", "450:650"]) == 0

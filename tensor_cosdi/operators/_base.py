@@ -322,6 +322,43 @@ class TensorOperator:
             lambda v: self._adjoint(self._forward(v)) + mu * v, r, rtol=rtol, maxiter=maxiter
         )
 
+    # ---- SciPy interop --------------------------------------------------------
+    def aslinearoperator(self):
+        """This operator as a SciPy ``LinearOperator`` on the column-major ``vec`` of SPEC §1.
+
+        ``matvec(v) = vec(A unvec(v))`` and ``rmatvec`` the adjoint, computed
+        with NumPy (float64) whatever backend is active, so SciPy's ``lsqr``,
+        ``cg``, ``eigsh``/``svds`` — and PyLops solvers — run on any system
+        without forming the matrix.  (The library's own CG stays
+        backend-neutral: it runs on torch tensors on the GPU.)
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from scipy.sparse.linalg import lsqr
+        >>> from tensor_cosdi.systems import SDCASSI
+        >>> sd = SDCASSI(np.eye(4), n_bands=3)
+        >>> A = sd.operator.aslinearoperator()
+        >>> A.shape
+        (24, 48)
+        """
+        from scipy.sparse.linalg import LinearOperator
+
+        n_in, n_out = int(np.prod(self.input_shape)), int(np.prod(self.output_shape))
+
+        def apply(v, shape_in, fn):
+            x = np.asarray(v, dtype=np.float64).reshape(shape_in, order="F")
+            with tl.backend_context("numpy"):
+                out = fn(x)
+            return np.asarray(B.to_numpy(out), dtype=np.float64).reshape(-1, order="F")
+
+        return LinearOperator(
+            (n_out, n_in),
+            matvec=lambda v: apply(v, self.input_shape, self.forward),
+            rmatvec=lambda y: apply(y, self.output_shape, self.adjoint),
+            dtype=np.float64,
+        )
+
     # ---- explicit matrix ------------------------------------------------------
     def to_matrix(self) -> sp.csr_matrix:
         """Explicit sparse matrix in column-major ``vec`` order (tests, small sizes)."""

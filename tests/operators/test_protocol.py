@@ -87,3 +87,26 @@ def test_operators_are_immutable_and_parameters_follow_input_dtype(rng):
     op.forward(x64.astype(np.float32))
     np.testing.assert_array_equal(op.forward(x64), before)
     assert op.forward(x64.astype(np.float32)).dtype == np.float32
+
+
+def test_aslinearoperator_is_the_matrix_and_scipy_lsqr_agrees_with_lsq():
+    from scipy.sparse.linalg import lsqr
+
+    import tensor_cosdi as tc
+    from tensor_cosdi.systems import SDCASSI
+
+    rng = np.random.default_rng(0)
+    sd = SDCASSI(rng.random((6, 5)), n_bands=4, shifts=1)
+    A = sd.operator.aslinearoperator()
+    M = sd.operator.to_matrix().toarray()
+    v = rng.random(A.shape[1])
+    y = rng.random(A.shape[0])
+    np.testing.assert_allclose(A.matvec(v), M @ v, rtol=1e-12)
+    np.testing.assert_allclose(A.rmatvec(y), M.T @ y, rtol=1e-12)
+    g = sd.forward(rng.random(sd.cube_shape))
+    mu = 1e-2
+    # lsq solves min ‖g − A x‖² + μ s ‖x‖²; lsqr's damp is the square root of that weight
+    s = float(np.sum(sd.operator.forward(np.ones(sd.cube_shape)) ** 2) / np.prod(sd.cube_shape))
+    x = lsqr(A, g.reshape(-1, order="F"), damp=np.sqrt(mu * s), atol=1e-14, btol=1e-14)[0]
+    want = tc.reconstruct(sd, g, "lsq", mu=mu).cube
+    np.testing.assert_allclose(x.reshape(sd.cube_shape, order="F"), want, rtol=1e-6, atol=1e-9)

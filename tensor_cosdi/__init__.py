@@ -17,6 +17,7 @@ from . import (
     noise,
     operators,
     optics,
+    plot,
     scenes,
     solvers,
     studies,
@@ -32,6 +33,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0+unknown"
 
 __all__ = [
+    "plot",
     "optics",
     "depth",
     "io",

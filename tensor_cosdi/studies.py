@@ -9,7 +9,10 @@ a scene of :mod:`tensor_cosdi.scenes` shaped for it, and a noisy measurement.
 
 from __future__ import annotations
 
+import csv
+import itertools
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -26,6 +29,9 @@ __all__ = [
     "score",
     "score_depth",
     "spectral_view",
+    "sweep",
+    "reconstruction_run",
+    "write_csv",
 ]
 
 SYSTEMS = S.REGISTRY
@@ -177,3 +183,108 @@ def spectral_view(problem: Problem, cube) -> np.ndarray:
     systems: the cube itself (``problem.system.spectral_view``).
     """
     return problem.system.spectral_view(cube)
+
+
+def _call(run, params):
+    out = run(**params)
+    if not isinstance(out, dict):
+        raise TypeError(f"run(**{params}) must return a dict of results, got {type(out).__name__}")
+    clash = sorted(set(out) & set(params))
+    if clash:
+        raise ValueError(f"run's results {clash} would overwrite the parameters of the same name")
+    return {**params, **out}
+
+
+def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
+    """Run ``run(**params)`` for every combination of ``grid``; one record per combination.
+
+    Parameters
+    ----------
+    grid : dict of name → sequence
+        The parameter grid (e.g. systems × scenes × SNR × methods × design
+        parameters); the records come back in ``itertools.product`` order.
+    run : callable
+        ``run(**params) -> dict`` of results (PSNR, seconds, …); picklable
+        (a module-level function) when a Dask cluster runs it.
+        :func:`reconstruction_run` is one for the usual study.
+    client : None, ``"local"``, a scheduler address or a ``dask.distributed.Client``
+        ``None`` runs serially here; ``"local"`` starts a local cluster for the
+        sweep (and closes it); an address (``"tcp://host:8786"``) connects to
+        a running scheduler; a client is used as is.  Needs the ``.[dask]`` extra.
+    progress : bool
+        A tqdm bar (serial) or Dask's progress bar.
+
+    Returns
+    -------
+    list of dict — the parameters and the results of each combination, ready
+    for :func:`write_csv` (or ``pandas.DataFrame``).
+    """
+    if not isinstance(grid, dict) or not grid:
+        raise ValueError("grid must be a non-empty dict of name → sequence of values")
+    for k, v in grid.items():
+        if isinstance(v, (str, bytes)) or not hasattr(v, "__iter__"):
+            raise ValueError(f"grid[{k!r}] must be a sequence of values, got {v!r}")
+    if not callable(run):
+        raise ValueError(f"run must be callable, got {run!r}")
+    keys = list(grid)
+    combos = [dict(zip(keys, vals)) for vals in itertools.product(*(list(grid[k]) for k in keys))]
+    if client is None:
+        from tqdm import tqdm
+
+        return [_call(run, c) for c in tqdm(combos, desc="sweep", disable=not progress)]
+    try:
+        from dask.distributed import Client
+        from dask.distributed import progress as dask_progress
+    except ImportError:
+        raise ImportError(
+            "a Dask sweep needs the dask extra: pip install 'tensor_cosdi[dask]'"
+        ) from None
+    own = isinstance(client, str)
+    if own:
+        client = Client(processes=True) if client == "local" else Client(client)
+    try:
+        futures = client.map(_call, [run] * len(combos), combos, pure=False)
+        if progress:
+            dask_progress(futures)
+        return client.gather(futures)
+    finally:
+        if own:
+            client.close()
+
+
+def reconstruction_run(
+    system, scene="chelsea", method="otd", snr_db=30.0, shape=(64, 64), n_bands=8, seed=0, **options
+) -> dict:
+    """One study cell for :func:`sweep`: :func:`make_problem` then :func:`tensor_cosdi.reconstruct`
+    with ``options``; returns PSNR / SSIM / SAM (and depth error where the system has depth),
+    seconds and iterations."""
+    from .solvers import reconstruct
+
+    p = make_problem(system, scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db, rng=seed)
+    t0 = time.perf_counter()
+    res = reconstruct(p.system, p.measurement, method, **options)
+    seconds = time.perf_counter() - t0
+    out = {**score(p, res.cube), "seconds": seconds, "iterations": res.iterations}
+    if p.depth is not None and res.depth is not None:
+        out.update({f"depth_{k}": v for k, v in score_depth(p, res.depth).items()})
+    return out
+
+
+def write_csv(records, path, *, overwrite: bool = False) -> Path:
+    """Write :func:`sweep` records as CSV (columns: the union of keys, in first-seen order),
+    atomically; an existing file only with ``overwrite=True``."""
+    from .io._atomic import atomic_write
+
+    records = list(records)
+    if not records:
+        raise ValueError("no records to write")
+    cols = list(dict.fromkeys(k for r in records for k in r))
+
+    def write(tmp):
+        with open(tmp, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=cols)
+            w.writeheader()
+            for r in records:
+                w.writerow({k: r.get(k, "") for k in cols})
+
+    return atomic_write(path, write, overwrite=overwrite)

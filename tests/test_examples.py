@@ -130,7 +130,14 @@ def _files_and_figures(ns):
     assert psnr["gap_tv"] > psnr["lsq"] + 2 and psnr["otd"] > psnr["lsq"] + 2, psnr
 
 
+def _conditioning(ns):
+    kappa = [c["cond_nonzero"] for c in ns["vsi"]]
+    assert all(a > b for a, b in zip(kappa, kappa[1:])), kappa  # prints 3528 … 8.7
+    assert [c["structure"] for c in ns["sd"]] == ["diagonal"] + ["pixel_blocks"] * 3
+
+
 CHECKS = {
+    "plot_conditioning": _conditioning,
     "plot_files_and_figures": _files_and_figures,
     "plot_real_spectra": _real_spectra,
     "plot_light_field_depth": _light_field,

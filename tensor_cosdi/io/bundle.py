@@ -261,6 +261,7 @@ def save_bundle(
         else "calibration"
     )
     doc["arrays"] = sorted(store)
+    doc["sha256"] = _arrays_digest(store)
     store["__bundle__"] = np.array(json.dumps(doc))
     if p.suffix.lower() in H5_SUFFIXES:
         store.pop("__bundle__")
@@ -268,6 +269,16 @@ def save_bundle(
     else:
         atomic_write(p, lambda tmp: np.savez(tmp, **store), overwrite=overwrite, suffix=".npz")
     return p
+
+
+def _arrays_digest(arrays: dict) -> str:
+    """SHA-256 over the arrays' names, dtypes, shapes and bytes, in name order."""
+    h = hashlib.sha256()
+    for k in sorted(arrays):
+        a = np.ascontiguousarray(arrays[k])
+        h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def _h5_name(key: str) -> str:
@@ -346,10 +357,28 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
             f"{p}: bundle format {doc['format_version']} is newer than this tensor_cosdi reads "
             f"({FORMAT_VERSION}); upgrade tensor_cosdi"
         )
+    if "sha256" in doc and _arrays_digest(data) != doc["sha256"]:
+        raise ValueError(
+            f"{p}: the arrays do not match the bundle's SHA-256 — the file was corrupted or edited"
+        )
+    listed = set(doc.get("arrays", data))
+    if listed != set(data):
+        raise ValueError(f"{p}: the bundle lists arrays {sorted(listed)} but holds {sorted(data)}")
     system = None
     if "system" in doc:
         sys_arrays = {k[len("system.") :]: v for k, v in data.items() if k.startswith("system.")}
         system = system_from_state(doc["system"], sys_arrays)
+    for name, want in (
+        ("measurement", None if system is None else tuple(system.measurement_shape)),
+        ("cube", None if system is None else tuple(system.cube_shape)),
+    ):
+        a = data.get(name)
+        if a is None:
+            continue
+        if want is not None and a.shape != want:
+            raise ValueError(f"{p}: {name} of shape {a.shape} does not match the system's {want}")
+        if a.dtype.kind == "f" and not np.all(np.isfinite(a)):
+            raise ValueError(f"{p}: the {name} holds NaN or infinite values")
     group = lambda g: {k[len(g) + 1 :]: v for k, v in data.items() if k.startswith(g + ".")}  # noqa: E731
     return Bundle(
         system,

@@ -1,6 +1,7 @@
 """Lenslet grid calibration on the real microscope capture, and bundles that lose nothing."""
 
 import hashlib
+import json
 from pathlib import Path
 
 import numpy as np
@@ -169,3 +170,33 @@ def test_rectified_lenslet_image_matches_the_system_layouts(layout):
         np.ones((Ni * U, Nj * V + 1)), n_bands=2, modality="lf", views=(U, V), raw_layout=layout
     )
     assert io.frames_to_measurement(mu, img).shape == mu.measurement_shape
+
+
+def test_load_bundle_verifies_checksum_shapes_and_values(tmp_path):
+    from tensor_cosdi.io import load_bundle, save_bundle
+    from tensor_cosdi.systems import SDCASSI
+
+    sd = SDCASSI(np.random.default_rng(0).random((4, 5)), n_bands=3)
+    g = np.random.default_rng(1).random(sd.measurement_shape)
+    path = save_bundle(tmp_path / "b.npz", system=sd, measurement=g)
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+
+    def forged(name, **change):
+        d = {**data, **change}
+        np.savez(tmp_path / name, **d)
+        return tmp_path / name
+
+    with pytest.raises(ValueError, match="SHA-256"):
+        load_bundle(forged("edit.npz", measurement=g * 2))
+    doc = json.loads(str(data["__bundle__"]))
+    doc.pop("sha256")  # a bundle without the checksum is still checked for shape and values
+    with pytest.raises(ValueError, match="does not match the system's"):
+        load_bundle(forged("shape.npz", measurement=g[:, :3], __bundle__=np.array(json.dumps(doc))))
+    bad = g.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        load_bundle(forged("nan.npz", measurement=bad, __bundle__=np.array(json.dumps(doc))))
+    with pytest.raises(ValueError, match="lists arrays"):
+        load_bundle(forged("extra.npz", stray=np.ones(2), __bundle__=np.array(json.dumps(doc))))
+    np.testing.assert_array_equal(load_bundle(path).measurement, g)

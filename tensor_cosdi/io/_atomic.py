@@ -59,3 +59,43 @@ def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = N
             os.unlink(tmp)
         raise
     return p
+
+
+def atomic_write_many(items, *, overwrite: bool = False) -> list[Path]:
+    """Write several files so that none replaces an old one before all new ones are complete.
+
+    ``items``: ``(path, write)`` pairs as for :func:`atomic_write`.  Every
+    file is first written and fsynced under a temporary name; only then are
+    they renamed into place (and the folders fsynced).  A failure while
+    writing (full disk, I/O error) removes the temporaries and leaves every
+    existing file as it was.
+    """
+    items = [(Path(p), w) for p, w in items]
+    for p, _ in items:
+        if not p.parent.is_dir():
+            raise FileNotFoundError(f"output folder {p.parent} does not exist")
+        if p.exists() and not overwrite:
+            raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+    temps = []
+    try:
+        for p, write in items:
+            fd, tmp = tempfile.mkstemp(suffix=p.suffix, dir=p.parent, prefix=f".{p.name}.")
+            os.close(fd)
+            temps.append(tmp)
+            write(tmp)
+            os.chmod(tmp, 0o666 & ~_umask())
+            _fsync_path(tmp)
+        for (p, _), tmp in zip(items, temps):
+            if overwrite:
+                os.replace(tmp, p)
+            else:
+                os.link(tmp, p)
+                os.unlink(tmp)
+        for folder in {p.parent for p, _ in items}:
+            _fsync_path(folder)
+    except BaseException:
+        for tmp in temps:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+        raise
+    return [p for p, _ in items]

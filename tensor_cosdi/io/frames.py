@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._atomic import atomic_write_many
+
 __all__ = [
     "read_frame",
     "write_frames",
@@ -313,6 +315,8 @@ def write_frames(
     ``.tif`` keeps the array's dtype (float32/64, uint16 …) exactly; ``.npy``
     likewise; ``.png`` needs integer pixels.  Existing files are an error
     unless ``overwrite=True`` — checked for every file before any is written.
+    Atomic as a set: every frame is written and fsynced under a temporary name
+    before any is renamed into place.
     """
     a = np.asarray(frames)
     if a.ndim == 2:
@@ -331,11 +335,12 @@ def write_frames(
     if suffix.lower() in (".tif", ".tiff"):
         import tifffile
 
-        for i, p in enumerate(paths):
-            tifffile.imwrite(p, a[..., i])
+        def writer(i):
+            return lambda tmp: tifffile.imwrite(tmp, a[..., i])
     elif suffix.lower() == ".npy":
-        for i, p in enumerate(paths):
-            np.save(p, a[..., i])
+
+        def writer(i):
+            return lambda tmp: np.save(tmp, a[..., i])
     elif suffix.lower() == ".png":
         if not np.issubdtype(a.dtype, np.integer):
             raise ValueError(
@@ -343,8 +348,10 @@ def write_frames(
             )
         import imageio.v3 as iio
 
-        for i, p in enumerate(paths):
-            iio.imwrite(p, a[..., i])
+        def writer(i):
+            return lambda tmp: iio.imwrite(tmp, a[..., i], extension=".png")
     else:
         raise ValueError(f"write_frames writes .tif, .npy or .png, not {suffix!r}")
-    return paths
+    # all frames complete on disk before any existing one is replaced (a full disk mid-way
+    # leaves the previous capture intact and no partial frame)
+    return atomic_write_many([(p, writer(i)) for i, p in enumerate(paths)], overwrite=overwrite)

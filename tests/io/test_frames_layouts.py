@@ -237,3 +237,27 @@ def test_a_frame_folder_is_one_strict_sequence(tmp_path):
     np.save(tmp_path / "frame_1.npy", np.zeros((4, 4)))
     with pytest.raises(ValueError, match="share a frame number.*frame_001.npy.*frame_1.npy"):
         frame_paths(tmp_path, exclude=[tmp_path / "dark.npy"])
+
+
+def test_write_frames_is_atomic_as_a_set(tmp_path, monkeypatch):
+    from tensor_cosdi.io import write_frames
+
+    old = np.ones((4, 4, 3))
+    paths = write_frames(old, tmp_path, suffix=".npy")
+    before = [p.read_bytes() for p in paths]
+    real_save, calls = np.save, []
+
+    def failing_save(file, arr, *a, **k):
+        calls.append(file)
+        if len(calls) == 3:
+            raise OSError(28, "No space left on device")
+        return real_save(file, arr, *a, **k)
+
+    monkeypatch.setattr(np, "save", failing_save)
+    with pytest.raises(OSError, match="No space"):
+        write_frames(np.zeros((4, 4, 3)), tmp_path, suffix=".npy", overwrite=True)
+    monkeypatch.undo()
+    assert [p.read_bytes() for p in paths] == before  # the previous capture is intact
+    assert sorted(p.name for p in tmp_path.iterdir()) == [p.name for p in paths]  # no temporaries
+    write_frames(np.zeros((4, 4, 3)), tmp_path, suffix=".npy", overwrite=True)
+    assert np.load(paths[2]).sum() == 0

@@ -700,12 +700,15 @@ def _positive_int(text: str) -> int:
     return value
 
 
+from .io.triggers import LockedError  # noqa: E402  (an expected error, reported like the others)
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileExistsError, FileNotFoundError, ImportError) as exc:
+    except (ValueError, FileExistsError, FileNotFoundError, ImportError, LockedError) as exc:
         print(f"tensor-cosdi {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

@@ -46,6 +46,7 @@ __all__ = [
     "AcquisitionPlan",
     "SerialDevice",
     "DeviceError",
+    "LockedError",
     "Acquisition",
     "FolderCamera",
     "FakeTriggerDevice",
@@ -382,9 +383,79 @@ def read_log(path) -> tuple[dict | None, list[dict]]:
             raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
         if "plan" in obj and header is None:
             header = obj
-        else:
+        elif "step" in obj and "sha256" in obj:  # frame entries; events ("reacquire") skipped
             entries.append(obj)
     return header, entries
+
+
+def _verified(entries):
+    """``({step: entry}, [(step, reason)])``: the last entry of each step whose frame file is on
+    disk with the logged SHA-256, and the steps whose frame is missing or changed."""
+    from .bundle import file_digest
+
+    last = {}
+    for e in entries:
+        last[e["step"]] = e
+    ok, bad = {}, []
+    for step, e in sorted(last.items()):
+        path = Path(e["frame"])
+        if not path.is_file():
+            bad.append((step, f"frame {path} is missing"))
+        elif file_digest(path)["sha256"] != e["sha256"]:
+            bad.append((step, f"frame {path} changed since it was logged (SHA-256 differs)"))
+        else:
+            ok[step] = e
+    return ok, bad
+
+
+class LockedError(RuntimeError):
+    """Another live process holds the acquisition's lock."""
+
+
+class _Lock:
+    """``PATH.lock`` holding the owner's pid, created exclusively; a lock whose process is gone is
+    stale and taken over."""
+
+    def __init__(self, path: Path):
+        self.path = path.with_name(path.name + ".lock")
+        self.fd = None
+
+    def __enter__(self):
+        for _ in range(2):
+            try:
+                self.fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                try:
+                    pid = int(self.path.read_text().split()[0])
+                except (OSError, ValueError, IndexError):
+                    pid = None
+                if pid is not None and _alive(pid):
+                    raise LockedError(
+                        f"{self.path}: another acquisition (pid {pid}) is running on this log; "
+                        "wait for it or stop it"
+                    ) from None
+                self.path.unlink(missing_ok=True)  # stale: its process is gone
+                continue
+            os.write(self.fd, f"{os.getpid()}\n".encode())
+            os.fsync(self.fd)
+            return self
+        raise RuntimeError(f"{self.path}: could not take the lock")  # pragma: no cover
+
+    def __exit__(self, *exc):
+        os.close(self.fd)
+        self.path.unlink(missing_ok=True)
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
 
 
 class Acquisition:
@@ -405,6 +476,9 @@ class Acquisition:
         self.plan, self.device, self.log_path, self.capture = plan, device, Path(log_path), capture
 
     def _open_log(self):
+        """Open the log for appending; returns ``(file, done steps)``.  A logged frame that is
+        missing on disk or whose SHA-256 changed is not done: it is acquired again and the log
+        says so."""
         header, entries = read_log(self.log_path)
         fp = self.plan.fingerprint()
         if header is not None and header["plan"] != fp:
@@ -428,7 +502,10 @@ class Acquisition:
                     "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                 },
             )
-        return f, {e["step"] for e in entries}
+        ok, bad = _verified(entries)
+        for step, reason in bad:
+            self._write(f, {"event": "reacquire", "step_again": step, "reason": reason})
+        return f, set(ok)
 
     @staticmethod
     def _write(f, obj):
@@ -437,13 +514,20 @@ class Acquisition:
         os.fsync(f.fileno())
 
     def remaining(self) -> list[int]:
-        """Steps not yet in the log."""
+        """Steps not yet logged with their frame intact on disk."""
         _, entries = read_log(self.log_path)
-        done = {e["step"] for e in entries}
+        done = set(_verified(entries)[0])
         return [i for i in range(len(self.plan.steps)) if i not in done]
 
     def run(self, *, progress: bool = False) -> list[dict]:
-        """Acquire every step not yet logged; returns the log entries written in this run."""
+        """Acquire every step not yet logged (or logged with a frame missing or changed on
+        disk); returns the log entries written in this run.  ``LOG.lock`` holds this process'
+        pid meanwhile: a second acquisition on the same log refuses, naming it; a lock left by a
+        process that no longer exists is taken over."""
+        with _Lock(self.log_path):
+            return self._run(progress)
+
+    def _run(self, progress):
         from tqdm import tqdm
 
         from .bundle import file_digest

@@ -3,6 +3,7 @@ failure."""
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -236,3 +237,46 @@ def test_fake_device_never_touches_descriptors_it_closed(tmp_path):
     finally:
         for fd in fds:
             os.close(fd)
+
+
+def test_resume_checks_the_disk_not_just_the_log(tmp_path, device):
+    plan = AcquisitionPlan.patterns(4)
+    cam = Camera(tmp_path)
+    log = tmp_path / "log.jsonl"
+    with SerialDevice(device().port, timeout=0.5) as host:
+        Acquisition(plan, host, log, cam).run()
+    _, entries = io.read_log(log)
+    frames = {e["step"]: Path(e["frame"]) for e in entries}
+    frames[1].unlink()  # deleted after it was logged
+    frames[3].write_bytes(b"not the frame")  # changed after it was logged
+    dev2 = device()
+    with SerialDevice(dev2.port, timeout=0.5) as host:
+        acq = Acquisition(plan, host, log, cam)
+        assert acq.remaining() == [1, 3]
+        written = acq.run()
+    assert [e["step"] for e in written] == [1, 3] and dev2.fired == [1, 3]
+    text = log.read_text()
+    assert "is missing" in text and "SHA-256 differs" in text  # the log says why
+    with SerialDevice(device().port, timeout=0.5) as host:
+        assert Acquisition(plan, host, log, cam).remaining() == []
+
+
+def test_a_second_acquisition_on_the_same_log_refuses_and_a_stale_lock_is_taken(tmp_path, device):
+    import subprocess
+    import sys
+
+    plan = AcquisitionPlan.snapshots(2)
+    log = tmp_path / "log.jsonl"
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        (tmp_path / "log.jsonl.lock").write_text(f"{holder.pid}\n")
+        with SerialDevice(device().port, timeout=0.5) as host:
+            with pytest.raises(RuntimeError, match=f"pid {holder.pid}"):
+                Acquisition(plan, host, log, Camera(tmp_path)).run()
+    finally:
+        holder.kill()
+        holder.wait()
+    # the holder is gone: its lock is stale and taken over; released at the end
+    with SerialDevice(device().port, timeout=0.5) as host:
+        assert len(Acquisition(plan, host, log, Camera(tmp_path)).run()) == 2
+    assert not (tmp_path / "log.jsonl.lock").exists()

@@ -93,9 +93,21 @@ def _require_h5py():
 
 
 # ---- listing: name → (shape, dtype, loader) without reading the data -----------------------------
+def _npy_header(f):
+    version = np.lib.format.read_magic(f)
+    read = (
+        np.lib.format.read_array_header_1_0
+        if version == (1, 0)
+        else np.lib.format.read_array_header_2_0
+    )
+    shape, _, dtype = read(f)
+    return shape, dtype
+
+
 def _entries_npy(path):
-    arr = np.load(path, mmap_mode="r", allow_pickle=False)
-    return {"array": (arr.shape, arr.dtype, lambda: np.array(arr))}
+    with open(path, "rb") as f:
+        shape, dtype = _npy_header(f)
+    return {"array": (shape, dtype, lambda: np.load(path, allow_pickle=False))}
 
 
 def _entries_npz(path):
@@ -104,13 +116,7 @@ def _entries_npz(path):
         names = list(z.files)
     for name in names:
         with np.load(path, allow_pickle=False) as z, z.zip.open(name + ".npy") as f:
-            version = np.lib.format.read_magic(f)
-            read = (
-                np.lib.format.read_array_header_1_0
-                if version == (1, 0)
-                else np.lib.format.read_array_header_2_0
-            )
-            shape, _, dtype = read(f)
+            shape, dtype = _npy_header(f)
 
         def load(name=name):
             with np.load(path, allow_pickle=False) as z:

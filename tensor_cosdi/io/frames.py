@@ -43,7 +43,30 @@ def _single_array(mapping: dict, path, key):
     return mapping[names[0]]
 
 
-def read_frame(path, *, key: str | None = None, channel: int | None = None) -> np.ndarray:
+def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
+    """Refuse a file whose header declares more than ``max_bytes`` before reading its data."""
+    from .files import _check_size, _entries
+
+    try:
+        if suffix in (".png", ".jpg", ".jpeg", ".bmp"):
+            import imageio.v3 as iio
+
+            props = iio.improps(p)
+            entries = {"frame": (props.shape, props.dtype)}
+        else:
+            found = _entries(p, ".tif" if suffix == ".tiff" else suffix)
+            entries = {k: (v[0], v[1]) for k, v in found.items()}
+    except (ValueError, KeyError):
+        raise
+    except Exception as e:  # corrupt headers raise many different errors in the readers
+        raise ValueError(f"{p}: cannot read the file ({type(e).__name__}: {e})") from e
+    for name, (shape, dtype) in entries.items():
+        _check_size(p, name, shape, dtype, max_bytes)
+
+
+def read_frame(
+    path, *, key: str | None = None, channel: int | None = None, max_bytes: int | None = None
+) -> np.ndarray:
     """Read one 2-D frame from ``path`` in its stored dtype.
 
     Parameters
@@ -53,6 +76,10 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
         Array name inside ``.npz`` / ``.mat`` files holding several arrays.
     channel : int, optional
         Channel of an RGB(A) image to use.
+    max_bytes : int, optional
+        Largest array the file may declare (default
+        :data:`tensor_cosdi.io.files.MAX_ARRAY_BYTES`); checked from the
+        header before anything is allocated.
 
     Raises
     ------
@@ -70,6 +97,9 @@ def read_frame(path, *, key: str | None = None, channel: int | None = None) -> n
         raise ValueError(
             f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}"
         )
+    from .files import MAX_ARRAY_BYTES
+
+    _check_declared(p, suffix, MAX_ARRAY_BYTES if max_bytes is None else int(max_bytes))
     try:
         if suffix in (".tif", ".tiff"):
             import tifffile

@@ -221,13 +221,10 @@ class AcquisitionPlan:
         ).hexdigest()
 
     def save(self, path, *, overwrite: bool = False) -> Path:
-        p = Path(path)
-        if p.exists() and not overwrite:
-            raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
-        p.write_text(
-            json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1)
-        )
-        return p
+        from ._atomic import atomic_write
+
+        text = json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1)
+        return atomic_write(path, lambda tmp: Path(tmp).write_text(text), overwrite=overwrite)
 
     @classmethod
     def load(cls, path) -> "AcquisitionPlan":

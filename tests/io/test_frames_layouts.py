@@ -261,3 +261,20 @@ def test_write_frames_is_atomic_as_a_set(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == [p.name for p in paths]  # no temporaries
     write_frames(np.zeros((4, 4, 3)), tmp_path, suffix=".npy", overwrite=True)
     assert np.load(paths[2]).sum() == 0
+
+
+def test_read_frame_checks_declared_sizes_before_reading(tmp_path):
+    from tensor_cosdi.io import read_frame
+
+    np.save(tmp_path / "f.npy", np.zeros((64, 64)))
+    with pytest.raises(ValueError, match="GiB limit"):
+        read_frame(tmp_path / "f.npy", max_bytes=1000)
+    # a forged .npy header declaring a 74 GiB array in a tiny file
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (100000, 100000), }"
+    header += " " * (118 - len(header)) + "\n"
+    (tmp_path / "forged.npy").write_bytes(
+        b"\x93NUMPY\x01\x00" + bytes([len(header), 0]) + header.encode()
+    )
+    with pytest.raises(ValueError, match="declares shape \\(100000, 100000\\)"):
+        read_frame(tmp_path / "forged.npy")
+    np.testing.assert_array_equal(read_frame(tmp_path / "f.npy"), np.zeros((64, 64)))

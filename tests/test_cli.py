@@ -31,7 +31,10 @@ def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
     # every depth-capable imager reports its depth error, the spectral ones none
     assert {r[0] for r in rows if r[8] != "-"} == {"cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
     names = sorted(p.name for p in out.iterdir())
-    assert len(names) == 5 * len(DEMO_CASES) + 4
+    # 5 PNGs per system, 4 depth panels, and (matplotlib present) a labelled comparison per
+    # system and the summary
+    assert len(names) == 5 * len(DEMO_CASES) + 4 + len(DEMO_CASES) + 1
+    assert "summary.png" in names and "cs2li_compare.png" in names
     assert (
         "c3slfi_truth.png" in names
         and "cs2li_error_otd.png" in names

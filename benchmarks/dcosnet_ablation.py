@@ -22,7 +22,8 @@ import scipy.io
 from real_spectra import MASK, problem, score
 
 from tensor_cosdi import datasets
-from tensor_cosdi.learn.dcosnet import LOSSES, DCoSNet, DCoSNetConfig, train_dcosnet
+from tensor_cosdi.learn.dcosnet import DCoSNet
+from tensor_cosdi.learn.dcosnet_train import LOSSES, DCoSNetConfig, train_dcosnet
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -34,12 +34,14 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import math
 import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
+from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
+from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
 
 __all__ = [
     "Step",
@@ -89,64 +91,6 @@ class Step:
 
     def to_dict(self):
         return {"index": dict(self.index), "commands": list(self.commands), "frame": self.frame}
-
-
-#: Largest deformable-mirror Zernike amplitude (waves) a command may ask for; the device's declared
-#: range.  Larger, NaN or infinite values never reach the hardware.
-DM_MAX_WAVES = 10.0
-
-
-def _check_command(c):
-    """``c`` stripped, or a ``ValueError``: one line, a known verb, arguments of the right kind and
-    range (``DMD``/``PROJ``/``TRIG``: one integer ≥ 0; ``DM``: ``j:a`` pairs, Noll ``j ≥ 1``,
-    finite ``|a| ≤`` :data:`DM_MAX_WAVES`; ``PING``: none)."""
-    if not isinstance(c, str) or not c.strip() or "\n" in c or "\r" in c:
-        raise ValueError(f"a command is one non-empty line of text, got {c!r}")
-    verb, *args = c.split()
-    if verb not in ("PING", "DMD", "DM", "PROJ", "TRIG"):
-        raise ValueError(
-            f"unknown command verb {verb!r} in {c!r}; the protocol knows PING, DMD, DM, PROJ, TRIG"
-        )
-    if verb == "PING" and args:
-        raise ValueError(f"PING takes no arguments, got {c!r}")
-    if verb in ("DMD", "PROJ", "TRIG"):
-        if len(args) != 1 or not args[0].isdigit():
-            raise ValueError(f"{verb} takes one integer ≥ 0, got {c!r}")
-    if verb == "DM":
-        if not args:
-            raise ValueError(f"DM needs at least one j:a pair, got {c!r}")
-        for pair in args:
-            j, sep, a = pair.partition(":")
-            try:
-                amp = float(a)
-            except ValueError:
-                amp = None
-            if not sep or not j.isdigit() or int(j) < 1 or amp is None:
-                raise ValueError(f"DM takes j:a pairs (Noll j ≥ 1, amplitude a), got {pair!r}")
-            if not np.isfinite(amp) or abs(amp) > DM_MAX_WAVES:
-                raise ValueError(
-                    f"DM amplitude {a} for Zernike {j} is not a finite value within "
-                    f"±{DM_MAX_WAVES:g} waves (DM_MAX_WAVES); not sent"
-                )
-    return c.strip()
-
-
-def _check_frame_name(name):
-    """A plan's frame name must be a plain file name: it is joined to the capture folder."""
-    if (
-        not isinstance(name, str)
-        or not name
-        or name in (".", "..")
-        or "/" in name
-        or "\\" in name
-        or "\0" in name
-        or name.startswith(".")
-    ):
-        raise ValueError(
-            f"frame names must be plain file names (no folders, '..', leading dots or absolute "
-            f"paths), got {name!r}"
-        )
-    return name
 
 
 @dataclass(frozen=True)
@@ -206,7 +150,7 @@ class AcquisitionPlan:
         names = cls._frames(len(zernike_steps), suffix)
         for z, coeffs in enumerate(zernike_steps):
             for j, a in dict(coeffs).items():
-                if not np.isfinite(float(a)) or abs(float(a)) > DM_MAX_WAVES:
+                if not math.isfinite(float(a)) or abs(float(a)) > DM_MAX_WAVES:
                     raise ValueError(
                         f"focal step {z}: Zernike {j} amplitude {a!r} is not a finite value "
                         f"within ±{DM_MAX_WAVES:g} waves"
@@ -360,99 +304,6 @@ class FolderCamera:
                 last = size
             time.sleep(self.poll)
         raise DeviceError(f"frame {p} did not appear within {self.timeout:g} s after the trigger")
-
-
-def read_log(path) -> tuple[dict | None, list[dict]]:
-    """``(header, entries)`` of a frame log; a truncated last line (crash mid-write) is ignored."""
-    p = Path(path)
-    if not p.exists():
-        return None, []
-    header, entries = None, []
-    text = p.read_text()
-    lines = text.split("\n")
-    complete = lines[:-1]  # the part after the last newline is an unfinished write
-    for n, line in enumerate(complete):
-        if not line.strip():
-            continue
-        try:
-            obj = json.loads(line)
-        except ValueError:
-            raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
-        if "plan" in obj and header is None:
-            header = obj
-        elif "step" in obj and "sha256" in obj:  # frame entries; events ("reacquire") skipped
-            entries.append(obj)
-    return header, entries
-
-
-def _verified(entries):
-    """``({step: entry}, [(step, reason)])``: the last entry of each step whose frame file is on
-    disk with the logged SHA-256, and the steps whose frame is missing or changed."""
-    from .bundle import file_digest
-
-    last = {}
-    for e in entries:
-        last[e["step"]] = e
-    ok, bad = {}, []
-    for step, e in sorted(last.items()):
-        path = Path(e["frame"])
-        if not path.is_file():
-            bad.append((step, f"frame {path} is missing"))
-        elif file_digest(path)["sha256"] != e["sha256"]:
-            bad.append((step, f"frame {path} changed since it was logged (SHA-256 differs)"))
-        else:
-            ok[step] = e
-    return ok, bad
-
-
-class LockedError(RuntimeError):
-    """Another live process holds the acquisition's lock."""
-
-
-class _Lock:
-    """``PATH.lock`` holding the owner's pid, created exclusively; a lock whose process is gone is
-    stale and taken over."""
-
-    def __init__(self, path: Path):
-        self.path = path.with_name(path.name + ".lock")
-        self.fd = None
-
-    def __enter__(self):
-        for _ in range(2):
-            try:
-                self.fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                try:
-                    pid = int(self.path.read_text().split()[0])
-                except (OSError, ValueError, IndexError):
-                    pid = None
-                if pid is not None and _alive(pid):
-                    raise LockedError(
-                        f"{self.path}: another acquisition (pid {pid}) is running on this log; "
-                        "wait for it or stop it"
-                    ) from None
-                self.path.unlink(missing_ok=True)  # stale: its process is gone
-                continue
-            os.write(self.fd, f"{os.getpid()}\n".encode())
-            os.fsync(self.fd)
-            return self
-        raise RuntimeError(f"{self.path}: could not take the lock")  # pragma: no cover
-
-    def __exit__(self, *exc):
-        os.close(self.fd)
-        self.path.unlink(missing_ok=True)
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # exists, owned by someone else
-        return True
-    return True
 
 
 class Acquisition:

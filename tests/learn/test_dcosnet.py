@@ -114,7 +114,8 @@ def test_ssim_equals_scikit_image():
 def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system):
     import torch
 
-    from tensor_cosdi.learn.dcosnet import DCoSNet, DCoSNetConfig, train_dcosnet
+    from tensor_cosdi.learn.dcosnet import DCoSNet
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, train_dcosnet
 
     _real()
     cfg = DCoSNetConfig(
@@ -146,7 +147,8 @@ def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system):
 def test_bad_inputs_are_clear_errors(tmp_path):
     import torch
 
-    from tensor_cosdi.learn.dcosnet import DCoSNet, DCoSNetConfig, Sensing
+    from tensor_cosdi.learn.dcosnet import DCoSNet, Sensing
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig
 
     with pytest.raises(ValueError, match="system must be one of"):
         DCoSNetConfig(system="c3slfi").check()

@@ -1,0 +1,230 @@
+"""``tensor-cosdi reconstruct --system …`` (the direct path from a measurement and a mask
+file), ``preview`` and ``info`` — the file-facing sub-commands of :mod:`tensor_cosdi.cli`."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ._cli_util import _jsonable, _method_defaults
+
+
+def _wavelength_range(text: str, n: int) -> np.ndarray:
+    """``"START:STOP"`` (nm) → ``n`` evenly spaced band centres."""
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise ValueError(f"--wavelengths must be START:STOP in nm, got {text!r}") from None
+    return np.linspace(lo, hi, n)
+
+
+def _system_from_args(args, code):
+    import inspect
+
+    from .systems import REGISTRY
+
+    cls = REGISTRY[args.system]  # an unknown name lists the registered ones
+    params = inspect.signature(cls.__init__).parameters
+    kwargs = dict(args.system_option or [])
+    named = {"n_bands": args.bands, "shifts": args.shift}
+    if args.wavelengths:
+        if args.bands is None:
+            raise ValueError("--wavelengths needs --bands")
+        named["wavelengths"] = _wavelength_range(args.wavelengths, args.bands)
+    for k, v in named.items():
+        if v is not None:
+            if k not in params:
+                raise ValueError(f"{args.system} takes no {k!r}; its arguments: {list(params)[1:]}")
+            kwargs[k] = int(v) if k == "shifts" and float(v).is_integer() else v
+    takes_kwargs = any(p.kind is p.VAR_KEYWORD for p in params.values())
+    unknown = [k for k in kwargs if k not in params and not takes_kwargs]
+    if unknown:
+        raise ValueError(
+            f"{args.system} takes no argument(s) {unknown}; its arguments: {list(params)[1:]}"
+        )
+    missing = [
+        k
+        for k, p in list(params.items())[2:]
+        if p.default is p.empty and p.kind is p.KEYWORD_ONLY and k not in kwargs
+    ]
+    if missing:
+        flags = {"n_bands": "--bands"}
+        raise ValueError(
+            f"{args.system} needs "
+            + ", ".join(flags.get(k, f"--system-option {k}=…") for k in missing)
+        )
+    return cls(code, **kwargs)
+
+
+def _reconstruct_direct(args) -> int:
+    from . import reconstruct
+    from .io import read_array, save_bundle
+    from .io.files import split_key
+
+    for name in ("system", "mask", "measurement"):
+        if getattr(args, name) is None:
+            raise ValueError(f"the direct path needs --{name}")
+    out = Path(args.out)
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    defaults = _method_defaults(args.method)
+    mask_path, mask_key = split_key(args.mask)
+    meas_path, meas_key = split_key(args.measurement)
+    code = np.asarray(read_array(mask_path, mask_key), dtype=np.float64)
+    g = np.asarray(read_array(meas_path, meas_key))
+    if g.dtype.kind not in "biuf":
+        raise ValueError(f"{args.measurement}: the measurement must be numeric, got {g.dtype}")
+    if not np.all(np.isfinite(g)):
+        raise ValueError(f"{args.measurement}: the measurement holds NaN or infinite values")
+    system = _system_from_args(args, code)
+    if g.shape != tuple(system.measurement_shape):
+        raise ValueError(
+            f"{args.measurement}: measurement shape {g.shape} does not match the system's "
+            f"{tuple(system.measurement_shape)} (code {code.shape}, options as given)"
+        )
+    g = g.astype(np.float32 if g.dtype.itemsize <= 4 else np.float64)
+    options = dict(args.option or [])
+    if "progress" in defaults:
+        options.setdefault("progress", not args.quiet)
+    t0 = time.perf_counter()
+    res = reconstruct(system, g, args.method, **options)
+    seconds = time.perf_counter() - t0
+    depth = res.depth
+    save_bundle(
+        out,
+        system=system,
+        measurement=g,
+        cube=np.asarray(res.cube, dtype=np.float32),
+        depth=None if depth is None else np.asarray(depth),
+        sources=[Path(mask_path), Path(meas_path)],
+        overwrite=args.force,
+        metadata={
+            "method": args.method,
+            "options": {k: v for k, v in res.options.items() if _jsonable(v)},
+            "seconds": seconds,
+            "iterations": res.iterations,
+            "mask": args.mask,
+            "measurement": args.measurement,
+        },
+    )
+    print(
+        f"{type(system).__name__} {tuple(system.cube_shape)} reconstructed with {args.method} in "
+        f"{seconds:.1f} s ({res.iterations} iterations, residual "
+        f"{res.history['residual'][-1]:.3g}); written to {out}"
+    )
+    return 0
+
+
+def _cube_and_wavelengths(spec, wavelengths):
+    from .io import files, load_bundle
+
+    path, key = files.split_key(spec)
+    p = Path(path)
+    suffix = files._suffix(p)
+    bundle = None
+    if key is None and suffix in (".h5", ".hdf5"):
+        import h5py
+
+        with h5py.File(p, "r") as f:
+            is_bundle = "tensor_cosdi_bundle" in f.attrs
+        bundle = load_bundle(p) if is_bundle else None
+    elif key is None and suffix == ".npz":
+        with np.load(p, allow_pickle=False) as z:
+            is_bundle = "__bundle__" in z.files
+        bundle = load_bundle(p) if is_bundle else None
+    if bundle is not None:
+        if bundle.cube is None:
+            raise ValueError(f"{p}: the bundle holds no cube (kind {bundle.info.get('kind')!r})")
+        cube = np.asarray(bundle.cube)
+        wl = None if bundle.system is None else getattr(bundle.system, "wavelengths", None)
+        if cube.ndim > 3:  # a spectral view of 4-D cubes (patterns, depth planes)
+            cube = np.asarray(bundle.system.spectral_view(cube))
+    else:
+        cube, wl = files.read_cube(p, key)
+    if wavelengths:
+        wl = _wavelength_range(wavelengths, cube.shape[2])
+    if wl is None:
+        raise ValueError(f"{p} holds no wavelengths; pass --wavelengths START:STOP (nm)")
+    return p, cube, np.asarray(wl, dtype=np.float64)
+
+
+def run_preview(args) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from . import plot
+    from .io._atomic import atomic_write
+
+    path, cube, wl = _cube_and_wavelengths(args.file, args.wavelengths)
+    out = Path(args.out) if args.out else path.with_name(path.stem + "_preview.png")
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    points = []
+    for text in args.points:
+        try:
+            r, c = (int(v) for v in text.split(","))
+        except ValueError:
+            raise ValueError(f"--points takes ROW,COL pairs, got {text!r}") from None
+        points.append((r, c))
+    fig, axes = plt.subplots(
+        1, 2 if points else 1, figsize=(9 if points else 4.5, 4), squeeze=False
+    )
+    ax = plot.preview(cube, wl, ax=axes[0, 0], title=path.name)
+    for k, (r, c) in enumerate(points):
+        ax.plot(c, r, "o", mfc="none", color=f"C{k % 10}", ms=8)
+    if points:
+        plot.spectra(cube, wl, points, ax=axes[0, 1])
+    fig.tight_layout()
+    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=120, format="png"), overwrite=args.force)
+    plt.close(fig)
+    print(f"wrote {out}")
+    return 0
+
+
+def run_info(args) -> int:
+    import json
+
+    from .io import files
+
+    path = Path(args.file)
+    suffix = files._suffix(path)
+    print(f"{path} ({path.stat().st_size if path.is_file() else 0} bytes)")
+    if suffix == ".hdr":
+        cube, wl = files.read_cube(path)
+        entries = {"cube": (cube.shape, cube.dtype, None)}
+    else:
+        entries = files._entries(path, suffix)
+    for name, (shape, dtype, _) in entries.items():
+        print(f"  {name}: {tuple(int(n) for n in shape)} {np.dtype(dtype)}")
+    doc = None
+    if suffix in (".h5", ".hdf5"):
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            raw = f.attrs.get("tensor_cosdi_bundle")
+        doc = None if raw is None else json.loads(raw)
+    elif suffix == ".npz" and "__bundle__" in entries:
+        doc = json.loads(str(entries["__bundle__"][2]()))
+    if doc is None and suffix != ".hdr":
+        try:
+            _, wl = files.read_cube(path)
+        except (ValueError, KeyError):
+            wl = None
+    elif doc is not None:
+        wl = None
+    if wl is not None:
+        print(f"  wavelengths: {len(wl)} bands, {wl[0]:g}–{wl[-1]:g} nm")
+    if doc is not None:
+        system = doc.get("system", {})
+        print(f"  bundle: {doc.get('kind')}, created {doc.get('created')}, {doc.get('software')}")
+        if system:
+            print(f"  system: {system.get('class')} {system.get('params')}")
+        for src in doc.get("provenance", []):
+            print(f"  source: {src.get('path')} sha256 {src.get('sha256')}")
+        if doc.get("metadata"):
+            print(f"  metadata: {json.dumps(doc['metadata'])[:400]}")
+    return 0

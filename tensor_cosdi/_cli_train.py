@@ -1,0 +1,85 @@
+"""``tensor-cosdi train-denoiser`` and ``train-dcosnet``: options and runners (see
+:mod:`tensor_cosdi.cli`)."""
+
+from __future__ import annotations
+
+import sys
+
+from ._cli_util import _positive_int
+
+
+def _training_options(p, *, steps: int, batch: int):
+    p.add_argument("--out", required=True, help="weights file to write (.pt)")
+    p.add_argument("--steps", type=_positive_int, default=steps, help="optimiser steps")
+    p.add_argument("--batch", type=_positive_int, default=batch, help="samples per step")
+    p.add_argument("--seed", type=int, default=0, help="seed of samples and noise (default 0)")
+    p.add_argument("--data", help="folder of the NAME.npz scenes (default: datasets.data_dir())")
+    p.add_argument("--device", help="cpu, cuda, … (default: cuda when available)")
+    p.add_argument("--threads", type=_positive_int, help="CPU threads for torch")
+    p.add_argument("--resume", action="store_true", help="continue from OUT.ckpt")
+    p.add_argument(
+        "--stop-after", type=_positive_int, help="stop this run after N steps (resume later)"
+    )
+    p.add_argument("--force", action="store_true", help="overwrite OUT and start over")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _run_training(args, train, cfg) -> int:
+    from .learn import require_torch
+
+    torch = require_torch()
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    summary = train(
+        args.out,
+        cfg,
+        resume=args.resume,
+        force=args.force,
+        device=args.device,
+        folder=args.data,
+        progress=not args.quiet,
+        command="tensor-cosdi " + " ".join(sys.argv[1:]) if sys.argv else None,
+        stop_after=args.stop_after,
+    )
+    if not summary["finished"]:
+        print(f"stopped at step {summary['steps']}; continue with the same command and --resume")
+        return 0
+    print(
+        f"wrote {args.out}: {summary['steps']} steps, loss {summary['final_loss']:.3e}, "
+        f"{summary['seconds']:.0f} s on {summary['device']}"
+    )
+    return 0
+
+
+def run_train_denoiser(args) -> int:
+    from .learn.train import TrainConfig, train_denoiser
+
+    cfg = TrainConfig(
+        steps=args.steps,
+        batch=args.batch,
+        patch=args.patch,
+        width=args.width,
+        blocks=args.blocks,
+        seed=args.seed,
+    )
+    return _run_training(args, train_denoiser, cfg)
+
+
+def run_train_dcosnet(args) -> int:
+    from .learn.dcosnet_train import DCoSNetConfig, train_dcosnet
+
+    cfg = DCoSNetConfig(
+        system=args.system,
+        n_bands=args.bands,
+        shift=args.shift,
+        stages=args.stages,
+        width=args.width,
+        unet_width=args.unet_width,
+        loss=args.loss,
+        mask=args.mask,
+        steps=args.steps,
+        batch=args.batch,
+        patch=args.patch,
+        seed=args.seed,
+    )
+    return _run_training(args, train_dcosnet, cfg.check())

@@ -1,0 +1,43 @@
+"""Small argument helpers shared by the ``tensor-cosdi`` sub-commands."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def _option_value(text: str):
+    import json
+
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    key, value = text.split("=", 1)
+    try:
+        return key, json.loads(value)
+    except ValueError:
+        return key, value
+
+
+def _method_defaults(name):
+    from .solvers import METHODS
+
+    return METHODS[name].defaults  # an unknown name is an error listing the registered ones
+
+
+def _jsonable(v) -> bool:
+    import json
+
+    try:
+        json.dumps(v)
+        return True
+    except (TypeError, ValueError):
+        return False
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value

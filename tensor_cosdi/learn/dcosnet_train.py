@@ -1,0 +1,240 @@
+"""Training D-CoSNet (``tensor-cosdi train-dcosnet``): crops of the tuning scenes measured
+through crops of a real coded aperture, Eq. 152's loss, the shared training loop of
+:mod:`tensor_cosdi.learn._loop` (checkpoints, exact resume).  The network is in
+:mod:`tensor_cosdi.learn.dcosnet`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .dcosnet import Sensing, _per_sample, build_dcosnet, ssim
+
+__all__ = ["DCoSNetConfig", "train_dcosnet", "TRAINABLE_SYSTEMS", "LOSSES"]
+
+#: Systems :func:`train_dcosnet` builds from crops of a coded aperture.
+TRAINABLE_SYSTEMS = ("sd_cassi", "mu_cosdi")
+#: Loss choices (Eq. 152 and the thesis' Table 2 ablation).
+LOSSES = ("l1+ssim", "l1", "ssim")
+
+
+@dataclass(frozen=True)
+class DCoSNetConfig:
+    """Every option of a D-CoSNet training run (stored with the weights).
+
+    ``mask``: ``"tsa"`` (random crops of the real TSA 256×256 coded aperture
+    in ``../shared/data/masks``), ``"random"`` (a fresh Bernoulli(½) code per
+    sample) or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    Measurements are noiseless for ``noiseless_fraction`` of the samples, else
+    at an SNR drawn uniformly from ``[snr_min, snr_max]`` dB.
+    """
+
+    system: str = "sd_cassi"
+    n_bands: int = 28
+    shift: int = 2
+    stages: int = 3
+    width: int = 16
+    unet_width: int = 32
+    loss: str = "l1+ssim"
+    mask: str = "tsa"
+    steps: int = 3000
+    batch: int = 8
+    patch: int = 64
+    lr: float = 1e-3
+    lr_end: float = 1e-5
+    warmup: int = 100
+    noiseless_fraction: float = 0.5
+    snr_min: float = 20.0
+    snr_max: float = 40.0
+    seed: int = 0
+    checkpoint_every: int = 100
+
+    def check(self):
+        if self.system not in TRAINABLE_SYSTEMS:
+            raise ValueError(f"system must be one of {TRAINABLE_SYSTEMS}, got {self.system!r}")
+        if self.loss not in LOSSES:
+            raise ValueError(f"loss must be one of {LOSSES}, got {self.loss!r}")
+        for name in ("n_bands", "shift", "stages", "width", "unet_width", "steps", "batch",
+                     "patch", "checkpoint_every"):  # fmt: skip
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        if not 2 <= self.n_bands <= 31:
+            raise ValueError(f"n_bands must lie in 2..31 (the scenes have 31), got {self.n_bands}")
+        if self.patch < 16 or self.patch % 4:
+            raise ValueError(f"patch must be a multiple of 4, ≥ 16, got {self.patch}")
+        if isinstance(self.warmup, bool) or not isinstance(self.warmup, int) or self.warmup < 0:
+            raise ValueError(f"warmup must be an integer ≥ 0, got {self.warmup!r}")
+        if not 0 < self.lr_end <= self.lr:
+            raise ValueError(f"need 0 < lr_end ≤ lr, got {self.lr_end}, {self.lr}")
+        if not 0 <= self.noiseless_fraction <= 1:
+            raise ValueError(
+                f"noiseless_fraction must lie in [0, 1], got {self.noiseless_fraction}"
+            )
+        if not self.snr_min <= self.snr_max:
+            raise ValueError(f"need snr_min ≤ snr_max, got {self.snr_min}, {self.snr_max}")
+        return self
+
+    @property
+    def margin(self) -> int:
+        """Extra code columns the system needs beyond the cube's width."""
+        return self.shift * (self.n_bands - 1) if self.system == "mu_cosdi" else 0
+
+    def make_system(self, code):
+        from ..systems import REGISTRY
+
+        cls = REGISTRY[self.system]
+        extra = {"modality": "monocular"} if self.system == "mu_cosdi" else {}
+        return cls(code, n_bands=self.n_bands, shifts=self.shift, **extra)
+
+
+def _load_mask(spec, folder=None):
+    """The 2-D training code named by ``spec`` (see :class:`DCoSNetConfig`), or ``None`` for
+    ``"random"``."""
+    if spec == "random":
+        return None
+    if spec == "tsa":
+        from ..datasets import data_dir
+
+        path = data_dir(folder).parent / "masks" / "tsa_mask256.mat"
+        if not path.is_file():
+            raise FileNotFoundError(
+                f"the TSA mask is not at {path}; pass mask='random' (--mask random) or a path"
+            )
+    else:
+        path = Path(spec)
+        if not path.is_file():
+            raise FileNotFoundError(f"mask file not found: {path}")
+    if path.suffix == ".npy":
+        arrays = {"array": np.load(path, allow_pickle=False)}
+    elif path.suffix == ".mat":
+        import scipy.io
+
+        arrays = {k: v for k, v in scipy.io.loadmat(path).items() if not k.startswith("__")}
+    else:
+        raise ValueError(f"mask must be 'tsa', 'random', a .npy or a .mat file, got {spec!r}")
+    codes = {k: v for k, v in arrays.items() if np.ndim(v) == 2}
+    if len(codes) != 1:
+        raise ValueError(
+            f"{path}: expected one 2-D code, found {[(k, np.shape(v)) for k, v in arrays.items()]}"
+        )
+    code = np.asarray(next(iter(codes.values())), dtype=np.float64)
+    if not np.all(np.isfinite(code)) or code.min() < 0:
+        raise ValueError(f"{path}: the code must be finite and non-negative")
+    return code
+
+
+def _training_data(cfg: DCoSNetConfig, folder=None):
+    from ..datasets import KAIST_WAVELENGTHS, TUNE_SCENES, load_hsi
+
+    wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
+    cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in TUNE_SCENES]
+    code = _load_mask(cfg.mask, folder)
+    need = (cfg.patch, cfg.patch + cfg.margin)
+    if code is not None and (code.shape[0] < need[0] or code.shape[1] < need[1]):
+        raise ValueError(f"the mask {code.shape} is smaller than a training crop {need}")
+    return cubes, code
+
+
+def _sample(rng, cfg: DCoSNetConfig, data):
+    """``(clean (B, p, p, L) float32, [system, …])`` from the random stream."""
+    cubes, code = data
+    p = cfg.patch
+    clean = np.empty((cfg.batch, p, p, cfg.n_bands), dtype=np.float32)
+    systems = []
+    for i in range(cfg.batch):
+        c = cubes[int(rng.integers(len(cubes)))]
+        r0 = int(rng.integers(0, c.shape[0] - p + 1))
+        c0 = int(rng.integers(0, c.shape[1] - p + 1))
+        patch = np.rot90(c[r0 : r0 + p, c0 : c0 + p], int(rng.integers(4)))
+        clean[i] = patch[::-1] if rng.random() < 0.5 else patch
+        w = p + cfg.margin
+        if code is None:
+            crop = (rng.random((p, w)) < 0.5).astype(np.float64)
+        else:
+            r0 = int(rng.integers(0, code.shape[0] - p + 1))
+            c0 = int(rng.integers(0, code.shape[1] - w + 1))
+            crop = code[r0 : r0 + p, c0 : c0 + w]
+            if rng.random() < 0.5:
+                crop = crop[::-1]
+        systems.append(cfg.make_system(np.ascontiguousarray(crop)))
+    return clean, systems
+
+
+def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
+    """Eq. 152 with the ablation choices; ``G`` compared in units of ``d̄`` (cube-like)."""
+    db = _per_sample(dbar, g_true)
+    total = (g_est - g_true).abs().div(db).mean()
+    if loss in ("l1+ssim", "l1"):
+        total = total + (est - truth).abs().mean()
+    if loss in ("l1+ssim", "ssim"):
+        total = total + (1 - ssim(est, truth))
+    return total
+
+
+def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
+    clean_np, systems = _sample(rng, cfg, data)
+    sensing = Sensing(systems, device=dev)
+    truth = torch.from_numpy(clean_np).to(dev).permute(0, 3, 1, 2)
+    with torch.no_grad():
+        g = sensing.forward(truth)
+        power = g.pow(2).reshape(len(g), -1).mean(dim=1)
+        snr = rng.uniform(cfg.snr_min, cfg.snr_max, cfg.batch)
+        noisy = rng.random(cfg.batch) >= cfg.noiseless_fraction
+        sig = torch.from_numpy(np.where(noisy, 10 ** (-snr / 20), 0.0).astype(np.float32)).to(dev)
+        g_in = g + _per_sample(sig * power.sqrt(), g) * torch.randn(g.shape).to(dev)
+        s = sensing.scale(g_in)
+    est, g_est = net(g_in / _per_sample(s, g), sensing)
+    return _loss_terms(
+        torch, est, truth / _per_sample(s, truth), g_est, g / _per_sample(s, g), sensing.dbar,
+        cfg.loss,
+    )  # fmt: skip
+
+
+def train_dcosnet(
+    out,
+    config: DCoSNetConfig | None = None,
+    *,
+    resume: bool = False,
+    force: bool = False,
+    device: str | None = None,
+    folder=None,
+    progress: bool = True,
+    command: str | None = None,
+    stop_after: int | None = None,
+):
+    """Train D-CoSNet on crops of the tuning scenes; write its weights to ``out``.
+
+    Same contract as :func:`tensor_cosdi.learn.train.train_denoiser`
+    (checkpoints to ``OUT.ckpt``, ``resume``, ``force``, ``stop_after``).
+    Returns a summary dict.
+    """
+    from ._loop import run
+
+    return run(
+        desc="train-dcosnet",
+        out=out,
+        config=config,
+        config_cls=DCoSNetConfig,
+        prepare=lambda cfg: _training_data(cfg, folder),
+        build=lambda torch, cfg, data: build_dcosnet(
+            torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width
+        ),
+        batch_loss=_dcosnet_loss,
+        weights_config=lambda cfg: {
+            "system": cfg.system,
+            "channels": cfg.n_bands,
+            "shift": cfg.shift,
+            "stages": cfg.stages,
+            "width": cfg.width,
+            "unet_width": cfg.unet_width,
+        },
+        resume=resume,
+        force=force,
+        device=device,
+        progress=progress,
+        command=command,
+        stop_after=stop_after,
+    )

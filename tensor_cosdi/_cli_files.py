@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._cli_util import _jsonable, _method_defaults
+from ._cli_util import _method_defaults, run_metadata
 
 
 def _wavelength_range(text: str, n: int) -> np.ndarray:
@@ -100,14 +100,7 @@ def _reconstruct_direct(args) -> int:
         depth=None if depth is None else np.asarray(depth),
         sources=[Path(mask_path), Path(meas_path)],
         overwrite=args.force,
-        metadata={
-            "method": args.method,
-            "options": {k: v for k, v in res.options.items() if _jsonable(v)},
-            "seconds": seconds,
-            "iterations": res.iterations,
-            "mask": args.mask,
-            "measurement": args.measurement,
-        },
+        metadata=run_metadata(args, res, seconds, mask=args.mask, measurement=args.measurement),
     )
     print(
         f"{type(system).__name__} {tuple(system.cube_shape)} reconstructed with {args.method} in "

@@ -41,3 +41,14 @@ def _positive_int(text: str) -> int:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
     return value
+
+
+def run_metadata(args, res, seconds, **extra) -> dict:
+    """What a reconstruction bundle records about the run (method, options, time, …)."""
+    return {
+        "method": args.method,
+        "options": {k: v for k, v in res.options.items() if _jsonable(v)},
+        "seconds": seconds,
+        "iterations": res.iterations,
+        **extra,
+    }

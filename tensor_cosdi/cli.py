@@ -172,14 +172,7 @@ def run_reconstruct(args) -> int:
         arrays=extra,
         sources=files,
         overwrite=args.force,
-        metadata={
-            "method": args.method,
-            "options": {k: v for k, v in res.options.items() if _jsonable(v)},
-            "seconds": seconds,
-            "iterations": res.iterations,
-            "roi": args.roi,
-            "binning": args.binning,
-        },
+        metadata=run_metadata(args, res, seconds, roi=args.roi, binning=args.binning),
     )
     print(
         f"{type(cal.system).__name__} {tuple(cal.system.cube_shape)} reconstructed with "
@@ -192,7 +185,7 @@ def run_reconstruct(args) -> int:
 
 from ._cli_files import _reconstruct_direct, run_info, run_preview  # noqa: E402
 from ._cli_train import _training_options, run_train_dcosnet, run_train_denoiser  # noqa: E402
-from ._cli_util import _jsonable, _method_defaults, _option_value, _positive_int  # noqa: E402
+from ._cli_util import _method_defaults, _option_value, _positive_int, run_metadata  # noqa: E402
 
 
 def build_parser() -> argparse.ArgumentParser:

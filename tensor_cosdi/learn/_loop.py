@@ -41,6 +41,19 @@ def check_out(out, force: bool) -> tuple[Path, Path]:
     return out, out.with_name(out.name + ".ckpt")
 
 
+def check_config(cfg, positive_ints) -> None:
+    """The checks every training configuration shares: ``positive_ints`` are integers ≥ 1,
+    ``warmup`` an integer ≥ 0, ``0 < lr_end ≤ lr``."""
+    for name in positive_ints:
+        v = getattr(cfg, name)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise ValueError(f"{name} must be a positive integer, got {v!r}")
+    if isinstance(cfg.warmup, bool) or not isinstance(cfg.warmup, int) or cfg.warmup < 0:
+        raise ValueError(f"warmup must be an integer ≥ 0, got {cfg.warmup!r}")
+    if not 0 < cfg.lr_end <= cfg.lr:
+        raise ValueError(f"need 0 < lr_end ≤ lr, got {cfg.lr_end}, {cfg.lr}")
+
+
 def check_stop_after(stop_after):
     if stop_after is not None and (
         isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 1

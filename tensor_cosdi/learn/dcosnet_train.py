@@ -56,19 +56,17 @@ class DCoSNetConfig:
             raise ValueError(f"system must be one of {TRAINABLE_SYSTEMS}, got {self.system!r}")
         if self.loss not in LOSSES:
             raise ValueError(f"loss must be one of {LOSSES}, got {self.loss!r}")
-        for name in ("n_bands", "shift", "stages", "width", "unet_width", "steps", "batch",
-                     "patch", "checkpoint_every"):  # fmt: skip
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        from ._loop import check_config
+
+        check_config(
+            self,
+            ("n_bands", "shift", "stages", "width", "unet_width", "steps", "batch", "patch",
+             "checkpoint_every"),
+        )  # fmt: skip
         if not 2 <= self.n_bands <= 31:
             raise ValueError(f"n_bands must lie in 2..31 (the scenes have 31), got {self.n_bands}")
         if self.patch < 16 or self.patch % 4:
             raise ValueError(f"patch must be a multiple of 4, ≥ 16, got {self.patch}")
-        if isinstance(self.warmup, bool) or not isinstance(self.warmup, int) or self.warmup < 0:
-            raise ValueError(f"warmup must be an integer ≥ 0, got {self.warmup!r}")
-        if not 0 < self.lr_end <= self.lr:
-            raise ValueError(f"need 0 < lr_end ≤ lr, got {self.lr_end}, {self.lr}")
         if not 0 <= self.noiseless_fraction <= 1:
             raise ValueError(
                 f"noiseless_fraction must lie in [0, 1], got {self.noiseless_fraction}"

@@ -54,10 +54,11 @@ class TrainConfig:
     checkpoint_every: int = 200
 
     def check(self):
-        for name in ("steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{name} must be a positive integer, got {v!r}")
+        from ._loop import check_config
+
+        check_config(
+            self, ("steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every")
+        )
         if self.patch < 8 or self.patch % 2:
             raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
         if not 0 <= self.coded_fraction <= 1:
@@ -66,10 +67,6 @@ class TrainConfig:
             raise ValueError(
                 f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
             )
-        if isinstance(self.warmup, bool) or not isinstance(self.warmup, int) or self.warmup < 0:
-            raise ValueError(f"warmup must be an integer ≥ 0, got {self.warmup!r}")
-        if not 0 < self.lr_end <= self.lr:
-            raise ValueError(f"need 0 < lr_end ≤ lr, got {self.lr_end}, {self.lr}")
         return self
 
 

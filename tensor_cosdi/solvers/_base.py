@@ -150,6 +150,14 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     Returns
     -------
     Result
+
+    Notes
+    -----
+    Every method runs on the measurement divided by its peak ``max|g|`` and
+    the cube is multiplied back (the history's objective too), so results do
+    not depend on the measurement's units.  An all-zero or constant
+    measurement, NaN out of a method, or a cube that overflows when scaled
+    back raise errors that say so.
     """
     entry = METHODS[method]  # an unknown name lists the registered ones
     unknown = sorted(set(options) - set(entry.defaults))

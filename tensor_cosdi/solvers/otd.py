@@ -81,7 +81,13 @@ def pan_weight_for(measurement, pan_weight) -> float:
 
 
 def panchromatic_estimate(
-    system, measurement, *, pan_iter: int = 60, pan_atoms: int = 3, pan_weight="auto"
+    system,
+    measurement,
+    *,
+    pan_iter: int = 60,
+    pan_atoms: int = 3,
+    pan_weight="auto",
+    progress: bool = False,
 ):
     """SPEC §5 step 1: ``Z`` and, where one was computed on the way, a starting cube.
 
@@ -106,6 +112,7 @@ def panchromatic_estimate(
         n_atoms=pan_atoms,
         max_iter=pan_iter,
         tv_weight=pan_weight_for(measurement, pan_weight),
+        progress=progress,
     )
     return system.decimation.forward(x), x
 
@@ -119,6 +126,7 @@ def initial_bases(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    progress: bool = False,
 ):
     """The starting per-mode bases ``{mode: ModeTransform}`` of OTD (or WDCT), and a starting cube.
 
@@ -155,7 +163,12 @@ def initial_bases(
     start = None
     if spatial == "panchromatic":
         z, start = panchromatic_estimate(
-            system, measurement, pan_iter=pan_iter, pan_atoms=pan_atoms, pan_weight=pan_weight
+            system,
+            measurement,
+            pan_iter=pan_iter,
+            pan_atoms=pan_atoms,
+            pan_weight=pan_weight,
+            progress=progress,
         )
         mats.update({m: Dense(u) for m, u in tucker_bases(z, modes=[0, 1]).items()})
     elif spatial == "wavelet":
@@ -173,6 +186,7 @@ def subspace_gap_tv(
     max_iter: int = 60,
     tv_weight: float = 0.05,
     eps: float = 1e-6,
+    progress: bool = False,
 ):
     """A fast first estimate for the panchromatic image: GAP-TV in a smooth spectral subspace.
 
@@ -212,7 +226,8 @@ def subspace_gap_tv(
         TV(tv_weight, denoise=subspace_tv),
         eps=eps,
         max_iter=max_iter,
-        desc="panchromatic",
+        progress=progress,
+        desc="OTD stage 1: panchromatic",
         objective=False,  # an internal stage: its history is not returned
     )
     return x
@@ -283,11 +298,10 @@ def tucker_admm(
     tol : float
         Stop when the relative change of ``F`` between iterations is below.
     plane_support : "auto", False or int
-        On systems whose cube has depth planes (CASSDI-DFA), keep one plane
-        per pixel (:class:`~tensor_cosdi.solvers.priors.PlaneSupport`) from
-        iteration ``max_iter // 6`` on ("auto"), or from the given one.  On
-        64×64×8×3 DFA scenes at 30 dB it took OTD from 18.67 / 19.32 dB,
-        SSIM 0.19 / 0.24 to 19.02 / 20.17 dB, SSIM 0.55 / 0.56.
+        On depth-plane systems (CASSDI-DFA) keep one plane per pixel
+        (:class:`~tensor_cosdi.solvers.priors.PlaneSupport`) from iteration
+        ``max_iter // 6`` ("auto") or the given one: on 64×64×8×3 DFA scenes
+        at 30 dB 18.67 / 19.32 → 19.02 / 20.17 dB, SSIM 0.19 / 0.24 → 0.55 / 0.56.
 
     Returns
     -------
@@ -387,6 +401,7 @@ def online_tucker_admm(
         pan_iter=pan_iter,
         pan_atoms=pan_atoms,
         pan_weight=pan_weight,
+        progress=bool(options.get("progress", False)),
     )
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
     return tucker_admm(
@@ -396,7 +411,7 @@ def online_tucker_admm(
         start=start,
         update_modes=update,
         update_every=update_every,
-        desc="OTD",
+        desc="OTD stage 2: ADMM",
         **options,
     )
 

@@ -112,21 +112,12 @@ def _reconstruct_direct(args) -> int:
 
 def _cube_and_wavelengths(spec, wavelengths):
     from .io import files, load_bundle
+    from .io.bundle import bundle_document
 
     path, key = files.split_key(spec)
     p = Path(path)
-    suffix = files._suffix(p)
-    bundle = None
-    if key is None and suffix in (".h5", ".hdf5"):
-        import h5py
-
-        with h5py.File(p, "r") as f:
-            is_bundle = "tensor_cosdi_bundle" in f.attrs
-        bundle = load_bundle(p) if is_bundle else None
-    elif key is None and suffix == ".npz":
-        with np.load(p, allow_pickle=False) as z:
-            is_bundle = "__bundle__" in z.files
-        bundle = load_bundle(p) if is_bundle else None
+    files._suffix(p)  # an unknown extension is an error naming the known ones
+    bundle = load_bundle(p) if key is None and bundle_document(p) is not None else None
     if bundle is not None:
         if bundle.cube is None:
             raise ValueError(f"{p}: the bundle holds no cube (kind {bundle.info.get('kind')!r})")
@@ -182,6 +173,7 @@ def run_info(args) -> int:
     import json
 
     from .io import files
+    from .io.bundle import bundle_document
 
     path = Path(args.file)
     suffix = files._suffix(path)
@@ -193,19 +185,11 @@ def run_info(args) -> int:
         entries = files._entries(path, suffix)
     for name, (shape, dtype, _) in entries.items():
         print(f"  {name}: {tuple(int(n) for n in shape)} {np.dtype(dtype)}")
-    doc = None
-    if suffix in (".h5", ".hdf5"):
-        import h5py
-
-        with h5py.File(path, "r") as f:
-            raw = f.attrs.get("tensor_cosdi_bundle")
-        doc = None if raw is None else json.loads(raw)
-    elif suffix == ".npz" and "__bundle__" in entries:
-        doc = json.loads(str(entries["__bundle__"][2]()))
+    doc = bundle_document(path)
     if doc is None and suffix != ".hdr":
         try:
             _, wl = files.read_cube(path)
-        except (ValueError, KeyError):
+        except (ValueError, KeyError):  # not a cube (a mask, a measurement): no wavelengths
             wl = None
     elif doc is not None:
         wl = None

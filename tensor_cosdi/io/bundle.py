@@ -325,6 +325,22 @@ def _read_h5(p: Path, max_bytes: int):
     return data, doc
 
 
+def bundle_document(path) -> dict | None:
+    """The JSON document of a bundle at ``path`` (``.npz`` or HDF5) without reading its arrays, or
+    ``None`` when the file is not a bundle."""
+    p = Path(path)
+    if p.suffix.lower() in H5_SUFFIXES:
+        from .files import _require_h5py
+
+        with _require_h5py().File(p, "r") as f:
+            raw = f.attrs.get("tensor_cosdi_bundle")
+        return None if raw is None else json.loads(raw)
+    if p.suffix.lower() == ".npz":
+        with np.load(p, allow_pickle=False) as z:
+            return json.loads(str(z["__bundle__"])) if "__bundle__" in z.files else None
+    return None
+
+
 def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     """Read a bundle written by :func:`save_bundle` (arrays bit-identical, system rebuilt).
 

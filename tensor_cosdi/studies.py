@@ -307,21 +307,16 @@ def _gram_eigenvalues(gram):
     if kind == "row_banded":
         import scipy.linalg
 
-        bands = np.asarray(gram.bands, dtype=np.float64)
-        b, n = bands.shape[0] - 1, bands.shape[-1]
-        fibres = bands.reshape(b + 1, -1, n)
+        b = gram.bandwidth
         evs, lo, hi = [], np.inf, -np.inf
-        for f in range(fibres.shape[1]):
-            ab = np.zeros((b + 1, n))
-            radius = np.zeros(n)
-            for o in range(b + 1):
-                ab[b - o, o:] = fibres[o, f, : n - o]
-                if o:
-                    radius[: n - o] += np.abs(fibres[o, f, : n - o])
-                    radius[o:] += np.abs(fibres[o, f, : n - o])
+        for ab in gram.upper_form():
+            diag, radius = ab[b], np.zeros(ab.shape[1])
+            for o in range(1, b + 1):  # off-diagonal o: ab[b − o, o:] couples p and p + o
+                off = np.abs(ab[b - o, o:])
+                radius[:-o] += off
+                radius[o:] += off
             evs.append(scipy.linalg.eig_banded(ab, eigvals_only=True))
-            lo = min(lo, float((fibres[0, f] - radius).min()))
-            hi = max(hi, float((fibres[0, f] + radius).max()))
+            lo, hi = min(lo, float((diag - radius).min())), max(hi, float((diag + radius).max()))
         return np.concatenate(evs), (lo, hi)
     raise ValueError(f"unknown structure {kind!r}")  # pragma: no cover
 

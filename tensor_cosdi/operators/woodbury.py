@@ -324,17 +324,22 @@ class RowBanded(_Structure):
     def bandwidth(self) -> int:
         return self.bands.shape[0] - 1
 
-    def _factors(self, mu):
+    def upper_form(self):
+        """Each fibre's matrix in LAPACK's upper banded storage ``ab[b − o, p + o] = (A Aᵀ)[p,
+        p + o]`` (a generator of ``(b + 1, n)`` arrays)."""
         b = self.bandwidth
         n = self.bands.shape[-1]
         fibres = self.bands.reshape(b + 1, -1, n)
-        ab = np.zeros((b + 1, n))
-        out = []
         for f in range(fibres.shape[1]):
-            ab[:] = 0.0
+            ab = np.zeros((b + 1, n))
             for o in range(b + 1):
                 ab[b - o, o:] = fibres[o, f, : n - o]
-            ab[b] += mu
+            yield ab
+
+    def _factors(self, mu):
+        out = []
+        for ab in self.upper_form():
+            ab[self.bandwidth] += mu
             out.append(scipy.linalg.cholesky_banded(ab, lower=False))
         return out
 

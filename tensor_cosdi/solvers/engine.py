@@ -46,7 +46,7 @@ from .. import _backend as B
 from ..systems._base import sensing_gain
 from ._base import History, relative_change
 
-__all__ = ["Loop", "admm", "gap", "fista", "twist", "lipschitz", "check_int"]
+__all__ = ["Loop", "admm", "gap", "fista", "twist", "least_norm", "lipschitz", "check_int"]
 
 
 def check_int(name, value, low):
@@ -167,6 +167,12 @@ def admm(
     return z, loop.history, loop.converged
 
 
+def least_norm(op, g, eps: float = 1e-6):
+    """``Aᵀ(AAᵀ + εI)⁻¹ g`` with ``ε = eps · s`` (the structured dual solve): the start of GAP and
+    TwIST."""
+    return op._adjoint(op.solve_dual(g, eps * sensing_gain(op, g)))
+
+
 def gap(
     op,
     g,
@@ -188,7 +194,7 @@ def gap(
     residual and the next projection.
     """
     lam = eps * sensing_gain(op, g)
-    x = op._adjoint(op.solve_dual(g, lam)) if start is None else start
+    x = least_norm(op, g, eps) if start is None else start
     prior.setup(x, penalty=1.0, gain=lam / eps)
     g_hat = g
     ax = op._forward(x)
@@ -272,7 +278,7 @@ def twist(
     op,
     g,
     prior,
-    start,
+    start=None,
     *,
     lam1: float = 1e-4,
     monotone: bool = True,
@@ -283,7 +289,7 @@ def twist(
     desc: str = "TwIST",
 ):
     """TwIST (two-step iterative shrinkage/thresholding, Bioucas-Dias & Figueiredo 2007) from
-    ``start``.  Returns ``(x, history, converged)``.
+    ``start`` (default :func:`least_norm`).  Returns ``(x, history, converged)``.
 
     ``Γ(x) = prox(x + Aᵀ(g − A x)/L)`` (``L`` from :func:`lipschitz`), then
     ``x_{t+1} = (1 − α) x_{t−1} + (α − β) x_t + β Γ(x_t)`` with the paper's
@@ -300,6 +306,7 @@ def twist(
     rho0 = (1 - lam1) / (1 + lam1)
     alpha = 2 / (1 + np.sqrt(1 - rho0 * rho0))
     beta = 2 * alpha / (1 + lam1)
+    start = least_norm(op, g) if start is None else start
     prior.setup(start, penalty=L, gain=L)
 
     def terms(x, ax):  # (data term, prior term)

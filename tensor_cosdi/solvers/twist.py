@@ -35,7 +35,6 @@ def twist_tv(
     paper's default); ``monotone`` falls back to the IST step when the
     two-step update raises the objective.
     """
-    from ..systems._base import sensing_gain
     from .denoisers import tv
 
     tv_weight = check_positive("tv_weight", tv_weight)
@@ -43,13 +42,11 @@ def twist_tv(
     engine.check_int("max_iter", max_iter, 1)
     tv_iter = engine.check_int("tv_iter", tv_iter, 1)
     op, g = system.operator, measurement
-    start = op._adjoint(op.solve_dual(g, 1e-6 * sensing_gain(op, g)))
     prior = TV(tv_weight, denoise=lambda x, w: tv(x, w, n_iter=tv_iter))
     return engine.twist(
         op,
         g,
         prior,
-        start,
         lam1=lam1,
         monotone=bool(monotone),
         max_iter=max_iter,

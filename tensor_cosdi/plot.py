@@ -124,6 +124,7 @@ def compare(truth, cubes: dict, wavelengths, *, percentile: float = 99.5, fig=No
     """sRGB panels of the truth and each reconstruction (one exposure for all), and maps of the
     mean absolute error over bands; PSNR / SSIM (data range: the truth's maximum) in the titles.
     Returns the figure."""
+    from .colour import to_srgb
     from .metrics import psnr, ssim
 
     plt = _plt()
@@ -147,8 +148,6 @@ def compare(truth, cubes: dict, wavelengths, *, percentile: float = 99.5, fig=No
     errs = {k: np.abs(c - t).mean(axis=2) for k, c in est.items()}
     vmax = max(float(np.percentile(e, 99)) for e in errs.values()) or 1.0
     for j, (name, c) in enumerate(est.items(), start=1):
-        from .colour import to_srgb
-
         ax = axes[0, j]
         ax.imshow(to_srgb(np.clip(c / white, 0, None), wl))
         ax.set_title(

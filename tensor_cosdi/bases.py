@@ -152,10 +152,36 @@ def svd_basis(matrix) -> np.ndarray:
     m = np.asarray(B.to_numpy(matrix), dtype=np.float64)
     if m.ndim != 2:
         raise ValueError(f"svd_basis needs a 2-D matrix, got shape {m.shape}")
-    if not np.isfinite(m).all():
-        raise ValueError("svd_basis: the matrix contains NaN or inf")
-    vals, vecs = np.linalg.eigh(m @ m.T)
+    return _gram_basis(m @ m.T, "svd_basis: the matrix contains NaN or inf")
+
+
+def _gram_basis(gram, nonfinite: str) -> np.ndarray:
+    """Eigenvectors of a Gram matrix, strongest first, polished to orthonormal."""
+    if not np.isfinite(gram).all():
+        raise ValueError(nonfinite)
+    vals, vecs = np.linalg.eigh(gram)
     return _polish(vecs[:, ::-1])
+
+
+#: Elements per block when :func:`unfolding_gram` streams a tensor (1/16 of a 256²×28 cube).
+_GRAM_BLOCK = 1 << 17
+
+
+def unfolding_gram(x: np.ndarray, mode: int) -> np.ndarray:
+    """``X₍ₘ₎ X₍ₘ₎ᵀ`` of the mode-``mode`` unfolding in float64, streamed in blocks: no copy of
+    the tensor (an unfolding of a non-leading mode and a float64 cast would cost three)."""
+    n = x.shape[mode]
+    pre, post = int(np.prod(x.shape[:mode])), int(np.prod(x.shape[mode + 1 :]))
+    v = np.ascontiguousarray(x).reshape(pre, n, post)
+    gram = np.zeros((n, n))
+    cols = min(post, max(1, _GRAM_BLOCK // n))
+    rows = max(1, _GRAM_BLOCK // (n * cols))
+    for p0 in range(0, pre, rows):
+        for c0 in range(0, post, cols):
+            blk = v[p0 : p0 + rows, :, c0 : c0 + cols].astype(np.float64)  # a small copy
+            blk = blk.transpose(1, 0, 2).reshape(n, -1)
+            gram += blk @ blk.T
+    return gram
 
 
 def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
@@ -175,7 +201,7 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
         if not -x.ndim <= m < x.ndim:
             raise ValueError(f"mode {m} is not an axis of a tensor of shape {x.shape}")
         m %= x.ndim
-        out[m] = svd_basis(np.moveaxis(x, m, 0).reshape(x.shape[m], -1))
+        out[m] = _gram_basis(unfolding_gram(x, m), "tucker_bases: the tensor contains NaN or inf")
     return out
 
 
@@ -221,17 +247,18 @@ class ModeTransform:
         return f"{type(self).__name__}(n={self.n})"
 
 
-def _dense_along(x: np.ndarray, m: np.ndarray, axis: int) -> np.ndarray:
+def _dense_along(x: np.ndarray, m: np.ndarray, axis: int, out=None) -> np.ndarray:
     """``y = x ×_axis m`` (``y[…, i, …] = Σ_j m[i, j] x[…, j, …]``) as one (batched) GEMM, C order
-    kept."""
+    kept; into ``out`` (a C-contiguous array of ``x``'s shape and dtype, not ``x``) if given."""
     n = x.shape[axis]
     pre, post = int(np.prod(x.shape[:axis])), int(np.prod(x.shape[axis + 1 :]))
     if post == 1:
-        y = x.reshape(pre, n) @ m.T
+        y = np.matmul(x.reshape(pre, n), m.T, out=None if out is None else out.reshape(pre, n))
     elif pre == 1:
-        y = m @ x.reshape(n, post)
+        y = np.matmul(m, x.reshape(n, post), out=None if out is None else out.reshape(n, post))
     else:
-        y = np.matmul(m, x.reshape(pre, n, post))
+        shape = (pre, n, post)
+        y = np.matmul(m, x.reshape(shape), out=None if out is None else out.reshape(shape))
     return y.reshape(x.shape)
 
 
@@ -260,11 +287,11 @@ class Dense(ModeTransform):
             )
         return hit
 
-    def _analysis(self, x, axis):
-        return _dense_along(x, self._typed(True, x.dtype), axis)
+    def _analysis(self, x, axis, out=None):
+        return _dense_along(x, self._typed(True, x.dtype), axis, out)
 
-    def _synthesis(self, x, axis):
-        return _dense_along(x, self._typed(False, x.dtype), axis)
+    def _synthesis(self, x, axis, out=None):
+        return _dense_along(x, self._typed(False, x.dtype), axis, out)
 
 
 class DCT(ModeTransform):
@@ -377,7 +404,7 @@ class KroneckerBasis:
         """``{mode: Ψn}`` as dense matrices."""
         return {m: t.matrix for m, t in self.transforms.items()}
 
-    def _apply(self, x, synthesis: bool):
+    def _apply(self, x, synthesis: bool, overwrite: bool = False):
         if not self.transforms:
             return x
         if not isinstance(x, np.ndarray):
@@ -386,18 +413,29 @@ class KroneckerBasis:
             return self._op.forward(x) if synthesis else self._op.adjoint(x)
         v, flipped = _memory_view(x)
         nd = v.ndim
+        spare = []  # C-contiguous buffers of v's shape whose contents are dead
+        dead = overwrite or (v is not x and not flipped)  # v may be written over once used
         for mode, t in self.transforms.items():
             axis = nd - 1 - mode if flipped else mode
-            v = t._synthesis(v, axis) if synthesis else t._analysis(v, axis)
+            step = t._synthesis if synthesis else t._analysis
+            if isinstance(t, Dense) and spare and spare[-1].dtype == v.dtype:
+                new = step(v, axis, out=spare.pop())  # a dense GEMM writes into a dead buffer
+            else:
+                new = step(v, axis)
+            if dead and new is not v:
+                spare.append(v)
+            v, dead = new, True
         return v.T if flipped else v
 
-    def synthesis(self, theta):
-        """``F = Θ ×ₙ Ψn`` — coefficients to cube."""
-        return self._apply(theta, True)
+    def synthesis(self, theta, *, overwrite: bool = False):
+        """``F = Θ ×ₙ Ψn`` — coefficients to cube.  ``overwrite=True`` lets it reuse ``theta``'s
+        memory (its contents are then undefined): one cube fewer at the peak."""
+        return self._apply(theta, True, overwrite)
 
-    def analysis(self, cube):
-        """``Θ = F ×ₙ Ψnᵀ`` — cube to coefficients (the inverse, by orthonormality)."""
-        return self._apply(cube, False)
+    def analysis(self, cube, *, overwrite: bool = False):
+        """``Θ = F ×ₙ Ψnᵀ`` — cube to coefficients (the inverse, by orthonormality);
+        ``overwrite`` as in :meth:`synthesis`."""
+        return self._apply(cube, False, overwrite)
 
     def with_mode(self, mode: int, matrix) -> KroneckerBasis:
         """A copy with the basis of one mode replaced (the OTD basis update)."""

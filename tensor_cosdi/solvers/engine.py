@@ -130,8 +130,10 @@ def admm(
     prior : :class:`~tensor_cosdi.solvers.priors.Prior`
     rho : float
         Penalty relative to the sensing gain (``ρ = rho · s``).
-    start : tensor, optional
-        Starting ``x`` (default: ``(AᵀA + ρI)⁻¹ Aᵀ g``).
+    start : tensor or one-element list, optional
+        Starting ``x`` (default: ``(AᵀA + ρI)⁻¹ Aᵀ g``).  A list ``[x0]`` hands
+        the cube over: ``admm`` empties the list, so the caller holds no
+        reference and the start's memory is freed after the first iteration.
     normal_solve : callable ``(b, x_prev) -> x``, optional
         Replaces ``(AᵀA + ρI)⁻¹ b`` (coupled problems; default the
         operator's structured ``solve_normal``).
@@ -142,18 +144,35 @@ def admm(
     r = rho * sensing_gain(op, g)
     solve = normal_solve if normal_solve is not None else (lambda b, x0: op.solve_normal(b, r))
     atg = op._adjoint(g)
+    if isinstance(start, list):
+        start = start.pop() if len(start) == 1 else _bad_handoff(start)
     x = solve(atg, None) if start is None else start
+    del start
     prior.setup(x, penalty=r, gain=r / rho)
     z = prior.prox(x)
     u = tl.zeros_like(z)
     loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
+    inplace = isinstance(u, np.ndarray)  # NumPy: update in place, no cube-sized temporaries
     for it in loop:
-        x_new = solve(atg + r * (z - u), x)
+        if inplace:
+            b = np.subtract(z, u)
+            b *= r
+            b += atg
+        else:
+            b = atg + r * (z - u)
+        z = None  # the last z is not needed any more (its memory is reused)
+        x_new = solve(b, x)
+        del b
         change = relative_change(x_new, x)
         x = x_new
-        z = prior.prox(x + u)
-        u = u + (x - z)
+        if inplace:  # the prior may keep or return its input: it gets a fresh array
+            z = prior.prox(x + u)
+            u += x
+            u -= z
+        else:
+            z = prior.prox(x + u)
+            u = u + (x - z)
         if loop.record(
             it,
             residual_norm=float(tl.norm(op._forward(z) - g)),
@@ -165,6 +184,10 @@ def admm(
         if it + 1 < loop.max_iter:
             prior.update(x, it + 1)
     return z, loop.history, loop.converged
+
+
+def _bad_handoff(start):
+    raise ValueError(f"start as a list hands one cube over: [x0], got a list of {len(start)}")
 
 
 def least_norm(op, g, eps: float = 1e-6):
@@ -186,13 +209,25 @@ def gap(
     progress: bool = False,
     desc: str = "GAP",
     objective: bool = True,
+    guard: float | None = None,
 ):
     """(Accelerated) generalised alternating projection.  Returns ``(x, history, converged)``.
 
     ``ε = eps · s``; the default start is the least-norm ``Aᵀ(AAᵀ + εI)⁻¹ g``.
     One forward per iteration: ``A x`` of the new iterate serves the
     residual and the next projection.
+
+    ``guard`` (accelerated only): stop when ``‖A x − g‖`` has risen three
+    iterations in a row and stands above ``guard`` times the lowest residual
+    so far, and return the iterate that had it (a single overshoot is normal
+    for accelerated GAP).  Accelerated GAP feeds the residual back into ``ĝ``; when the
+    prior cannot express the scene (a plug-and-play denoiser at a low level),
+    that feedback grows instead of shrinking and the iterates diverge — the
+    residual is the signal, and it needs no ground truth.
     """
+    if guard is not None and not guard > 1:
+        raise ValueError(f"guard must be a ratio > 1 or None, got {guard!r}")
+    best, rises, last = (np.inf, None), 0, np.inf
     lam = eps * sensing_gain(op, g)
     x = least_norm(op, g, eps) if start is None else start
     prior.setup(x, penalty=1.0, gain=lam / eps)
@@ -207,13 +242,22 @@ def gap(
         change = relative_change(x_new, x)
         x = x_new
         ax = op._forward(x)
-        if loop.record(
+        res = float(tl.norm(ax - g))
+        done = loop.record(
             it,
-            residual_norm=float(tl.norm(ax - g)),
+            residual_norm=res,
             gnorm=gnorm,
             change=change,
             prior_term=prior.objective(x) if loop.objective else float("nan"),
-        ):
+        )
+        if guard is not None and accelerate:
+            rises, last = (rises + 1 if res > last else 0), res
+            if res < best[0]:
+                best = (res, x)
+            elif rises >= 3 and res > guard * best[0]:  # diverging: return the best iterate
+                x, loop.converged = best[1], False
+                break
+        if done:
             break
         if it + 1 < loop.max_iter:
             prior.update(x, it + 1)

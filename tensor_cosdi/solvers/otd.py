@@ -274,8 +274,9 @@ def tucker_admm(
     ----------
     bases : dict {mode: (n, n) orthonormal ndarray or ModeTransform}
         Starting synthesis bases (modes not listed: identity).
-    start : tensor of ``system.cube_shape``, optional
-        Starting cube (default: regularised least squares with weight ``mu``).
+    start : tensor of ``system.cube_shape`` or ``[tensor]``, optional
+        Starting cube (default: regularised least squares with weight ``mu``);
+        a one-element list hands it over (see :func:`~tensor_cosdi.solvers.engine.admm`).
     update_modes : sequence of int
         Modes whose basis is re-learned (HOSVD of the estimate's unfolding)
         every ``update_every`` iterations.
@@ -404,11 +405,13 @@ def online_tucker_admm(
         progress=bool(options.get("progress", False)),
     )
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
+    handoff = [start] if start is not None else None  # ADMM frees the start after iteration 1
+    del start
     return tucker_admm(
         system,
         measurement,
         bases,
-        start=start,
+        start=handoff,
         update_modes=update,
         update_every=update_every,
         desc="OTD stage 2: ADMM",

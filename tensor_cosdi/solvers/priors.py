@@ -54,7 +54,11 @@ __all__ = [
 
 def soft(x, t):
     """Soft thresholding ``sign(x) · max(|x| − t, 0)`` (``t`` a scalar or a tensor of ``x``'s
-    shape)."""
+    shape).  On NumPy arrays as ``x − clip(x, −t, t)`` into one new array (the same numbers;
+    the TensorLy form allocates four cube-sized temporaries)."""
+    if isinstance(x, np.ndarray) and np.issubdtype(x.dtype, np.floating):
+        c = np.clip(x, -t, t)
+        return np.subtract(x, c, out=c)
     return tl.sign(x) * tl.clip(tl.abs(x) - t, 0, None)
 
 
@@ -64,10 +68,17 @@ def omega_step(theta, nu, prev, thresh, mu, beta):
     ``= soft((βΩ_prev + μ(Θ − ν)) / (β + μ), λ / (2(β + μ)))``; here
     ``thresh`` is that threshold, ``λ / (2(β + μ))``, already.
     """
-    v = theta - nu
+    v = theta if isinstance(nu, (int, float)) and nu == 0 else theta - nu
     if beta > 0:
         v = (beta * prev + mu * v) / (beta + mu)
     return soft(v, thresh)
+
+
+def _l1(x) -> float:
+    """``Σ|x|`` without a cube-sized temporary on NumPy."""
+    if isinstance(x, np.ndarray):
+        return float(np.linalg.norm(x.reshape(-1), 1))
+    return float(tl.sum(tl.abs(x)))
 
 
 def rms(x) -> float:
@@ -198,9 +209,11 @@ class SparseInBasis(Prior):
         if beta > 0 and self._prev is None:
             self._prev = self.basis.analysis(self._prev_cube)
         omega = omega_step(theta, 0.0, self._prev, self.thresh, self.mu, beta)
-        self._omega_l1 = float(tl.sum(tl.abs(omega if self._w is None else self._w * omega)))
-        z = self.basis.synthesis(omega)
-        if self._prev_cube is None:
+        del theta
+        self._omega_l1 = _l1(omega if self._w is None else self._w * omega)
+        # Ω is not kept when β = 0: synthesis may reuse its memory (one cube fewer at the peak)
+        z = self.basis.synthesis(omega, overwrite=not self.beta > 0)
+        if self._prev_cube is None and self.beta > 0:  # Ω_prev is kept only when β uses it
             self._prev_cube, self._prev = z, omega
         return z
 
@@ -210,7 +223,8 @@ class SparseInBasis(Prior):
 
     def _rebase(self, mode, matrix, z_last):
         self.basis = self.basis.with_mode(mode, matrix)
-        self._prev_cube, self._prev = z_last, None  # Ω_prev = Ω at the basis change
+        if self.beta > 0:
+            self._prev_cube, self._prev = z_last, None  # Ω_prev = Ω at the basis change
 
 
 class FixedBasis(SparseInBasis):
@@ -248,8 +262,9 @@ class TuckerDictionary(SparseInBasis):
         self._last = None
 
     def prox(self, v):
-        self._last = super().prox(v)
-        return self._last
+        z = super().prox(v)
+        self._last = z if self.beta > 0 else None  # Ω_prev at a basis change needs it (β > 0)
+        return z
 
     def update(self, x, iteration: int) -> None:
         if not (self.update_modes and self.update_every and iteration % self.update_every == 0):

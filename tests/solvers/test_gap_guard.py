@@ -1,0 +1,60 @@
+"""The divergence guard of accelerated GAP (``engine.gap(guard=…)``, on by default in PnP-GAP)."""
+
+import numpy as np
+import pytest
+import tensorly as tl
+from scipy.ndimage import gaussian_filter
+
+import tensor_cosdi as tc
+from tensor_cosdi.solvers import engine
+from tensor_cosdi.solvers.priors import Denoiser
+
+
+def _sharpen(x, sigma):
+    """An expansive 'denoiser' (unsharp masking): accelerated GAP's feedback diverges with it."""
+    return x + 0.6 * (x - gaussian_filter(x, (1, 1, 0)))
+
+
+@pytest.fixture(scope="module")
+def problem():
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(32, 32), n_bands=8, rng=0)
+    return p.system.operator, np.asarray(p.measurement, dtype=np.float64)
+
+
+def _residual(op, x, g):
+    return float(tl.norm(op.forward(x) - g)) / float(tl.norm(g))
+
+
+def test_unguarded_accelerated_gap_diverges_with_an_expansive_prior(problem):
+    op, g = problem
+    x, hist, conv = engine.gap(op, g, Denoiser(_sharpen, sigma=0.1), max_iter=30)
+    assert not conv
+    assert hist["residual"][-1] > 3 * min(hist["residual"])  # the failure the guard is for
+
+
+def test_guard_returns_the_lowest_residual_iterate(problem):
+    op, g = problem
+    x, hist, conv = engine.gap(op, g, Denoiser(_sharpen, sigma=0.1), max_iter=30, guard=1.3)
+    assert not conv
+    assert len(hist["residual"]) < 30  # stopped early
+    best = min(hist["residual"])
+    assert _residual(op, x, g) == pytest.approx(best, rel=1e-9)
+    after = hist["residual"][hist["residual"].index(best) :]
+    assert after[-1] > 1.3 * best  # why it stopped: three rises in a row, above the guard
+    assert all(b > a for a, b in zip(after[-4:], after[-3:]))
+
+
+def test_guard_does_not_change_a_converging_run(problem):
+    op, g = problem
+    prior = lambda: Denoiser("tv", sigma=0.05)  # noqa: E731
+    a, ha, _ = engine.gap(op, g, prior(), max_iter=20)
+    b, hb, _ = engine.gap(op, g, prior(), max_iter=20, guard=1.3)
+    assert len(ha["residual"]) == len(hb["residual"])
+    assert np.array_equal(np.asarray(a), np.asarray(b))
+
+
+@pytest.mark.parametrize("bad", [1.0, 0.5, -2.0])
+def test_guard_must_be_a_ratio_above_one(problem, bad):
+    op, g = problem
+    with pytest.raises(ValueError, match="guard must be a ratio > 1"):
+        engine.gap(op, g, Denoiser("tv", sigma=0.05), guard=bad)

@@ -8,8 +8,10 @@ views — on several scenes and at 20 and 30 dB SNR, runs every method on the
 same measurement and reports mean PSNR / SSIM / SAM and the median seconds.
 The SD-CASSI speed ratio GAP-TV/OTD is a ratio of medians measured in the
 same run.  Memory: peak bytes allocated by NumPy during one OTD
-reconstruction of a 256×256×28 float32 SD-CASSI measurement (tracemalloc),
-in cube sizes, and the process' peak-RSS growth.
+reconstruction of a 256×256×28 float32 SD-CASSI measurement (tracemalloc,
+after a small warm-up run so that module imports are not counted; the
+system's own operator caches are), in cube sizes, and the process' peak-RSS
+growth.
 
     python benchmarks/reconstruction.py [--systems sd_cassi,cassi_vsi] [--scenes ...]
         [--snr 20,30] [--size 256] [--bands 28] [--mask PATH] [--out benchmarks/results]
@@ -64,6 +66,8 @@ def problem_for(system, scene, snr, args, mask):
 
 
 def memory_probe(args, mask):
+    small = studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30.0)
+    tc.reconstruct(small.system, small.measurement, "otd")  # imports (not per-reconstruction)
     p = problem_for("sd_cassi", "chelsea", 30.0, args, mask)
     g = np.asarray(p.measurement, dtype=np.float32)
     cube_bytes = int(np.prod(p.system.cube_shape)) * 4

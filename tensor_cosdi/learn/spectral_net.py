@@ -199,7 +199,11 @@ class SpectralDenoiser:
         if len(shape) < 3:
             raise ValueError(f"expected a cube (rows, columns, channels…), got shape {shape}")
         dev = self._device(x)
-        t = x if isinstance(x, torch.Tensor) else torch.from_numpy(np.asarray(B.to_numpy(x)))
+        if isinstance(x, torch.Tensor):
+            t = x
+        else:  # torch takes no negative strides (a flipped view): a contiguous copy then
+            a = np.asarray(B.to_numpy(x))
+            t = torch.from_numpy(a if all(s >= 0 for s in a.strides) else a.copy())
         work_dtype = torch.float32
         t = t.to(device=dev, dtype=work_dtype).reshape(shape[0], shape[1], -1)
         scale = _robust_peak(t)

@@ -51,7 +51,6 @@ SPATIAL_BASES = ("panchromatic", "wavelet", "dct")
 
 _check_int = engine.check_int
 
-
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
 #: (:func:`tensor_cosdi.noise.snr_schedule`), chosen on the tuning scenes (SD-CASSI, TSA mask):
 #: noiseless (balloons, flowers, clay) 28.23 dB at 0.3 (27.78 at 0.1, 27.69 at 0.6); 30 dB
@@ -274,9 +273,8 @@ def tucker_admm(
     ----------
     bases : dict {mode: (n, n) orthonormal ndarray or ModeTransform}
         Starting synthesis bases (modes not listed: identity).
-    start : tensor of ``system.cube_shape`` or ``[tensor]``, optional
-        Starting cube (default: regularised least squares with weight ``mu``);
-        a one-element list hands it over (see :func:`~tensor_cosdi.solvers.engine.admm`).
+    start : tensor of ``system.cube_shape`` or ``[tensor]`` (handed over), optional
+        Starting cube (default: regularised least squares with weight ``mu``).
     update_modes : sequence of int
         Modes whose basis is re-learned (HOSVD of the estimate's unfolding)
         every ``update_every`` iterations.
@@ -405,13 +403,12 @@ def online_tucker_admm(
         progress=bool(options.get("progress", False)),
     )
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
-    handoff = [start] if start is not None else None  # ADMM frees the start after iteration 1
-    del start
+    start = [start] if start is not None else None  # handed over: ADMM frees it after iteration 1
     return tucker_admm(
         system,
         measurement,
         bases,
-        start=handoff,
+        start=start,
         update_modes=update,
         update_every=update_every,
         desc="OTD stage 2: ADMM",

@@ -17,7 +17,7 @@ from __future__ import annotations
 from ..noise import snr_schedule
 from . import engine
 from ._base import check_positive, register_method
-from .denoisers import resolve, spectral_net
+from .denoisers import resolve, self_ensemble, spectral_net
 from .priors import Denoiser
 
 __all__ = ["pnp_gap"]
@@ -78,6 +78,7 @@ def pnp_gap(
     eps="auto",
     tol: float = 1e-5,
     guard=1.3,
+    ensemble: int = 1,
     progress: bool = False,
 ):
     """Plug-and-play GAP (see the module).  Registered as ``"pnp_gap"``.
@@ -111,6 +112,10 @@ def pnp_gap(
     max_iter, tol
         GAP iterations (``"auto"``: :data:`MAX_ITER`, 100 accelerated, 40
         plain) and the relative-change tolerance.
+    ensemble : int
+        Average the denoiser over this many symmetries of the image plane
+        (1, 2, 4 or 8; :func:`~tensor_cosdi.solvers.denoisers.self_ensemble`):
+        costs that many denoiser calls per iteration.
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` rises above
         ``guard`` times its lowest value and returns the iterate that had it
@@ -147,6 +152,7 @@ def pnp_gap(
         from ..learn import require_torch
 
         require_torch()
+    den = self_ensemble(den, ensemble)
     prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter)
     return warm_started_gap(
         system,
@@ -222,6 +228,7 @@ register_method(
         "accelerate": "auto",
         "eps": "auto",
         "guard": 1.3,
+        "ensemble": 1,
         "tol": 1e-5,
         "progress": False,
     },

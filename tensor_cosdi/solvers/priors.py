@@ -74,11 +74,15 @@ def omega_step(theta, nu, prev, thresh, mu, beta):
     return soft(v, thresh)
 
 
-def _l1(x) -> float:
-    """``Σ|x|`` without a cube-sized temporary on NumPy."""
-    if isinstance(x, np.ndarray):
-        return float(np.linalg.norm(x.reshape(-1), 1))
-    return float(tl.sum(tl.abs(x)))
+def _l1(x, block: int = 1 << 18) -> float:
+    """``Σ|x|``; on NumPy in blocks, without a cube-sized ``|x|`` temporary."""
+    if not isinstance(x, np.ndarray):
+        return float(tl.sum(tl.abs(x)))
+    v = x.T if x.flags.f_contiguous and not x.flags.c_contiguous else np.ascontiguousarray(x)
+    flat = v.reshape(-1)
+    return float(
+        sum(np.abs(flat[i : i + block]).sum(dtype=np.float64) for i in range(0, flat.size, block))
+    )
 
 
 def rms(x) -> float:

@@ -92,6 +92,9 @@ def test_any_band_count_and_extra_axes_and_torch_tensors():
     out_t = den(t, 0.01)
     assert isinstance(out_t, torch.Tensor) and out_t.dtype == torch.float64
     np.testing.assert_allclose(out_t.numpy(), den(clean, 0.01), atol=1e-5)
+    # views with negative strides (a flipped cube: the self-ensemble's input) are accepted
+    flipped = den(clean[::-1, :, ::-1], 0.01)
+    np.testing.assert_allclose(flipped, den(clean[::-1, :, ::-1].copy(), 0.01), atol=1e-6)
 
 
 @needs_torch

@@ -58,3 +58,40 @@ def test_guard_must_be_a_ratio_above_one(problem, bad):
     op, g = problem
     with pytest.raises(ValueError, match="guard must be a ratio > 1"):
         engine.gap(op, g, Denoiser("tv", sigma=0.05), guard=bad)
+
+
+# ---- geometric self-ensemble of a denoiser (pnp_gap(ensemble=…)) ------------------------------
+def test_self_ensemble_averages_over_the_symmetries():
+    from tensor_cosdi.solvers.denoisers import self_ensemble
+
+    x = np.random.default_rng(1).random((6, 5, 3))
+    # a denoiser that is not symmetric: it shifts the image down by one row
+    down = lambda v, s: np.roll(v, 1, axis=0)  # noqa: E731
+    two = self_ensemble(down, 2)(x, 0.1)
+    flipped = np.roll(x[::-1], 1, axis=0)[::-1]  # = rolled up by one row
+    assert np.allclose(two, (np.roll(x, 1, axis=0) + flipped) / 2)
+    assert not np.allclose(two, down(x, 0.1))
+    # a symmetric (pointwise) denoiser is unchanged by any ensemble, transposes included
+    for n in (1, 2, 4, 8):
+        assert np.allclose(self_ensemble(lambda v, s: v**2, n)(x, 0.1), x**2)
+
+
+@pytest.mark.parametrize("bad", [0, 3, 16, True, "2"])
+def test_self_ensemble_sizes(bad):
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    with pytest.raises(ValueError, match="ensemble size must be one of"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="none", ensemble=bad)
+
+
+def test_pnp_gap_ensemble_runs_the_denoiser_n_times():
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    calls = []
+
+    def den(x, s):
+        calls.append(x.shape)
+        return x
+
+    tc.reconstruct(
+        p.system, p.measurement, "pnp_gap", denoiser=den, warm="none", max_iter=3, ensemble=8
+    )
+    assert len(calls) == 24

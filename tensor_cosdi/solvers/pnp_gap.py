@@ -78,7 +78,7 @@ def pnp_gap(
     eps="auto",
     tol: float = 1e-5,
     guard=1.3,
-    ensemble: int = 1,
+    ensemble: int = 2,
     progress: bool = False,
 ):
     """Plug-and-play GAP (see the module).  Registered as ``"pnp_gap"``.
@@ -228,7 +228,7 @@ register_method(
         "accelerate": "auto",
         "eps": "auto",
         "guard": 1.3,
-        "ensemble": 1,
+        "ensemble": 2,
         "tol": 1e-5,
         "progress": False,
     },

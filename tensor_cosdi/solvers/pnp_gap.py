@@ -78,7 +78,7 @@ def pnp_gap(
     eps="auto",
     tol: float = 1e-5,
     guard=1.3,
-    ensemble: int = 2,
+    ensemble="auto",
     progress: bool = False,
 ):
     """Plug-and-play GAP (see the module).  Registered as ``"pnp_gap"``.
@@ -112,10 +112,12 @@ def pnp_gap(
     max_iter, tol
         GAP iterations (``"auto"``: :data:`MAX_ITER`, 100 accelerated, 40
         plain) and the relative-change tolerance.
-    ensemble : int
+    ensemble : int or "auto"
         Average the denoiser over this many symmetries of the image plane
         (1, 2, 4 or 8; :func:`~tensor_cosdi.solvers.denoisers.self_ensemble`):
-        costs that many denoiser calls per iteration.
+        costs that many denoiser calls per iteration.  ``"auto"``: 2 with
+        acceleration (clean data; tuning split 30.71 → 31.01 dB), else 1 (on
+        a noisy 64×64 test crop 2 lost 0.12 dB).
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` rises above
         ``guard`` times its lowest value and returns the iterate that had it
@@ -152,6 +154,12 @@ def pnp_gap(
         from ..learn import require_torch
 
         require_torch()
+    if isinstance(ensemble, str):
+        if ensemble != "auto":
+            raise ValueError(
+                f"the ensemble size must be 'auto' or one of 1, 2, 4, 8, got {ensemble!r}"
+            )
+        ensemble = 2 if accelerate else 1
     den = self_ensemble(den, ensemble)
     prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter)
     return warm_started_gap(
@@ -228,7 +236,7 @@ register_method(
         "accelerate": "auto",
         "eps": "auto",
         "guard": 1.3,
-        "ensemble": 2,
+        "ensemble": "auto",
         "tol": 1e-5,
         "progress": False,
     },

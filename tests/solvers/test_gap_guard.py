@@ -76,10 +76,10 @@ def test_self_ensemble_averages_over_the_symmetries():
         assert np.allclose(self_ensemble(lambda v, s: v**2, n)(x, 0.1), x**2)
 
 
-@pytest.mark.parametrize("bad", [0, 3, 16, True, "2"])
+@pytest.mark.parametrize("bad", [0, 3, 16, True, "2", "fast"])
 def test_self_ensemble_sizes(bad):
     p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
-    with pytest.raises(ValueError, match="ensemble size must be one of"):
+    with pytest.raises(ValueError, match="ensemble size must be"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="none", ensemble=bad)
 
 

@@ -374,7 +374,10 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
             desc = {"metadata": metadata or {}}
             if wl is not None:
                 desc["wavelengths_nm"] = wl.tolist()
-            tifffile.imwrite(tmp, np.moveaxis(cube, -1, 0), description=json.dumps(desc))
+            tifffile.imwrite(  # one grey page per band, also for 3 or 4 bands (not RGB)
+                tmp, np.moveaxis(cube, -1, 0), photometric="minisblack",
+                description=json.dumps(desc),
+            )  # fmt: skip
 
     if suffix == ".npy" and (wl is not None or metadata):
         raise ValueError(f"{path}: .npy holds the cube only; use .npz or .h5 to keep wavelengths")

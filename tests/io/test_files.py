@@ -176,3 +176,16 @@ def test_hdf5_bundles_round_trip_and_read_without_the_library(tmp_path):
     write_cube(tmp_path / "plain.h5", _cube())
     with pytest.raises(ValueError, match="without the tensor_cosdi_bundle"):
         load_bundle(tmp_path / "plain.h5")
+
+
+@pytest.mark.parametrize("bands", [3, 4])
+def test_tiff_with_three_or_four_bands_is_grey_pages_not_rgb(tmp_path, bands):
+    import tifffile
+
+    cube = _cube()[..., :bands]
+    path = write_cube(tmp_path / "c.tif", cube, WL[:bands])
+    with tifffile.TiffFile(path) as tif:
+        assert tif.pages[0].photometric == tifffile.PHOTOMETRIC.MINISBLACK
+    back, wl = read_cube(path)
+    np.testing.assert_array_equal(back, cube)
+    np.testing.assert_allclose(wl, WL[:bands])

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 
 from . import _backend as B
@@ -22,6 +24,14 @@ def snr_db(clean, noisy) -> float:
     e = np.asarray(B.to_numpy(noisy), dtype=np.float64) - g
     den = float(np.sum(e * e))
     return float("inf") if den == 0 else 10.0 * np.log10(float(np.sum(g * g)) / den)
+
+
+def check_snr_db(snr_db) -> float:
+    """``snr_db`` as a float, or a ``ValueError``: a finite real number of dB (negative is
+    fine: noise stronger than the signal)."""
+    if isinstance(snr_db, bool) or not isinstance(snr_db, numbers.Real) or not np.isfinite(snr_db):
+        raise ValueError(f"snr_db must be a finite number of dB or None, got {snr_db!r}")
+    return float(snr_db)
 
 
 def add_noise(measurement, snr_db: float | None, *, rng=None):
@@ -46,9 +56,10 @@ def add_noise(measurement, snr_db: float | None, *, rng=None):
     """
     if snr_db is None:
         return measurement
-    if not np.isfinite(snr_db):
-        raise ValueError(f"snr_db must be a finite number of dB or None, got {snr_db!r}")
+    snr_db = check_snr_db(snr_db)
     g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    if not np.isfinite(g).all():
+        raise ValueError("the measurement holds NaN or inf; cannot set an SNR on it")
     power = float(np.mean(g * g))
     if power == 0.0:
         raise ValueError("cannot set an SNR on an all-zero measurement (signal power is 0)")

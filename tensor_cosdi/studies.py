@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import itertools
+import numbers
 import time
 from pathlib import Path
 
@@ -96,6 +97,19 @@ def make_problem(
             f"the system {system!r} is now called {_RENAMED[system]!r} (systems.REGISTRY)"
         )
     cls = SYSTEMS[system]
+    if (
+        isinstance(shape, (str, bytes))
+        or np.ndim(shape) != 1
+        or len(shape) != 2
+        or not all(
+            isinstance(n, numbers.Integral) and not isinstance(n, bool) and n > 0 for n in shape
+        )
+    ):
+        raise ValueError(f"shape must be (rows, columns), two positive integers, got {shape!r}")
+    if snr_db is not None:
+        from .noise import check_snr_db
+
+        snr_db = check_snr_db(snr_db)
     return cls.example_problem(
         scene, shape=shape, n_bands=n_bands, snr_db=snr_db, rng=rng, shifts=shifts, **options
     )

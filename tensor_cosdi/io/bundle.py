@@ -354,7 +354,17 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     if not p.is_file():
         raise FileNotFoundError(f"bundle not found: {p}")
     if p.suffix.lower() in H5_SUFFIXES:
-        data, doc = _read_h5(p, MAX_ARRAY_BYTES if max_bytes is None else max_bytes)
+        try:
+            data, doc = _read_h5(p, MAX_ARRAY_BYTES if max_bytes is None else max_bytes)
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
+        except ValueError:
+            raise  # ours: sizes, shapes, a missing document — they name the file already
+        except Exception as e:  # HDF5 raises OSError, KeyError, RuntimeError on a damaged file
+            raise ValueError(
+                f"{p}: not a readable HDF5 bundle — truncated or corrupted "
+                f"({type(e).__name__}: {e})"
+            ) from e
     else:
         try:
             with np.load(p, allow_pickle=False) as z:
@@ -365,7 +375,10 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
             raise ValueError(
                 f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"
             )
-        doc = json.loads(str(data.pop("__bundle__")))
+        try:
+            doc = json.loads(str(data.pop("__bundle__")))
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
     if doc.get("format") != FORMAT:
         raise ValueError(f"{p}: unknown format {doc.get('format')!r}")
     if doc.get("format_version", 0) > FORMAT_VERSION:

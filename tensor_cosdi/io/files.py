@@ -35,6 +35,7 @@ import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
 from ._atomic import atomic_write
+from ._readers import _entries, _load, _require_h5py  # noqa: F401 - frames/bundle/CLI use them
 
 __all__ = [
     "read_array",
@@ -84,128 +85,6 @@ def _check_size(path, name, shape, dtype, max_bytes):
         )
 
 
-def _require_h5py():
-    try:
-        import h5py
-    except ImportError:  # pragma: no cover - a core dependency
-        raise ImportError("HDF5 and MATLAB v7.3 files need h5py: pip install h5py") from None
-    return h5py
-
-
-# ---- listing: name → (shape, dtype, loader) without reading the data -----------------------------
-def _npy_header(f):
-    version = np.lib.format.read_magic(f)
-    read = (
-        np.lib.format.read_array_header_1_0
-        if version == (1, 0)
-        else np.lib.format.read_array_header_2_0
-    )
-    shape, _, dtype = read(f)
-    return shape, dtype
-
-
-def _entries_npy(path):
-    with open(path, "rb") as f:
-        shape, dtype = _npy_header(f)
-    return {"array": (shape, dtype, lambda: np.load(path, allow_pickle=False))}
-
-
-def _entries_npz(path):
-    out = {}
-    with np.load(path, allow_pickle=False) as z:
-        names = list(z.files)
-    for name in names:
-        with np.load(path, allow_pickle=False) as z, z.zip.open(name + ".npy") as f:
-            shape, dtype = _npy_header(f)
-
-        def load(name=name):
-            with np.load(path, allow_pickle=False) as z:
-                return z[name]
-
-        out[name] = (shape, dtype, load)
-    return out
-
-
-def _is_v73(path) -> bool:
-    with open(path, "rb") as f:
-        head = f.read(128)
-    return b"MATLAB 7.3" in head
-
-
-def _entries_mat(path):
-    if _is_v73(path):
-        return _entries_h5(path, matlab=True)
-    import scipy.io
-
-    out = {}
-    for name, shape, cls in scipy.io.whosmat(path):
-        if cls in ("cell", "struct", "object", "function_handle", "opaque"):
-            continue
-        dtype = {
-            "logical": np.bool_, "char": np.str_, "int8": np.int8, "uint8": np.uint8,
-            "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
-            "int64": np.int64, "uint64": np.uint64, "single": np.float32,
-        }.get(cls, np.float64)  # fmt: skip
-        if dtype is np.str_:
-            continue
-
-        def load(name=name):
-            return np.asarray(scipy.io.loadmat(path, variable_names=[name])[name])
-
-        out[name] = (tuple(shape), np.dtype(dtype), load)
-    return out
-
-
-def _entries_h5(path, *, matlab=False):
-    h5py = _require_h5py()
-    out = {}
-    with h5py.File(path, "r") as f:
-
-        def visit(name, obj):
-            if not isinstance(obj, h5py.Dataset) or name.startswith("#"):
-                return
-            if obj.dtype.kind not in "biuf":
-                return
-            if matlab and obj.attrs.get("MATLAB_class", b"") in (b"char", b"cell", b"struct"):
-                return
-            shape = tuple(reversed(obj.shape)) if matlab else tuple(obj.shape)
-
-            def load(name=name):
-                with h5py.File(path, "r") as g:
-                    a = g[name][()]
-                return np.ascontiguousarray(a.T) if matlab else a
-
-            out[name] = (shape, obj.dtype, load)
-
-        f.visititems(visit)
-    return out
-
-
-def _entries_tiff(path):
-    import tifffile
-
-    with tifffile.TiffFile(path) as t:
-        series = t.series[0]
-        shape, dtype = tuple(series.shape), series.dtype
-    return {"array": (shape, dtype, lambda: tifffile.imread(path))}
-
-
-def _entries(path: Path, suffix: str):
-    if not path.is_file():
-        raise FileNotFoundError(f"file not found: {path}")
-    if suffix == ".npy":
-        return _entries_npy(path)
-    if suffix == ".npz":
-        return _entries_npz(path)
-    if suffix == ".mat":
-        return _entries_mat(path)
-    if suffix in (".h5", ".hdf5"):
-        return _entries_h5(path)
-    if suffix in (".tif", ".tiff"):
-        return _entries_tiff(path)
-    raise AssertionError(suffix)  # pragma: no cover
-
-
 def _pick(path, entries, key, want_ndim=None):
     if key is not None:
         if key not in entries:
@@ -246,7 +125,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
     name = _pick(path, entries, key)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
-    return load()
+    return _load(path, suffix, load)
 
 
 def _check_wavelengths(path, wl, n_bands):
@@ -296,7 +175,7 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
     name = _pick(path, entries, key, want_ndim=3)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
-    cube = np.asarray(load())
+    cube = np.asarray(_load(path, suffix, load))
     if suffix in (".tif", ".tiff") and cube.ndim == 3:
         cube = np.moveaxis(cube, 0, -1)  # pages are bands
     if cube.ndim < 3:

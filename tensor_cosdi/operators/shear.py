@@ -23,6 +23,9 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
     """
     if isinstance(n_bands, bool) or not isinstance(n_bands, numbers.Integral) or n_bands < 1:
         raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
+    kinds = np.asarray(shifts).dtype.kind if not isinstance(shifts, (str, bytes)) else "U"
+    if kinds not in "iuf" or isinstance(shifts, bool):  # "2" or True would be read as numbers
+        raise ValueError(f"shifts must be a number or a sequence of numbers (px), got {shifts!r}")
     if np.ndim(shifts) == 0:
         step = float(np.asarray(shifts))
         if not np.isfinite(step) or step < 0:

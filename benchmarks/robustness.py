@@ -1,0 +1,518 @@
+"""Bad input and faults over the public API: a fixed, seeded catalogue of cases, classified.
+
+Every case calls one public entry (system constructors through
+``studies.make_problem``, ``reconstruct`` with every method, the file
+readers and writers, bundles, frames, metrics, noise, bases, denoisers) with
+one bad argument, a corrupted file or an injected fault, and is classified:
+
+* **clear** — an exception of a documented kind (``ValueError``,
+  ``TypeError``, ``KeyError``, ``OSError`` and subclasses) whose message names
+  the bad argument (one of the case's words); for corrupted or faulted
+  cases where no error is due, a result identical to the original also counts
+  (the corruption missed the data, the earlier file is intact);
+* **obscure** — any other exception, or a message naming none of the words;
+* **silent** — a result returned where an error was due, or data that differ
+  from what was saved;
+* **hang** — no answer within the per-case timeout (``--timeout``, 30 s);
+* **crash** — ``MemoryError``, ``RecursionError``, ``SystemExit`` or another
+  non-``Exception``.
+
+Targets (issue "nothing lost"): 0 silent, 0 hangs, 0 crashes, ≥ 95 % clear.
+
+    python benchmarks/robustness.py [--only MODULE] [--timeout 30] [--list]
+
+Prints one line per non-clear case and a table per module; writes
+``benchmarks/results/robustness.md``.  Never asserts anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import os
+import signal
+import tempfile
+import time
+from collections import Counter, defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+import tensor_cosdi as tc
+from tensor_cosdi import metrics, noise, studies
+from tensor_cosdi.bases import KroneckerBasis
+from tensor_cosdi.io import _atomic, load_bundle, read_frame, save_bundle, write_frames
+from tensor_cosdi.io.files import read_array, read_cube, write_cube
+from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
+
+ROOT = Path(__file__).resolve().parents[1]
+CLEAR = (ValueError, TypeError, KeyError, OSError)
+
+
+@dataclass
+class Case:
+    module: str
+    name: str
+    run: Callable  # () -> None / bool (for "same" cases: True when the data are intact)
+    words: tuple = ()  # lower-case words one of which the error message must contain
+    expect: str = "error"  # "error", or "same" (an error or intact data are both fine)
+
+
+class Hang(Exception):
+    pass
+
+
+def classify(case: Case, timeout: float) -> tuple[str, str]:
+    def alarm(*_):
+        raise Hang()
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        out = case.run()
+    except Hang:
+        return "hang", f"no answer in {timeout:g} s"
+    except (MemoryError, RecursionError) as exc:
+        return "crash", repr(exc)[:160]
+    except Exception as exc:  # noqa: BLE001 - classifying is the point
+        msg = str(exc).lower()
+        if isinstance(exc, CLEAR) and (not case.words or any(w in msg for w in case.words)):
+            return "clear", ""
+        return "obscure", f"{type(exc).__name__}: {str(exc)[:160]}"
+    except BaseException as exc:  # noqa: BLE001
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        return "crash", repr(exc)[:160]
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    if case.expect == "same" and out is True:
+        return "clear", ""
+    return "silent", f"returned {type(out).__name__} where an error was due"
+
+
+# ---- catalogue ----------------------------------------------------------------------------------
+SMALL = {"shape": (16, 16), "n_bands": 4}
+BAD_INTS = [0, -1, 1.5, "4", True, None, float("nan")]
+
+
+def system_cases():
+    out = []
+    for name in tc.systems.REGISTRY:
+
+        def mk(**kw):
+            return lambda: studies.make_problem(name, "colorchecker", **{**SMALL, **kw})
+
+        for v in BAD_INTS:
+            out.append(Case("systems", f"{name} n_bands={v!r}", mk(n_bands=v), ("n_bands",)))
+        for v in [(0, 16), (16,), (-4, 16), (16.5, 16), "16x16", (16, 16, 16)]:
+            out.append(Case("systems", f"{name} shape={v!r}", mk(shape=v), ("shape",)))
+        for v in [float("nan"), float("inf"), "30", True]:  # −5 dB is valid (noise > signal)
+            out.append(Case("systems", f"{name} snr_db={v!r}", mk(snr_db=v), ("snr",)))
+        for v in [-1, float("nan"), "1", -2.5]:  # 1.5 px is valid (interpolated)
+            out.append(Case("systems", f"{name} shifts={v!r}", mk(shifts=v), ("shift",)))
+        out.append(Case("systems", f"{name} unknown option", mk(colour="red"), ("colour",)))
+        out.append(Case("systems", f"{name} rng='a'", mk(rng="a"), ("rng", "seed")))
+    return out
+
+
+def _measurement_variants(g):
+    rng = np.random.default_rng(0)
+    nan = g.copy()
+    nan.flat[rng.integers(g.size)] = np.nan
+    inf = g.copy()
+    inf.flat[rng.integers(g.size)] = np.inf
+    return {
+        "NaN": (nan, ("nan", "finite")),
+        "inf": (inf, ("inf", "finite")),
+        "all zero": (np.zeros_like(g), ("zero",)),
+        "constant": (np.full_like(g, 0.3), ("constant",)),
+        "wrong shape": (g[:-1], ("shape",)),
+        "transposed": (g.T.copy() if g.ndim == 2 else g[..., ::-1].T, ("shape",)),
+        "extra axis": (g[..., None], ("shape",)),
+        "complex": (g.astype(np.complex128), ("complex", "real", "dtype")),
+        "strings": (g.astype(str), ("dtype", "numeric", "real")),
+        "empty": (np.zeros((0,)), ("shape",)),
+    }
+
+
+#: the thesis' per-system algorithms
+ONLY_FOR = {"avsi": ("cassi_vsi",), "dfa": ("cassdi_dfa",), "pnp_admm": ("cs2li", "mu_cosdi")}
+
+
+def reconstruct_cases():
+    out = []
+    names = ("sd_cassi", "cassi_vsi", "cassdi_dfa", "cs2li", "mu_cosdi", "c3slfi")
+    for sname in names:
+        p = studies.make_problem(sname, "colorchecker", **SMALL)
+        g, system = np.asarray(p.measurement, dtype=np.float64), p.system
+        for method in tc.reconstruct.methods():
+            if method == "dcosnet":
+                continue  # needs torch and weights for 28 bands: covered by its own tests
+            if sname not in ONLY_FOR.get(method, (sname,)):
+                out.append(
+                    Case("reconstruct", f"{sname} {method} (other system)",
+                         lambda m=method, s=system, g=g: tc.reconstruct(s, g, m), ("reconstructs",))
+                )  # fmt: skip
+                continue
+            for label, (bad, words) in _measurement_variants(g).items():
+                out.append(
+                    Case("reconstruct", f"{sname} {method} measurement {label}",
+                         lambda m=method, b=bad, s=system: tc.reconstruct(s, b, m),
+                         words + ("measurement",))
+                )  # fmt: skip
+            for opt, v in [("max_iter", 0), ("max_iter", -3), ("max_iter", 2.5), ("bogus", 1)]:
+
+                def call(m=method, o=opt, v=v, s=system, g=g):
+                    return tc.reconstruct(s, g, m, **{o: v})
+
+                out.append(Case("reconstruct", f"{sname} {method} {opt}={v!r}", call, (opt,)))
+        out.append(
+            Case("reconstruct", f"{sname} unknown method",
+                 lambda s=system, g=g: tc.reconstruct(s, g, "x"), ("method",))
+        )  # fmt: skip
+    return out
+
+
+def _files(folder: Path):
+    """Valid files of every format, written fresh: ``{suffix: path}``."""
+    cube = np.random.default_rng(1).random((12, 10, 5)).astype(np.float32)
+    wl = np.linspace(450.0, 650.0, 5)
+    paths = {}
+    for suffix in (".h5", ".npz", ".mat", ".tif", ".npy"):
+        paths[suffix] = write_cube(folder / f"cube{suffix}", cube, wl if suffix != ".npy" else None)
+    return cube, wl, paths
+
+
+def file_cases(folder: Path):
+    out = []
+    cube, wl, paths = _files(folder)
+    rng = np.random.default_rng(2)
+    for suffix, path in paths.items():
+        raw = path.read_bytes()
+        variants = {
+            "empty": b"",
+            "truncated to 10 %": raw[: len(raw) // 10],
+            "truncated to 90 %": raw[: 9 * len(raw) // 10],
+            "random bytes": rng.integers(0, 256, len(raw), dtype=np.uint8).tobytes(),
+            "text": b"this is not an array file\n" * 20,
+        }
+        for label, data in variants.items():
+            bad = folder / f"bad_{label.replace(' ', '_').replace('%', 'pc')}{suffix}"
+            bad.write_bytes(data)
+            for reader in (read_array, read_cube):
+                out.append(
+                    Case(
+                        "io.files",
+                        f"{reader.__name__} {suffix} {label}",
+                        lambda r=reader, b=bad: r(b),
+                        (bad.name.lower(), "file", "format", "cannot", "not a"),
+                    )
+                )
+        for reader in (read_array, read_cube):
+            out.append(
+                Case(
+                    "io.files",
+                    f"{reader.__name__} {suffix} missing key",
+                    lambda r=reader, p=path: r(p, "nokey"),
+                    ("nokey",),
+                )
+            )
+    forged = folder / "forged.npy"
+    head = b"{'descr': '<f8', 'fortran_order': False, 'shape': (100000, 100000, 1), }"
+    forged.write_bytes(
+        b"\x93NUMPY\x01\x00" + len(head + b"\n").to_bytes(2, "little") + head + b"\n"
+    )
+    out.append(
+        Case(
+            "io.files",
+            "read_array forged huge .npy header",
+            lambda: read_array(forged),
+            ("bytes", "size", "large"),
+        )
+    )
+    for target, words in [
+        (folder / "nofile.h5", ("nofile",)),
+        (folder, ("directory", "folder", str(folder).lower())),
+    ]:
+        out.append(
+            Case("io.files", f"read_cube {target.name}", lambda t=target: read_cube(t), words)
+        )
+    out.append(
+        Case(
+            "io.files",
+            "read_cube .xyz",
+            lambda: read_cube(folder / "a.xyz"),
+            (".xyz", "extension", "format"),
+        )
+    )
+    out.append(
+        Case(
+            "io.files",
+            "write_cube over existing",
+            lambda: write_cube(paths[".h5"], cube, wl),
+            ("exists",),
+        )
+    )
+    out.append(
+        Case(
+            "io.files",
+            "write_cube µm wavelengths",
+            lambda: write_cube(folder / "u.h5", cube, wl / 1000),
+            ("nm", "wavelength"),
+        )
+    )
+    out.append(
+        Case(
+            "io.files",
+            "write_cube wrong wavelength count",
+            lambda: write_cube(folder / "w.h5", cube, wl[:3]),
+            ("wavelength",),
+        )
+    )
+    out.append(
+        Case(
+            "io.files",
+            "write_cube into a missing folder",
+            lambda: write_cube(folder / "no" / "c.h5", cube, wl),
+            ("folder", "no"),
+        )
+    )
+    return out
+
+
+def bundle_cases(folder: Path, n_flips: int):
+    """Bundles with seeded single-byte corruptions: an error, or arrays identical to the saved."""
+    out = []
+    p = studies.make_problem("sd_cassi", "colorchecker", **SMALL)
+    cube = np.asarray(p.cube, dtype=np.float32)
+    rng = np.random.default_rng(3)
+    for suffix in (".h5", ".npz"):
+        good = save_bundle(
+            folder / f"good{suffix}", system=p.system, cube=cube, measurement=p.measurement
+        )
+        raw = bytearray(good.read_bytes())
+        for i in range(n_flips):
+            pos = int(rng.integers(len(raw)))
+            data = bytearray(raw)
+            data[pos] ^= 1 << int(rng.integers(8))
+            bad = folder / f"flip{i}{suffix}"
+            bad.write_bytes(bytes(data))
+
+            def run(b=bad):
+                got = load_bundle(b)
+                return bool(
+                    np.array_equal(got.cube, cube)
+                    and np.array_equal(np.asarray(got.measurement), np.asarray(p.measurement))
+                )
+
+            out.append(
+                Case(
+                    "io.bundle",
+                    f"bundle {suffix} bit flip at byte {pos}",
+                    run,
+                    ("sha-256", "checksum", bad.name.lower(), "corrupt", "bundle", "file"),
+                    "same",
+                )
+            )
+    return out
+
+
+def fault_cases(folder: Path):
+    """Injected full-disk / I/O errors while overwriting: the error, and the old file intact."""
+    out = []
+    cube = np.random.default_rng(4).random((12, 10, 5)).astype(np.float32)
+    wl = np.linspace(450.0, 650.0, 5)
+
+    def faulted(step, code, save, target):
+        def run():
+            before = target.read_bytes()
+            real = getattr(_atomic.os, step)
+
+            def boom(*a, **k):
+                raise OSError(code, os.strerror(code))
+
+            setattr(_atomic.os, step, boom)
+            try:
+                save()
+            except OSError:
+                return target.read_bytes() == before and not any(
+                    q.name.startswith(".") for q in target.parent.iterdir()
+                )
+            finally:
+                setattr(_atomic.os, step, real)
+            return False  # no error: the fault was swallowed
+
+        return run
+
+    for suffix in (".h5", ".npz", ".mat", ".tif", ".npy"):
+        target = write_cube(folder / f"keep{suffix}", cube, None if suffix == ".npy" else wl)
+        for step in ("fsync", "replace", "chmod"):
+            for code in (errno.ENOSPC, errno.EIO):
+
+                def save(t=target, s=suffix):
+                    return write_cube(t, cube, None if s == ".npy" else wl, overwrite=True)
+
+                out.append(
+                    Case(
+                        "io.faults",
+                        f"write_cube {suffix} {step} {errno.errorcode[code]}",
+                        faulted(step, code, save, target),
+                        expect="same",
+                    )
+                )
+    frames_dir = folder / "frames"
+    write_frames(cube, frames_dir, suffix=".npy")
+    first = frames_dir / "frame_000.npy"
+    for step in ("fsync", "replace", "chmod"):
+        save = lambda: write_frames(cube + 1, frames_dir, suffix=".npy", overwrite=True)  # noqa: E731
+        out.append(
+            Case(
+                "io.faults",
+                f"write_frames {step} ENOSPC",
+                faulted(step, errno.ENOSPC, save, first),
+                expect="same",
+            )
+        )
+    return out
+
+
+def misc_cases(folder: Path):
+    out = []
+    x = np.random.default_rng(5).random((8, 8, 3))
+    for label, (a, b, kw, words) in {
+        "psnr shape mismatch": (x, x[:-1], {}, ("shape",)),
+        "psnr data_range 0": (x, x, {"data_range": 0}, ("data_range",)),
+        "psnr data_range nan": (x, x, {"data_range": np.nan}, ("data_range",)),
+        "psnr NaN estimate": (x, np.full_like(x, np.nan), {}, ("nan", "finite")),
+    }.items():
+        out.append(Case("metrics", label, lambda a=a, b=b, kw=kw: metrics.psnr(a, b, **kw), words))
+    for f in (metrics.ssim, metrics.sam, metrics.rmse):
+        out.append(
+            Case("metrics", f"{f.__name__} shape mismatch", lambda f=f: f(x, x[:, :-1]), ("shape",))
+        )
+        out.append(
+            Case(
+                "metrics",
+                f"{f.__name__} NaN",
+                lambda f=f: f(x, np.full_like(x, np.nan)),
+                ("nan", "finite"),
+            )
+        )
+    for v in (np.nan, np.inf, "30", True):  # None is valid: no noise
+        out.append(
+            Case(
+                "noise",
+                f"add_noise snr_db={v!r}",
+                lambda v=v: noise.add_noise(x, v, rng=0),
+                ("snr",),
+            )
+        )
+    out.append(
+        Case(
+            "noise",
+            "add_noise NaN signal",
+            lambda: noise.add_noise(np.full_like(x, np.nan), 30, rng=0),
+            ("nan", "finite"),
+        )
+    )
+    for label, m in {
+        "not orthonormal": np.ones((8, 8)),
+        "wrong size": np.eye(7),
+        "not square": np.eye(8)[:, :6],
+    }.items():
+        out.append(
+            Case(
+                "bases",
+                f"KroneckerBasis {label}",
+                lambda m=m: KroneckerBasis((8, 8, 3), {0: m}),
+                ("basis", "orthonormal", "square"),
+            )
+        )
+    out.append(
+        Case(
+            "bases",
+            "KroneckerBasis mode 5",
+            lambda: KroneckerBasis((8, 8, 3), {5: np.eye(8)}),
+            ("mode",),
+        )
+    )
+    out.append(
+        Case("denoisers", "unknown denoiser", lambda: denoise("nope", x, 0.1), ("nope", "denoiser"))
+    )
+    for n in (0, 3, 16, "2"):
+        out.append(
+            Case(
+                "denoisers",
+                f"self_ensemble {n!r}",
+                lambda n=n: self_ensemble("tv", n),
+                ("ensemble",),
+            )
+        )
+    for name in ("a/b.npy", "../x.npy", "/etc/passwd"):
+        words = ("not found", "no such", name.split("/")[-1])
+        out.append(
+            Case("io.frames", f"read_frame {name}", lambda n=name: read_frame(folder / n), words)
+        )
+    return out
+
+
+def catalogue(folder: Path, n_flips: int = 150):
+    return (
+        system_cases()
+        + reconstruct_cases()
+        + file_cases(folder)
+        + bundle_cases(folder, n_flips)
+        + fault_cases(folder)
+        + misc_cases(folder)
+    )
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", default=None, help="run one module's cases")
+    ap.add_argument("--timeout", type=float, default=30.0)
+    ap.add_argument("--flips", type=int, default=150, help="corrupted bundles per format")
+    ap.add_argument("--list", action="store_true", help="list the cases and stop")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        cases = catalogue(Path(tmp), args.flips)
+        if args.only:
+            cases = [c for c in cases if c.module == args.only]
+        if args.list:
+            for c in cases:
+                print(f"{c.module:12s} {c.name}")
+            return
+        counts: dict = defaultdict(Counter)
+        t0 = time.perf_counter()
+        for c in cases:
+            kind, detail = classify(c, args.timeout)
+            counts[c.module][kind] += 1
+            if kind != "clear":
+                print(f"{kind:8s} {c.module:12s} {c.name}: {detail}", flush=True)
+    kinds = ("clear", "obscure", "silent", "hang", "crash")
+    lines = ["| module | cases | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 2) + "|"]
+    total = Counter()
+    for mod in sorted(counts):
+        total.update(counts[mod])
+        n = sum(counts[mod].values())
+        lines.append(f"| {mod} | {n} | " + " | ".join(str(counts[mod][k]) for k in kinds) + " |")
+    n = sum(total.values())
+    lines.append(f"| **all** | {n} | " + " | ".join(str(total[k]) for k in kinds) + " |")
+    share = 100.0 * total["clear"] / max(n, 1)
+    text = (
+        f"{n} cases in {time.perf_counter() - t0:.0f} s; clear {share:.1f} % "
+        f"(targets: 0 silent, 0 hangs, 0 crashes, ≥ 95 % clear).\n\n" + "\n".join(lines) + "\n"
+    )
+    print(text)
+    if not args.only:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "robustness.md").write_text(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -32,6 +32,7 @@ __all__ = [
     "spectral_view",
     "sweep",
     "conditioning",
+    "prism_grid",
     "reconstruction_run",
     "write_csv",
 ]
@@ -44,6 +45,8 @@ SCENES = scenes.SCENES
 """The scenes :func:`make_problem` accepts: :data:`tensor_cosdi.scenes.SCENES`."""
 
 _RENAMED = {"dual_camera": "dual_camera_cassi"}
+
+from .optics.design import prism_grid  # noqa: E402 - the prism design study (thesis App. B)
 
 
 def make_problem(

@@ -7,7 +7,11 @@ deviates the 570 nm ray by almost nothing while spreading 450-650 nm over
 tens of pixels.  Here: its deviation δ(λ) (Alg. 7) on axis and averaged over
 the ±1.15° field (Alg. 8), the φ3 that zeroes the deviation for other
 apex angles φ1, and the shear S(λ) (Eq. 191) turned into per-band shifts
-that build an SD-CASSI.
+that build an SD-CASSI.  Then the design grid of App. B
+(:func:`tensor_cosdi.studies.prism_grid`): for four glass pairs and a range of
+φ1, the zero-deviation φ3, the dispersion over 450-700 nm and a first-order
+length, with the thesis' prism marked — and the thesis' fit Eq. 190, which
+the ray trace refutes.
 """
 
 # %%
@@ -54,3 +58,29 @@ sd = tc.systems.SDCASSI(
 )
 print("shifts (px):", np.round(shifts, 2))
 print("measurement shape:", sd.measurement_shape)
+
+# %%
+# The design grid: every glass pair, φ1 from 80° to 88°
+rows = [r for r in tc.studies.prism_grid() if np.isfinite(r["phi3"])]
+fig, axes = plt.subplots(1, 3, figsize=(8, 2.6))
+for pair in dict.fromkeys((r["glass1"], r["glass2"]) for r in rows):
+    rs = [r for r in rows if (r["glass1"], r["glass2"]) == pair]
+    label = " | ".join(pair)
+    for ax, key in zip(axes, ("phi3", "shear_px", "length_mm")):
+        ax.plot([r["phi1"] for r in rs], [r[key] for r in rs], "o-", ms=3, label=label)
+thesis = next(r for r in rows if r["thesis_design"])
+for ax, key, title in zip(
+    axes,
+    ("phi3", "shear_px", "length_mm"),
+    ("zero-deviation φ3 (°)", "450-700 nm at 30 mm (px)", "length, 10 mm aperture"),
+):
+    ax.plot(thesis["phi1"], thesis[key], "k*", ms=10)
+    ax.set(xlabel="φ1 (°)", title=title)
+phi1 = np.linspace(80, 88, 9)
+axes[0].plot(phi1, tc.optics.design.eq190_phi3(phi1), "k:", label="Eq. 190")
+axes[0].legend(fontsize=6)
+fig.tight_layout()
+print(
+    f"thesis prism (★): φ3 = {thesis['phi3']:.2f}° (built: 73.7°), "
+    f"{thesis['shear_px']:.1f} px over 450-700 nm, Eq. 190 says {thesis['eq190']:.1f}°"
+)

@@ -108,13 +108,14 @@ def _entries_h5(path, *, matlab=False):
 
 class _TiffComplaints:
     """tifffile logs (instead of raising) what it skips in a damaged file — a truncated page
-    chain reads as fewer pages.  Inside this context such a log record is an error."""
+    chain reads as fewer pages.  Inside this context an ERROR record of its logger is an error
+    (its warnings, e.g. about odd vendor tags, are left alone)."""
 
     def __enter__(self):
         import logging
 
         self.records = []
-        handler = logging.Handler(logging.WARNING)
+        handler = logging.Handler(logging.ERROR)  # its warnings (odd vendor tags) are benign
         handler.emit = self.records.append
         self.logger, self.handler = logging.getLogger("tifffile"), handler
         self.logger.addHandler(handler)

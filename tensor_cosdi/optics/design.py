@@ -41,18 +41,43 @@ def prism_grid(
     """One row per ``(glass pair, φ1)``: the ``φ3`` that zeroes the on-axis deviation at
     ``center_nm`` and what that prism does.
 
-    Columns: ``glass1``, ``glass2``, ``phi1``, ``phi3`` (degrees; NaN where no
-    φ3 in (45°, 90°) zeroes the deviation — the row then says why in
-    ``note``), ``alpha1`` / ``alpha2`` (outer and middle apex angles),
-    ``dispersion_deg`` (Eq. 187, ``δ(λmax) − δ(λmin)`` over ``band_nm``),
-    ``shear_px`` (the band's spread on a sensor ``distance_mm`` behind it,
-    ``pixel_um`` pixels, Eq. 191), ``field_deviation_deg`` (deviation at
-    ``center_nm`` averaged over the field, Alg. 8 — what the on-axis design
-    leaves off axis), ``length_mm`` (first-order: the base thicknesses of three
-    symmetric wedges of height ``aperture_mm``, ``h·(4 tan(α1/2) + 2 tan(α2/2))``
-    — an estimate, the real length depends on how the wedges are cut),
-    ``eq190`` (the thesis' fit Eq. 190 for this φ1) and ``thesis_design``
-    (True on the row of the prism the thesis built).
+    Parameters
+    ----------
+    phi1 : float or sequence of float
+        Outer apex parameters φ1 to try (degrees).
+    glass_pairs : sequence of (str, str)
+        ``(outer glass, middle glass)`` names of :data:`tensor_cosdi.optics.GLASSES`.
+    center_nm : float
+        Wavelength of zero deviation (thesis: 570 nm).
+    band_nm : (float, float)
+        Band whose dispersion and shear are reported, nm (thesis: 450-700).
+    distance_mm, pixel_um : float
+        Prism–sensor distance and pixel pitch for the shear in pixels.
+    aperture_mm : float
+        Aperture height for the first-order length.
+    field_deg : float
+        Full field of view for the field-averaged deviation (Alg. 8).
+
+    Returns
+    -------
+    list of dict
+        Columns: ``glass1``, ``glass2``, ``phi1``, ``phi3`` (degrees; NaN where
+        no φ3 in (45°, 90°) zeroes the deviation — ``note`` then says why),
+        ``alpha1`` / ``alpha2`` (outer and middle apex angles),
+        ``dispersion_deg`` (Eq. 187, ``δ(λmax) − δ(λmin)`` over ``band_nm``),
+        ``shear_px`` (Eq. 191, the band's spread on the sensor),
+        ``field_deviation_deg`` (deviation at ``center_nm`` averaged over the
+        field — what the on-axis design leaves off axis), ``length_mm``
+        (first-order: base thicknesses of three symmetric wedges of height
+        ``aperture_mm``, ``h·(4 tan(α1/2) + 2 tan(α2/2))`` — an estimate, the
+        real length depends on how the wedges are cut), ``eq190`` (the thesis'
+        fit for this φ1) and ``thesis_design`` (True on the built prism's row).
+
+    Examples
+    --------
+    >>> rows = prism_grid(phi1=[85.9], glass_pairs=[("N-SK2", "SF4")])
+    >>> round(rows[0]["phi3"], 1), rows[0]["thesis_design"]
+    (73.8, True)
     """
     lo, hi = (float(v) for v in band_nm)
     if not 200 <= lo < center_nm < hi <= 20000:

@@ -15,11 +15,18 @@ one bad argument, a corrupted file or an injected fault, and is classified:
   from what was saved;
 * **hang** — no answer within the per-case timeout (``--timeout``, 30 s);
 * **crash** — ``MemoryError``, ``RecursionError``, ``SystemExit`` or another
-  non-``Exception``.
+  non-``Exception``, or the process running the case died (segfault, abort,
+  out-of-memory kill).
+
+Cases run one by one in a forked worker process: a case that kills its
+process or hangs inside C code (where no alarm reaches it) is recorded, the
+worker is replaced by a fresh fork and the run goes on (``--in-process``
+runs them in this process instead, for debugging).
 
 Targets (issue "nothing lost"): 0 silent, 0 hangs, 0 crashes, ≥ 95 % clear.
 
-    python benchmarks/robustness.py [--only MODULE] [--timeout 30] [--list]
+    python benchmarks/robustness.py [--only MODULE] [--timeout 30] [--list] [--in-process]
+    python benchmarks/robustness.py --selftest --timeout 2   # crash and hang are caught
 
 Prints one line per non-clear case and a table per module; writes
 ``benchmarks/results/robustness.md``.  Never asserts anything.
@@ -29,7 +36,9 @@ from __future__ import annotations
 
 import argparse
 import errno
+import json
 import os
+import select
 import signal
 import tempfile
 import time
@@ -459,6 +468,85 @@ def misc_cases(folder: Path):
     return out
 
 
+class Worker:
+    """Runs cases of ``cases`` by index in a forked child; a dead or stuck child is replaced."""
+
+    def __init__(self, cases, timeout: float):
+        self.cases, self.timeout, self.pid = cases, timeout, None
+
+    def _start(self):
+        to_child_r, to_child_w = os.pipe()
+        to_parent_r, to_parent_w = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the worker: read an index, answer one JSON line, until EOF
+            os.close(to_child_w)
+            os.close(to_parent_r)
+            inp, out = os.fdopen(to_child_r, "r"), os.fdopen(to_parent_w, "w")
+            for line in inp:
+                kind, detail = classify(self.cases[int(line)], self.timeout)
+                out.write(json.dumps([kind, detail]) + "\n")
+                out.flush()
+            os._exit(0)
+        os.close(to_child_r)
+        os.close(to_parent_w)
+        self.pid, self.inp = pid, os.fdopen(to_child_w, "w")
+        self.out = os.fdopen(to_parent_r, "r")
+
+    def _stop(self, sig=signal.SIGKILL):
+        try:
+            os.kill(self.pid, sig)
+        except ProcessLookupError:
+            pass
+        _, status = os.waitpid(self.pid, 0)
+        self.inp.close()
+        self.out.close()
+        self.pid = None
+        return status
+
+    def run(self, i: int) -> tuple[str, str]:
+        if self.pid is None:
+            self._start()
+        self.inp.write(f"{i}\n")
+        self.inp.flush()
+        ready, _, _ = select.select([self.out], [], [], self.timeout + 15.0)
+        if not ready:  # the in-process alarm did not get through: stuck in C code
+            self._stop()
+            return "hang", f"no answer in {self.timeout:g} s (worker killed)"
+        line = self.out.readline()
+        if not line:  # EOF: the worker died running this case
+            status = self._stop()
+            how = (
+                f"signal {signal.Signals(os.WTERMSIG(status)).name}"
+                if os.WIFSIGNALED(status)
+                else f"exit status {os.WEXITSTATUS(status)}"
+            )
+            return "crash", f"worker process died ({how})"
+        kind, detail = json.loads(line)
+        return kind, detail
+
+    def close(self):
+        if self.pid is not None:
+            self.inp.close()
+            os.waitpid(self.pid, 0)
+            self.out.close()
+            self.pid = None
+
+
+def harness_cases():
+    """``--selftest``: cases that kill or wedge their process, to show the worker catches them."""
+
+    def wedge():  # the alarm blocked: only the parent's hard timeout can end this
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})
+        time.sleep(3600)
+
+    return [
+        Case("harness", "segfault", lambda: os.kill(os.getpid(), signal.SIGSEGV)),
+        Case("harness", "abort", os.abort),
+        Case("harness", "hang with the alarm blocked", wedge),
+        Case("harness", "clear error after them", lambda: int("x"), ("invalid",)),
+    ]
+
+
 def catalogue(folder: Path, n_flips: int = 150):
     return (
         system_cases()
@@ -476,10 +564,12 @@ def main(argv=None):
     ap.add_argument("--timeout", type=float, default=30.0)
     ap.add_argument("--flips", type=int, default=150, help="corrupted bundles per format")
     ap.add_argument("--list", action="store_true", help="list the cases and stop")
+    ap.add_argument("--in-process", action="store_true", help="no worker process (debugging)")
+    ap.add_argument("--selftest", action="store_true", help="only cases that crash or hang")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        cases = catalogue(Path(tmp), args.flips)
+        cases = harness_cases() if args.selftest else catalogue(Path(tmp), args.flips)
         if args.only:
             cases = [c for c in cases if c.module == args.only]
         if args.list:
@@ -488,11 +578,17 @@ def main(argv=None):
             return
         counts: dict = defaultdict(Counter)
         t0 = time.perf_counter()
-        for c in cases:
-            kind, detail = classify(c, args.timeout)
-            counts[c.module][kind] += 1
-            if kind != "clear":
-                print(f"{kind:8s} {c.module:12s} {c.name}: {detail}", flush=True)
+        isolated = not args.in_process and hasattr(os, "fork")
+        worker = Worker(cases, args.timeout) if isolated else None
+        try:
+            for i, c in enumerate(cases):
+                kind, detail = worker.run(i) if worker else classify(c, args.timeout)
+                counts[c.module][kind] += 1
+                if kind != "clear":
+                    print(f"{kind:8s} {c.module:12s} {c.name}: {detail}", flush=True)
+        finally:
+            if worker:
+                worker.close()
     kinds = ("clear", "obscure", "silent", "hang", "crash")
     lines = ["| module | cases | " + " | ".join(kinds) + " |", "|---" * (len(kinds) + 2) + "|"]
     total = Counter()
@@ -508,7 +604,7 @@ def main(argv=None):
         f"(targets: 0 silent, 0 hangs, 0 crashes, ≥ 95 % clear).\n\n" + "\n".join(lines) + "\n"
     )
     print(text)
-    if not args.only:
+    if not (args.only or args.selftest):
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         (out / "robustness.md").write_text(text)

@@ -40,6 +40,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._atomic import atomic_write
 from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
 
@@ -165,8 +166,6 @@ class AcquisitionPlan:
         ).hexdigest()
 
     def save(self, path, *, overwrite: bool = False) -> Path:
-        from ._atomic import atomic_write
-
         text = json.dumps({"name": self.name, "steps": [s.to_dict() for s in self.steps]}, indent=1)
         return atomic_write(path, lambda tmp: Path(tmp).write_text(text), overwrite=overwrite)
 
@@ -337,8 +336,8 @@ class Acquisition:
         if self.log_path.exists():  # drop an unfinished last line before appending
             text = self.log_path.read_text()
             keep = text[: text.rfind("\n") + 1] if "\n" in text else ""
-            if keep != text:
-                self.log_path.write_text(keep)
+            if keep != text:  # replaced atomically: a kill here must not empty the log
+                atomic_write(self.log_path, lambda t: Path(t).write_text(keep), overwrite=True)
         f = open(self.log_path, "a")
         if header is None:
             self._write(

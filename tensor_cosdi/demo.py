@@ -145,6 +145,7 @@ def run_demo(args) -> int:
     from tqdm import tqdm
 
     from .colour import to_srgb
+    from .io._atomic import atomic_write
     from .studies import compare, make_problem, score_depth, spectral_view
 
     if args.size % 4:
@@ -220,12 +221,20 @@ def run_demo(args) -> int:
     if figures:
         figs["summary.png"] = _summary_figure(rows, f"tensor-cosdi demo: {setting}")
     out.mkdir(parents=True, exist_ok=True)
-    for name, img in images.items():
-        io.imsave(str(out / name), img, check_contrast=False)
+    for name, img in images.items():  # each file atomic: a reader never sees half a PNG
+        atomic_write(
+            out / name,
+            lambda tmp, img=img: io.imsave(tmp, img, check_contrast=False),
+            overwrite=True,  # existing files were refused above unless --force
+        )
     for name, fig in figs.items():
         import matplotlib.pyplot as plt
 
-        fig.savefig(out / name, dpi=110, bbox_inches="tight")
+        atomic_write(
+            out / name,
+            lambda tmp, fig=fig: fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png"),
+            overwrite=True,
+        )
         plt.close(fig)
 
     head = (

@@ -28,18 +28,9 @@ from . import _backend as B
 from .operators import ModeProduct, validate_shape
 
 __all__ = [
-    "dct",
-    "wavelet",
-    "identity",
-    "svd_basis",
-    "tucker_bases",
-    "KroneckerBasis",
-    "is_orthonormal",
-    "ModeTransform",
-    "Dense",
-    "DCT",
-    "Wavelet",
-    "as_transform",
+    *("dct", "wavelet", "identity", "svd_basis", "tucker_bases", "KroneckerBasis"),
+    *("is_orthonormal", "ModeTransform", "Dense", "DCT", "Wavelet", "as_transform"),
+    *("BlockDense", "block_hosvd", "block_sizes"),
 ]
 
 
@@ -446,3 +437,6 @@ class KroneckerBasis:
     def __repr__(self):
         kinds = {m: t.kind for m, t in sorted(self.transforms.items())}
         return f"KroneckerBasis(shape={self.shape}, modes={kinds})"
+
+
+from ._block_basis import BlockDense, block_hosvd, block_sizes  # noqa: E402  (they build on Dense)

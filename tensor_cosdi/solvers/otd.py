@@ -30,7 +30,7 @@ import numpy as np
 from tensorly import tenalg
 
 from .. import _backend as B
-from ..bases import DCT, Dense, Wavelet, dct, tucker_bases
+from ..bases import DCT, Dense, Wavelet, block_hosvd, block_sizes, dct, tucker_bases
 from . import engine
 from ._base import check_positive, register_method
 from .priors import TV, FixedBasis, TuckerDictionary, omega_step, with_plane_support
@@ -125,6 +125,7 @@ def initial_bases(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    spatial_block: int | None = None,
     progress: bool = False,
 ):
     """The starting per-mode bases ``{mode: ModeTransform}`` of OTD (or WDCT), and a starting cube.
@@ -145,6 +146,12 @@ def initial_bases(
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
         estimated SNR, :data:`PAN_WEIGHTS`).
+    spatial_block : int or None
+        With ``"panchromatic"``: a spatial axis longer than this gets a
+        block-diagonal basis, one learned block per run of at most
+        ``spatial_block`` pixels (:class:`~tensor_cosdi.bases.BlockDense`),
+        so the transforms cost the same per pixel at any size.  ``None``: one
+        dense basis per axis.
 
     Returns
     -------
@@ -169,7 +176,12 @@ def initial_bases(
             pan_weight=pan_weight,
             progress=progress,
         )
-        mats.update({m: Dense(u) for m, u in tucker_bases(z, modes=[0, 1]).items()})
+        for m in (0, 1):
+            n = shape[m]
+            if spatial_block is not None and n > _check_int("spatial_block", spatial_block, 2):
+                mats[m] = block_hosvd(z, m, block_sizes(n, spatial_block))
+            else:
+                mats[m] = Dense(tucker_bases(z, modes=[m])[m])
     elif spatial == "wavelet":
         mats[0], mats[1] = Wavelet(shape[0], wavelet_name), Wavelet(shape[1], wavelet_name)
     else:
@@ -367,6 +379,7 @@ def online_tucker_admm(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    spatial_block=None,
     **options,
 ):
     """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as
@@ -400,6 +413,7 @@ def online_tucker_admm(
         pan_iter=pan_iter,
         pan_atoms=pan_atoms,
         pan_weight=pan_weight,
+        spatial_block=spatial_block,
         progress=bool(options.get("progress", False)),
     )
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
@@ -438,6 +452,7 @@ register_method(
         "pan_iter": 60,
         "pan_atoms": 3,
         "pan_weight": "auto",
+        "spatial_block": None,
     },
     "online Tucker dictionary ADMM (thesis Alg. 5, every system)",
 )

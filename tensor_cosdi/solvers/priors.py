@@ -32,7 +32,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..bases import KroneckerBasis, tucker_bases
+from ..bases import BlockDense, KroneckerBasis, block_hosvd, tucker_bases
 from .denoisers import resolve
 
 __all__ = [
@@ -273,7 +273,11 @@ class TuckerDictionary(SparseInBasis):
     def update(self, x, iteration: int) -> None:
         if not (self.update_modes and self.update_every and iteration % self.update_every == 0):
             return
-        learned = tucker_bases(x, modes=list(self.update_modes))
+        trans = self.basis.transforms
+        blocked = {m for m in self.update_modes if isinstance(trans.get(m), BlockDense)}
+        learned = tucker_bases(x, modes=[m for m in self.update_modes if m not in blocked])
+        for mode in blocked:  # a block-diagonal basis is re-learned with the same blocks
+            learned[mode] = block_hosvd(x, mode, trans[mode].sizes)
         for mode in self.update_modes:
             self._rebase(mode, learned[mode], self._last)
 

@@ -86,6 +86,7 @@ def panchromatic_estimate(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    pan_tv_steps: int | None = 10,
     progress: bool = False,
 ):
     """SPEC §5 step 1: ``Z`` and, where one was computed on the way, a starting cube.
@@ -111,6 +112,7 @@ def panchromatic_estimate(
         n_atoms=pan_atoms,
         max_iter=pan_iter,
         tv_weight=pan_weight_for(measurement, pan_weight),
+        tv_steps=pan_tv_steps,
         progress=progress,
     )
     return system.decimation.forward(x), x
@@ -125,6 +127,7 @@ def initial_bases(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    pan_tv_steps: int | None = 10,
     spatial_block: int | None = None,
     progress: bool = False,
 ):
@@ -142,7 +145,7 @@ def initial_bases(
         both (the WDCT baseline).  ``"dct"``: 2-D DCT.
     wavelet_name : str
         A PyWavelets orthogonal wavelet (default Symlet-8).
-    pan_iter, pan_atoms, pan_weight
+    pan_iter, pan_atoms, pan_weight, pan_tv_steps
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
         estimated SNR, :data:`PAN_WEIGHTS`).
@@ -174,6 +177,7 @@ def initial_bases(
             pan_iter=pan_iter,
             pan_atoms=pan_atoms,
             pan_weight=pan_weight,
+            pan_tv_steps=pan_tv_steps,
             progress=progress,
         )
         for m in (0, 1):
@@ -196,6 +200,7 @@ def subspace_gap_tv(
     n_atoms: int = 3,
     max_iter: int = 60,
     tv_weight: float = 0.05,
+    tv_steps: int | None = 10,
     eps: float = 1e-6,
     progress: bool = False,
 ):
@@ -215,7 +220,7 @@ def subspace_gap_tv(
     cube : tensor of ``system.cube_shape``
         The subspace estimate; ``system.decimation.forward(cube)`` is ``Z``.
     """
-    from .denoisers import tv
+    from .denoisers import WarmTV, tv
 
     n_atoms = _check_int("n_atoms", n_atoms, 1)
     max_iter = _check_int("max_iter", max_iter, 1)
@@ -227,9 +232,11 @@ def subspace_gap_tv(
         for m in modes
     ]
 
+    denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
+
     def subspace_tv(v, weight):
         coef = tenalg.multi_mode_dot(v, mats, modes=modes, transpose=True)
-        return tenalg.multi_mode_dot(tv(coef, weight), mats, modes=modes)
+        return tenalg.multi_mode_dot(denoise(coef, weight), mats, modes=modes)
 
     x, _, _ = engine.gap(
         system.operator,
@@ -379,6 +386,7 @@ def online_tucker_admm(
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
+    pan_tv_steps=10,
     spatial_block=None,
     **options,
 ):
@@ -413,6 +421,7 @@ def online_tucker_admm(
         pan_iter=pan_iter,
         pan_atoms=pan_atoms,
         pan_weight=pan_weight,
+        pan_tv_steps=pan_tv_steps,
         spatial_block=spatial_block,
         progress=bool(options.get("progress", False)),
     )
@@ -452,6 +461,7 @@ register_method(
         "pan_iter": 60,
         "pan_atoms": 3,
         "pan_weight": "auto",
+        "pan_tv_steps": 10,
         "spatial_block": None,
     },
     "online Tucker dictionary ADMM (thesis Alg. 5, every system)",

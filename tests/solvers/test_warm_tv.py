@@ -1,0 +1,47 @@
+"""WarmTV: scikit-image's Chambolle iteration, with its dual carried from call to call."""
+
+import numpy as np
+import pytest
+from skimage.restoration import denoise_tv_chambolle
+
+from tensor_cosdi.solvers.denoisers import WarmTV
+
+
+@pytest.mark.parametrize("shape", [(40, 30), (40, 30, 3), (24, 20, 2, 3)])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_cold_start_is_scikit_image(shape, dtype):
+    x = np.random.default_rng(0).random(shape).astype(dtype)
+    for n in (1, 2, 7, 30):
+        ref = denoise_tv_chambolle(
+            x.reshape(shape[:2] + (-1,)), weight=0.1, max_num_iter=n, eps=0, channel_axis=-1
+        ).reshape(shape)
+        out = WarmTV(n)(x, 0.1)
+        assert out.shape == x.shape and out.dtype == dtype
+        np.testing.assert_allclose(out, ref, atol=1e-5 if dtype == np.float32 else 1e-12)
+
+
+def test_warm_start_reaches_the_converged_denoiser_in_few_steps_per_call():
+    rng = np.random.default_rng(1)
+    clean = np.kron(rng.random((6, 6, 2)), np.ones((8, 8, 1)))
+    x = clean + 0.1 * rng.standard_normal(clean.shape)
+    converged = denoise_tv_chambolle(x, weight=0.1, max_num_iter=2000, eps=0, channel_axis=-1)
+    warm = WarmTV(5)
+    for _ in range(40):  # 40 calls × 5 steps: the dual keeps improving
+        out = warm(x, 0.1)
+    cold5 = WarmTV(5)(x, 0.1)
+    # on a fixed input, 40 warm calls of 5 steps are exactly 200 cold steps
+    np.testing.assert_allclose(out, WarmTV(200)(x, 0.1), atol=1e-12)
+    assert np.abs(out - converged).max() < 0.25 * np.abs(cold5 - converged).max()
+    warm.reset()
+    np.testing.assert_array_equal(warm(x, 0.1), cold5)
+    # a new shape starts cold instead of failing
+    assert warm(x[:20, :20], 0.1).shape == (20, 20, 2)
+
+
+def test_warm_tv_errors():
+    with pytest.raises(ValueError, match="n_iter"):
+        WarmTV(0)
+    with pytest.raises(TypeError, match="n_iter"):
+        WarmTV(2.5)
+    with pytest.raises(ValueError, match="sigma"):
+        WarmTV(2)(np.ones((4, 4)), 0.0)

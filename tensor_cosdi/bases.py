@@ -439,4 +439,4 @@ class KroneckerBasis:
         return f"KroneckerBasis(shape={self.shape}, modes={kinds})"
 
 
-from ._block_basis import BlockDense, block_hosvd, block_sizes  # noqa: E402  (they build on Dense)
+from ._block_basis import BlockDense, block_hosvd, block_sizes  # noqa: E402, F401  (on Dense)

@@ -117,9 +117,7 @@ class WarmTV:
             cuts = np.linspace(0, f.shape[0], n + 1).astype(int)
             with ThreadPoolExecutor(n) as pool:
                 jobs = [
-                    pool.submit(
-                        _chambolle_steps, f[a:b], self.p[:, a:b], out[a:b], w, self.n_iter
-                    )
+                    pool.submit(_chambolle_steps, f[a:b], self.p[:, a:b], out[a:b], w, self.n_iter)
                     for a, b in zip(cuts[:-1], cuts[1:])
                 ]
                 for job in jobs:

@@ -55,6 +55,8 @@ def to_numpy(x) -> np.ndarray:
     """Return ``x`` as a NumPy array (no copy for NumPy inputs)."""
     if isinstance(x, np.ndarray):
         return x
+    if hasattr(x, "detach") and hasattr(x, "cpu"):  # a torch tensor, whatever backend is active
+        return x.detach().cpu().numpy()  # (also on CUDA, where np.asarray would fail)
     return tl.to_numpy(x)
 
 

@@ -39,9 +39,10 @@ class Problem:
     name : str
         ``"<system>/<scene>"``.
     system : tensor_cosdi.systems.System
-    cube : ndarray of ``system.cube_shape``
-        The ground truth the measurement was simulated from.
-    measurement : ndarray of ``system.measurement_shape``
+    cube : tensor of ``system.cube_shape``
+        The ground truth the measurement was simulated from (a tensor of the
+        TensorLy backend active when the problem was made; NumPy by default).
+    measurement : tensor of ``system.measurement_shape`` (same backend)
     wavelengths : ndarray (Nλ,)
     snr_db : float or None
     reflectance : ndarray (Nx, Ny, Nλ)
@@ -269,6 +270,8 @@ class SystemRoles:
         system, cube, reflectance, depth, extras = cls._example(
             scene, (nx, ny), wl, seed, shifts, **opts
         )
+        if B.backend_name() != "numpy":  # the truth and the measurement on the active backend
+            cube = B.as_tensor(cube, np.asarray(cube).dtype.name)
         g = system.simulate(cube, snr_db=snr_db, rng=gen)
         return Problem(
             f"{cls.name}/{scene}", system, cube, g, wl, snr_db, reflectance, depth, extras

@@ -6,6 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 import tensorly as tl
 
+from .. import _backend as B
 from ..codes import complementary_colour_codes
 from ..operators import LAYOUTS, Code, LightFieldLayout, ModeProduct, Stack, SumAxis
 from ._base import System, as_code, count, wavelengths_for
@@ -256,7 +257,8 @@ class C3SLFI(System):
         system = cls.example(
             (nx, ny, len(wl)), rng=seed, n_snapshots=n_snapshots, views=(n4, n5), wavelengths=wl
         )
-        return system, np.asarray(system.to_3d(lf)), centre, d, {}
+        lf = lf if B.backend_name() == "numpy" else B.as_tensor(lf, np.asarray(lf).dtype.name)
+        return system, B.to_numpy(system.to_3d(lf)), centre, d, {}
 
     @classmethod
     def separable(

@@ -182,7 +182,8 @@ def fringe_cube(
     k = np.arange(n_steps)
     mod = offset + amplitude * np.cos(ph[:, :, :, None] + 2 * np.pi * k / n_steps)  # (Nx, Ny, f, K)
     mod = mod.reshape(shape[:2] + (-1,))  # t = f·K + k
-    if not tl.is_tensor(reflectance):
-        reflectance = np.asarray(reflectance, dtype=np.float64)
+    if isinstance(reflectance, np.ndarray) or not tl.is_tensor(reflectance):
+        F = np.asarray(reflectance, dtype=np.float64)  # NumPy in, NumPy out (any backend)
+        return F[:, :, :, None] * mod[:, :, None, :]
     F = reflectance
     return F[:, :, :, None] * B.tensor_like(mod[:, :, None, :], F)

@@ -25,7 +25,7 @@ from . import (
     testing,
 )
 from .operators import TensorOperator
-from .solvers import Result, reconstruct
+from .solvers import Result, reconstruct, reconstruct_tiled
 
 try:
     __version__ = version("tensor_cosdi")
@@ -50,6 +50,7 @@ __all__ = [
     "studies",
     "TensorOperator",
     "reconstruct",
+    "reconstruct_tiled",
     "Result",
     "solvers",
     "__version__",

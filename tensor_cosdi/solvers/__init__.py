@@ -19,11 +19,13 @@ from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
 from .pnp_gap import pnp_gap
+from .tiled import reconstruct_tiled
 from .twist import twist_tv
 
 __all__ = [
     "Result",
     "reconstruct",
+    "reconstruct_tiled",
     "methods",
     "register_method",
     "METHODS",

@@ -1,0 +1,166 @@
+"""Tiled reconstruction of large CASSI captures: tiles cut with the dispersion's overlap,
+reconstructed independently (serially or on a Dask cluster) and blended.
+
+A tile's sub-problem is the same imager on a window of the code: for
+SD-CASSI the cube window ``[x0, x1) × [y0, y1)`` lands on measurement
+columns ``[y0, y1 + S)`` (``S`` the total shear), whose first and last ``S``
+columns also hold light from outside the window — those cube columns are
+kept out of the blend; for DD-CASSI the window is exact.  Every tile is
+grown by ``overlap`` pixels (plus ``S`` across the shear) on its inner
+sides, and the estimates are blended with weights that ramp from 0 to 1
+across the overlap.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .. import _backend as B
+from ..bases import block_sizes
+from ._base import Result, reconstruct
+
+__all__ = ["reconstruct_tiled", "TILED_SYSTEMS"]
+
+#: Imagers :func:`reconstruct_tiled` can cut into tiles.
+TILED_SYSTEMS = ("sd_cassi", "dd_cassi")
+
+
+def _tile_system(system, x0, x1, y0, y1):
+    """The imager on cube window ``[x0, x1) × [y0, y1)`` and its measurement's column range."""
+    from ..systems import DDCASSI, SDCASSI
+
+    s = system.measurement_shape[1] - system.cube_shape[1] if system.name == "sd_cassi" else 0
+    extra = system.code.shape[1] - system.cube_shape[1]  # DD-CASSI: the code's extra columns
+    kw = {"n_bands": system.cube_shape[2], "shifts": system.shifts}
+    kw["wavelengths"] = system.wavelengths
+    if system.name == "sd_cassi":
+        return SDCASSI(system.code[x0:x1, y0:y1], **kw), (y0, y1 + s)
+    return DDCASSI(system.code[x0:x1, y0 : y1 + extra], **kw), (y0, y1)
+
+
+def _solve_tile(system, g, method, options):
+    res = reconstruct(system, g, method, **options)
+    return np.asarray(B.to_numpy(res.cube), dtype=np.float64)
+
+
+def _ramp(n, lo_margin, hi_margin, lo_dead=0, hi_dead=0):
+    """Blend weights along one axis of an extended tile: 0 on ``dead`` pixels at an inner edge,
+    a linear rise across the rest of the margin, 1 in the core."""
+    w = np.ones(n)
+    for margin, dead, side in ((lo_margin, lo_dead, 1), (hi_margin, hi_dead, -1)):
+        if margin == 0:
+            continue
+        rise = np.zeros(margin)
+        k = margin - dead
+        rise[dead:] = (np.arange(k) + 1) / (k + 1)
+        if side == 1:
+            w[:margin] = rise
+        else:
+            w[n - margin :] = rise[::-1]
+    return w
+
+
+def reconstruct_tiled(
+    system,
+    measurement,
+    method: str = "otd",
+    *,
+    tile: int = 256,
+    overlap: int = 64,
+    client=None,
+    progress: bool = False,
+    **options,
+) -> Result:
+    """Reconstruct a large SD-CASSI or DD-CASSI capture tile by tile.
+
+    Parameters
+    ----------
+    system : SDCASSI or DDCASSI (:data:`TILED_SYSTEMS`)
+    measurement : tensor of ``system.measurement_shape``
+    method : str
+        Any registered method (:func:`tensor_cosdi.reconstruct`), run on each tile with
+        ``options``.
+    tile : int
+        Largest core of a tile in pixels along each spatial axis (the axes
+        are cut into near-equal runs of at most ``tile``).
+    overlap : int
+        Pixels each tile is grown by on its inner sides (SD-CASSI: plus the
+        shear ``S`` across columns), blended with ramped weights.  On a
+        256×256×28 SD-CASSI tuning scene (balloons, random code, 30 dB,
+        OTD 29.59 dB untiled) tiles of 128 gave 28.90 dB with 16, 28.59
+        with 32 and 29.75 with 64: the light of the shear's edge columns
+        comes from outside the tile, and OTD's bases carry that error
+        inward, so the default is 64.
+    client : dask.distributed.Client, optional
+        Reconstruct the tiles on this cluster (``client.map``); ``None``: one
+        after the other in this process.
+    progress : bool
+        A progress bar over tiles (serial runs).
+
+    Returns
+    -------
+    Result
+        ``cube`` on the measurement's backend; ``history`` holds per tile
+        ``"tiles"`` (``(x0, x1, y0, y1)`` of each core); ``options`` the
+        method's and the tiling's.
+    """
+    from .engine import check_int
+
+    if getattr(system, "name", None) not in TILED_SYSTEMS:
+        raise ValueError(
+            f"reconstruct_tiled supports {TILED_SYSTEMS}, got {getattr(system, 'name', system)!r}"
+        )
+    tile, overlap = check_int("tile", tile, 8), check_int("overlap", overlap, 0)
+    t0 = time.perf_counter()
+    g = np.asarray(B.to_numpy(measurement))
+    if g.shape != tuple(system.measurement_shape):
+        raise ValueError(
+            f"measurement has shape {g.shape}; {system.name} expects {system.measurement_shape}"
+        )
+    nx, ny, nl = system.cube_shape
+    s = system.measurement_shape[1] - ny if system.name == "sd_cassi" else 0
+    jobs, places = [], []
+    xs, ys = np.cumsum([0] + block_sizes(nx, tile)), np.cumsum([0] + block_sizes(ny, tile))
+    for a0, a1 in zip(xs[:-1], xs[1:]):
+        for b0, b1 in zip(ys[:-1], ys[1:]):
+            x0, x1 = max(0, a0 - overlap), min(nx, a1 + overlap)
+            y0, y1 = max(0, b0 - overlap - s), min(ny, b1 + overlap + s)
+            sub, (m0, m1) = _tile_system(system, x0, x1, y0, y1)
+            jobs.append((sub, g[x0:x1, m0:m1]))
+            wx = _ramp(x1 - x0, a0 - x0, x1 - a1)
+            wy = _ramp(y1 - y0, b0 - y0, y1 - b1, min(s, b0 - y0), min(s, y1 - b1))
+            places.append(((x0, x1, y0, y1), (a0, a1, b0, b1), np.outer(wx, wy)))
+    if client is None:
+        from tqdm import tqdm
+
+        cubes = (
+            _solve_tile(sub, gt, method, options)
+            for sub, gt in tqdm(jobs, desc="tiles", disable=not progress)
+        )
+    else:
+        futures = client.map(
+            _solve_tile,
+            [j[0] for j in jobs],
+            [j[1] for j in jobs],
+            method=method,
+            options=options,
+            pure=False,
+        )
+        cubes = iter(client.gather(futures))
+    acc, wsum = np.zeros((nx, ny, nl)), np.zeros((nx, ny))
+    for cube, ((x0, x1, y0, y1), _, w) in zip(cubes, places):
+        acc[x0:x1, y0:y1] += cube * w[:, :, None]
+        wsum[x0:x1, y0:y1] += w
+    out = (acc / wsum[:, :, None]).astype(g.dtype, copy=False)
+    if not isinstance(measurement, np.ndarray):
+        out = B.tensor_like(out, measurement)
+    return Result(
+        cube=out,
+        history={"tiles": [p[1] for p in places]},
+        seconds=time.perf_counter() - t0,
+        options={**options, "tile": tile, "overlap": overlap},
+        method=f"{method} (tiled)",
+        system=system,
+    )

@@ -1,0 +1,67 @@
+"""reconstruct_tiled: SD-/DD-CASSI captures cut into overlapping tiles, solved and blended."""
+
+import numpy as np
+import pytest
+
+import tensor_cosdi as tc
+from tensor_cosdi import metrics
+
+
+def problem(kind, n=64, bands=8, snr=30):
+    cube, wl = tc.datasets.load_hsi("balloons", tc.datasets.KAIST_WAVELENGTHS[:bands], shape=(n, n))
+    cube = cube.astype(np.float32)
+    extra = bands - 1 if kind == "dd" else 0
+    code = tc.codes.random_binary((n, n + extra), rng=0)
+    cls = tc.systems.DDCASSI if kind == "dd" else tc.systems.SDCASSI
+    s = cls(code, n_bands=bands, shifts=1, wavelengths=wl)
+    return s, cube, np.asarray(s.simulate(cube, snr_db=snr, rng=0), dtype=np.float32)
+
+
+@pytest.fixture(autouse=True)
+def _needs_data():
+    try:
+        tc.datasets.data_dir()
+        tc.datasets.load_hsi("balloons")
+    except (FileNotFoundError, ValueError):
+        pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
+
+
+@pytest.mark.parametrize("kind", ["sd", "dd"])
+def test_one_tile_is_the_untiled_reconstruction(kind):
+    s, cube, g = problem(kind, n=48)
+    full = tc.reconstruct(s, g, "gap_tv", max_iter=10)
+    one = tc.reconstruct_tiled(s, g, "gap_tv", tile=48, max_iter=10)
+    np.testing.assert_allclose(one.cube, full.cube, rtol=1e-5, atol=1e-6)
+    assert one.history["tiles"] == [(0, 48, 0, 48)] and one.cube.dtype == np.float32
+
+
+@pytest.mark.parametrize("kind", ["sd", "dd"])
+def test_tiles_blend_close_to_the_untiled_result(kind):
+    s, cube, g = problem(kind)
+    full = metrics.psnr(cube, tc.reconstruct(s, g, "otd").cube, data_range=1.0)
+    res = tc.reconstruct_tiled(s, g, "otd", tile=32, overlap=24)  # tiles of 56-63 of 64 px
+    tiled = metrics.psnr(cube, res.cube, data_range=1.0)
+    assert len(res.history["tiles"]) == 4 and res.cube.shape == cube.shape
+    assert np.isfinite(res.cube).all()
+    assert tiled > full - 0.5 and tiled > 30.0, (tiled, full)  # measured: −0.12 / +0.25 dB
+
+
+def test_a_dask_cluster_gives_the_serial_result():
+    distributed = pytest.importorskip("distributed")
+    s, cube, g = problem("sd", n=48)
+    serial = tc.reconstruct_tiled(s, g, "gap_tv", tile=24, overlap=8, max_iter=8)
+    with distributed.Client(processes=False, n_workers=2, threads_per_worker=1) as client:
+        par = tc.reconstruct_tiled(s, g, "gap_tv", tile=24, overlap=8, max_iter=8, client=client)
+    np.testing.assert_allclose(par.cube, serial.cube, rtol=1e-6, atol=1e-7)
+
+
+def test_tiled_errors():
+    s, cube, g = problem("sd", n=32)
+    with pytest.raises(ValueError, match="supports"):
+        tc.reconstruct_tiled(tc.systems.CASSIVSI.example(), g)
+    with pytest.raises(ValueError, match="tile"):
+        tc.reconstruct_tiled(s, g, tile=2)
+    with pytest.raises(ValueError, match="expects"):
+        tc.reconstruct_tiled(s, g[:, :-1])
+    with pytest.raises(ValueError, match="unknown|nope"):
+        tc.reconstruct_tiled(s, g, "gap_tv", nope=1)

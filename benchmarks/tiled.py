@@ -66,7 +66,8 @@ def main(argv=None):
         peak = tracemalloc.get_traced_memory()[1] / 2**20
         tracemalloc.stop()
         p = metrics.psnr(cube, res.cube, data_range=1.0)
-        rows.append(f"| {name} | {p:.2f} | {dt:.1f} | {peak:.0f} MiB = {peak / cube_mib:.1f} cubes |")
+        mem = f"{peak:.0f} MiB = {peak / cube_mib:.1f} cubes"
+        rows.append(f"| {name} | {p:.2f} | {dt:.1f} | {mem} |")
         print(rows[-1], flush=True)
     if args.dask:
         from distributed import Client

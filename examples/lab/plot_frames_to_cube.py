@@ -17,6 +17,7 @@ What a lab does with its own prototype, end to end, on simulated captures
 """
 
 # %%
+import os
 import tempfile
 from pathlib import Path
 
@@ -27,7 +28,13 @@ import tifffile
 import tensor_cosdi as tc
 from tensor_cosdi import io
 
-data = Path(tc.__file__).resolve().parents[1] / ".." / "shared" / "data"
+# the project's research-use data (not shipped): $TENSOR_COSDI_DATA, else ../shared/data next to
+# a source checkout
+data = Path(
+    os.environ.get("TENSOR_COSDI_DATA")
+    or Path(tc.__file__).resolve().parents[1] / ".." / "shared" / "data"
+)
+print(f"data folder: {data} ({'found' if data.is_dir() else 'absent: seeded stand-ins are used'})")
 work = Path(tempfile.mkdtemp())
 n, nl = 64, 16
 wl = tc.scenes.default_wavelengths(nl)
@@ -132,3 +139,9 @@ if lf_dir.exists():
     for ax in axes:
         ax.axis("off")
     fig.tight_layout()
+else:
+    print(
+        f"step 5 skipped: the real lenslet capture ({lf_dir}) is not here — it is research-use "
+        "data and not shipped; point TENSOR_COSDI_DATA at a folder holding lenslet_raw_guv/ to "
+        "run it"
+    )

@@ -41,6 +41,12 @@ def _host(x):
     return a.reshape(a.shape[:2] + (-1,)), a.shape
 
 
+def _like(out: np.ndarray, x):
+    """``out`` on ``x``'s backend and device (a NumPy input gets NumPy back, whatever backend is
+    active)."""
+    return out if isinstance(x, np.ndarray) else B.tensor_like(out, x)
+
+
 def _workers(channels: int) -> int:
     return max(1, min(channels, os.cpu_count() or 1, 8))
 
@@ -72,7 +78,7 @@ def tv(x, sigma: float, *, n_iter: int = 50):
         chunks = [flat[:, :, a:b] for a, b in zip(bounds[:-1], bounds[1:])]
         with ThreadPoolExecutor(n) as pool:
             out = np.concatenate(list(pool.map(run, chunks)), axis=2)
-    return B.tensor_like(out.reshape(shape), x)
+    return _like(out.reshape(shape), x)
 
 
 class WarmTV:
@@ -103,10 +109,14 @@ class WarmTV:
         w = float(sigma)
         if not w > 0:
             raise ValueError(f"WarmTV: sigma must be > 0, got {sigma!r}")
+        if not isinstance(x, np.ndarray):  # other backends (torch, CUDA): stays on the device
+            return self._on_device(x, w)
         flat, shape = _host(x)
         f = np.ascontiguousarray(np.moveaxis(flat, 2, 0))  # (channels, H, W): planes contiguous
-        if self.p is None or self.p.shape[1:] != f.shape or self.p.dtype != f.dtype:
+        if not isinstance(self.p, np.ndarray) or self.p.shape[1:] != f.shape:
             self.p = np.zeros((2,) + f.shape, f.dtype)
+        elif self.p.dtype != f.dtype:
+            self.p = self.p.astype(f.dtype)
         out = np.empty_like(f)
         n = _workers(f.shape[0])
         if n == 1:
@@ -122,7 +132,32 @@ class WarmTV:
                 ]
                 for job in jobs:
                     job.result()
-        return B.tensor_like(np.moveaxis(out, 0, 2).reshape(shape), x)
+        return _like(np.moveaxis(out, 0, 2).reshape(shape), x)
+
+    def _on_device(self, x, w):
+        """The same steps with backend operations on ``x``'s device (no host round trip)."""
+        import tensorly as tl
+
+        shape = tuple(x.shape)
+        f = tl.moveaxis(tl.reshape(x, shape[:2] + (-1,)), 2, 0)
+        if (
+            self.p is None
+            or isinstance(self.p, np.ndarray)
+            or tuple(self.p.shape[1:]) != tuple(f.shape)
+        ):
+            self.p = B.zeros_like_shape((2,) + tuple(f.shape), f)
+        p, tau = self.p, 0.25
+        for _ in range(self.n_iter):
+            d = -(p[0] + p[1])
+            d[:, 1:] += p[0][:, :-1]
+            d[:, :, 1:] += p[1][:, :, :-1]
+            out = f + d
+            g = B.zeros_like_shape(tuple(p.shape), f)
+            g[0][:, :-1] = out[:, 1:] - out[:, :-1]
+            g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
+            p = (p - tau * g) / (1.0 + (tau / w) * tl.sqrt(g[0] * g[0] + g[1] * g[1]))
+        self.p = p
+        return tl.reshape(tl.moveaxis(out, 0, 2), shape)
 
 
 def _chambolle_steps(f, p, out, w: float, n_iter: int) -> None:
@@ -160,7 +195,7 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
         method="BayesShrink",
         rescale_sigma=False,
     )
-    return B.tensor_like(out.reshape(shape), x)
+    return _like(out.reshape(shape), x)
 
 
 _NETS: dict = {}

@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _results import append
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -76,11 +77,7 @@ def main(argv=None):
             print(lines[-1], flush=True)
     text = f"\n{time.strftime('%Y-%m-%d')}, 2 cores, float32, median of {args.repeats}:\n\n"
     text += "\n".join(lines) + "\n"
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "otd_scaling.md", "a") as f:
-        f.write(text)
-    print(text)
+    append(args.out, "otd_scaling.md", text)
 
 
 if __name__ == "__main__":

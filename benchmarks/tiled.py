@@ -22,6 +22,7 @@ import tracemalloc
 from pathlib import Path
 
 import numpy as np
+from _results import append
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -87,11 +88,7 @@ def main(argv=None):
         + "\n".join(rows)
         + "\n"
     )
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "tiled.md", "a") as f:
-        f.write(text)
-    print(text)
+    append(args.out, "tiled.md", text)
 
 
 if __name__ == "__main__":

@@ -42,7 +42,7 @@ def _tile_system(system, x0, x1, y0, y1):
 
 def _solve_tile(system, g, method, options):
     res = reconstruct(system, g, method, **options)
-    return np.asarray(B.to_numpy(res.cube), dtype=np.float64)
+    return np.asarray(B.to_numpy(res.cube), dtype=g.dtype)
 
 
 def _ramp(n, lo_margin, hi_margin, lo_dead=0, hi_dead=0):
@@ -115,6 +115,8 @@ def reconstruct_tiled(
     tile, overlap = check_int("tile", tile, 8), check_int("overlap", overlap, 0)
     t0 = time.perf_counter()
     g = np.asarray(B.to_numpy(measurement))
+    if g.dtype not in (np.float32, np.float64):  # raw counts: blend in float64
+        g = g.astype(np.float64)
     if g.shape != tuple(system.measurement_shape):
         raise ValueError(
             f"measurement has shape {g.shape}; {system.name} expects {system.measurement_shape}"
@@ -149,11 +151,15 @@ def reconstruct_tiled(
             pure=False,
         )
         cubes = iter(client.gather(futures))
-    acc, wsum = np.zeros((nx, ny, nl)), np.zeros((nx, ny))
+    # one cube-sized array in the measurement's dtype: the weighted sum, divided in place
+    out, wsum = np.zeros((nx, ny, nl), g.dtype), np.zeros((nx, ny), g.dtype)
     for cube, ((x0, x1, y0, y1), _, w) in zip(cubes, places):
-        acc[x0:x1, y0:y1] += cube * w[:, :, None]
+        w = w.astype(g.dtype)
+        cube *= w[:, :, None]
+        out[x0:x1, y0:y1] += cube
         wsum[x0:x1, y0:y1] += w
-    out = (acc / wsum[:, :, None]).astype(g.dtype, copy=False)
+        del cube
+    out /= wsum[:, :, None]
     if not isinstance(measurement, np.ndarray):
         out = B.tensor_like(out, measurement)
     return Result(

@@ -105,6 +105,14 @@ def reconstruct_tiled(
         ``cube`` on the measurement's backend; ``history`` holds per tile
         ``"tiles"`` (``(x0, x1, y0, y1)`` of each core); ``options`` the
         method's and the tiling's.
+
+    Examples
+    --------
+    >>> import tensor_cosdi as tc
+    >>> p = tc.studies.make_problem("sd_cassi", "coffee", shape=(48, 48), n_bands=8)
+    >>> res = tc.reconstruct_tiled(p.system, p.measurement, "gap_tv", tile=24, overlap=8)
+    >>> res.cube.shape, len(res.history["tiles"])
+    ((48, 48, 8), 4)
     """
     from .engine import check_int
 

@@ -9,7 +9,7 @@ peak is comparable; ``--dask N`` adds a run on a local cluster of N worker
 processes, timed only).  Target (issue "real data"): tiled within 0.3 dB of
 untiled, with less peak memory.
 
-    python benchmarks/tiled.py [--size 1024] [--tile 256] [--overlap 64] [--dask 2]
+    python benchmarks/tiled.py [--size 1024] [--tile 256] [--overlap 128] [--dask 2]
 
 Appends to ``benchmarks/results/tiled.md``.  Never asserts anything.
 """
@@ -31,7 +31,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=1024)
     ap.add_argument("--tile", type=int, default=256)
-    ap.add_argument("--overlap", type=int, default=64)
+    ap.add_argument("--overlap", type=int, default=128)
     ap.add_argument("--scene", default="balloons")
     ap.add_argument("--dask", type=int, default=0, help="also run on N local worker processes")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))

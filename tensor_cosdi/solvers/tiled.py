@@ -133,7 +133,7 @@ def reconstruct_tiled(
         )
     nx, ny, nl = system.cube_shape
     s = system.measurement_shape[1] - ny if system.name == "sd_cassi" else 0
-    places = []  # (extended window, core, measurement columns), in tile order
+    places = []  # (extended window, core) of each tile, in tile order
     xs, ys = np.cumsum([0] + block_sizes(nx, tile)), np.cumsum([0] + block_sizes(ny, tile))
     for a0, a1 in zip(xs[:-1], xs[1:]):
         for b0, b1 in zip(ys[:-1], ys[1:]):
@@ -170,7 +170,10 @@ def reconstruct_tiled(
         wx = _ramp(x1 - x0, a0 - x0, x1 - a1)
         wy = _ramp(y1 - y0, b0 - y0, y1 - b1, min(s, b0 - y0), min(s, y1 - b1))
         w = np.outer(wx, wy).astype(g.dtype)
-        cube *= w[:, :, None]
+        if cube.flags.writeable:  # (arrays from worker processes may arrive read-only)
+            cube *= w[:, :, None]
+        else:
+            cube = cube * w[:, :, None]
         out[x0:x1, y0:y1] += cube
         wsum[x0:x1, y0:y1] += w
         del cube

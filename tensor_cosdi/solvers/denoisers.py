@@ -147,12 +147,12 @@ class WarmTV:
         ):
             self.p = B.zeros_like_shape((2,) + tuple(f.shape), f)
         p, tau = self.p, 0.25
+        g = B.zeros_like_shape(tuple(p.shape), f)  # its last row / column stay 0
         for _ in range(self.n_iter):
             d = -(p[0] + p[1])
             d[:, 1:] += p[0][:, :-1]
             d[:, :, 1:] += p[1][:, :, :-1]
             out = f + d
-            g = B.zeros_like_shape(tuple(p.shape), f)
             g[0][:, :-1] = out[:, 1:] - out[:, :-1]
             g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
             p = (p - tau * g) / (1.0 + (tau / w) * tl.sqrt(g[0] * g[0] + g[1] * g[1]))

@@ -41,6 +41,13 @@ def _structured_light(ns):
     assert _rmse(ns["h_cs"], sl.height) < 1.0  # CS2LI + OTD + Gray code: prints 0.28
 
 
+def _tiled(ns):
+    psnr = ns["psnr"]
+    whole, small, enough = psnr["untiled"], *(psnr[k] for k in list(psnr)[1:])
+    assert len(ns["runs"]["tiles of 64, overlap 48"].history["tiles"]) == 4
+    assert enough > whole - 0.5 and enough > small, psnr  # the overlap absorbs the shear
+
+
 def _frames_to_cube(ns):
     np.testing.assert_allclose(ns["shifts"], 2.0 * np.arange(ns["nl"]), atol=0.1)
     assert np.abs(ns["code"] - ns["true_code"]).mean() < 0.01
@@ -148,6 +155,7 @@ CHECKS = {
     "plot_prism_design": _prism,
     "plot_otd_vs_baselines": _otd_vs_baselines,
     "plot_thesis_algorithms": _thesis_algorithms,
+    "plot_tiled": _tiled,
     "plot_c3slfi": _c3slfi,
     "plot_cassdi_dfa": _cassdi_dfa,
     "plot_cassi_baselines": _cassi_baselines,

@@ -147,9 +147,13 @@ def test_pnp_gap_auto_switches_off_acceleration_for_noisy_data(monkeypatch):
     monkeypatch.setattr(engine, "gap", spy)
     for snr in (None, 20):
         system, g = _tsa_problem(snr)
-        tc.reconstruct(system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2)
+        tc.reconstruct(
+            system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2, splitting="gap"
+        )
     assert seen[0] == (True, 1e-6)  # noise-free: accelerated, tiny ε
     assert seen[1][0] is False and seen[1][1] > 0.1  # 20 dB: plain GAP, larger ε
+    tc.reconstruct(system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2)
+    assert len(seen) == 2  # 20 dB with the automatic splitting: ADMM, not GAP
     tc.reconstruct(
         system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2, accelerate=True, eps=1e-3
     )

@@ -320,17 +320,23 @@ class Denoiser(Prior):
     ``sigma`` is relative: the denoiser runs at ``σ = sigma · P₉₉.₉|start|``,
     whatever the engine's step (the plug-and-play convention).  With
     ``sigma_end`` the level anneals geometrically from ``sigma`` to
-    ``sigma_end`` over ``n_steps`` calls and then stays there.  Implicit: its
-    objective term is 0.
+    ``sigma_end`` over ``n_steps`` calls and then stays there.  ``nonneg``
+    projects each output onto ``x ≥ 0`` (cubes of light are non-negative; a
+    learned denoiser's negative excursions are what made plug-and-play ADMM
+    diverge on weakly coded pixels, see :mod:`~tensor_cosdi.solvers.pnp_gap`).
+    Implicit: its objective term is 0.
     """
 
     name = "denoiser"
 
-    def __init__(self, denoiser="tv", *, sigma: float, sigma_end=None, n_steps: int = 1):
+    def __init__(
+        self, denoiser="tv", *, sigma: float, sigma_end=None, n_steps: int = 1, nonneg=False
+    ):
         self._denoise = resolve(denoiser)
         self.sigma = float(sigma)
         self.sigma_end = self.sigma if sigma_end is None else float(sigma_end)
         self.n_steps = max(int(n_steps), 1)
+        self.nonneg = bool(nonneg)
         self.calls = 0
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
@@ -346,7 +352,8 @@ class Denoiser(Prior):
     def prox(self, v):
         self.strength = self.current_sigma()
         self.calls += 1
-        return self._denoise(v, self.strength)
+        out = self._denoise(v, self.strength)
+        return tl.clip(out, 0, None) if self.nonneg else out
 
 
 class PlaneSupport(Prior):

@@ -91,7 +91,83 @@ def test_pnp_gap_ensemble_runs_the_denoiser_n_times():
         calls.append(x.shape)
         return x
 
-    tc.reconstruct(
-        p.system, p.measurement, "pnp_gap", denoiser=den, warm="none", max_iter=3, ensemble=8
+    run = lambda splitting: tc.reconstruct(  # noqa: E731
+        p.system, p.measurement, "pnp_gap", denoiser=den, warm="none", max_iter=3, ensemble=8,
+        splitting=splitting,
+    )  # fmt: skip
+    run("gap")
+    assert len(calls) == 3 * 8
+    run("admm")  # ADMM denoises its start too
+    assert len(calls) == 3 * 8 + 4 * 8
+
+
+# ---- plug-and-play ADMM on noisy data, non-negative denoiser output (stop 16) ----------------
+def test_denoiser_prior_projects_onto_nonnegative_values_when_asked():
+    x = np.random.default_rng(2).standard_normal((6, 5, 3))
+    shift = lambda v, s: v - 0.5  # noqa: E731  (a biased "denoiser" with negative output)
+    for nonneg in (False, True):
+        prior = Denoiser(shift, sigma=0.1, nonneg=nonneg)
+        prior.setup(np.abs(x), penalty=1.0, gain=1.0)
+        out = prior.prox(x)
+        assert np.allclose(out, np.maximum(x - 0.5, 0) if nonneg else x - 0.5)
+
+
+def test_nonnegativity_keeps_pnp_admm_bounded_on_weakly_coded_pixels():
+    # A code with a patch of 1 % transmission (like the TSA mask's dark patch): those voxels are
+    # almost unobserved, so x ≈ z − u there and a denoiser with a negative bias drives z down by
+    # the bias every iteration.  With z ≥ 0 the patch stays bounded.
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=4, rng=0)
+    code = np.asarray(p.system.code, dtype=float).copy()
+    code[8:16, 8:16] = 0.01
+    system = tc.systems.SDCASSI(code, n_bands=4, shifts=1)
+    g = system.simulate(np.asarray(p.cube), snr_db=20, rng=0)
+    biased = lambda v, s: v - 0.02  # noqa: E731
+    runs = {}
+    for nonneg in (False, True):
+        runs[nonneg] = tc.reconstruct(
+            system, g, "pnp_gap", denoiser=biased, warm="none", splitting="admm",
+            max_iter=60, nonneg=nonneg,
+        ).cube  # fmt: skip
+    patch = (slice(8, 16), slice(8, 16))
+    assert float(np.min(runs[True])) >= 0
+    assert float(np.min(runs[False][patch])) < -0.5  # drifted 60 × 0.02 below the truth
+    err = {k: float(np.abs(v[patch] - np.asarray(p.cube)[patch]).mean()) for k, v in runs.items()}
+    assert err[True] < 0.5 * err[False], err
+
+
+def test_pnp_gap_splits_by_the_estimated_snr(monkeypatch):
+    seen = []
+    real_gap, real_admm = engine.gap, engine.admm
+
+    def spy_gap(*args, **kwargs):
+        seen.append(("gap", kwargs["accelerate"]))
+        return real_gap(*args, **kwargs)
+
+    def spy_admm(*args, **kwargs):
+        seen.append(("admm", kwargs["rho"]))
+        return real_admm(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "gap", spy_gap)
+    monkeypatch.setattr(engine, "admm", spy_admm)
+    from tensor_cosdi.solvers.pnp_gap import ACCELERATE_ABOVE_DB, RHO
+
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=4, rng=0)
+    run = lambda g, **kw: tc.reconstruct(  # noqa: E731
+        p.system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2, **kw
     )
-    assert len(calls) == 24
+    monkeypatch.setattr("tensor_cosdi.noise.estimate_snr_db", lambda g: ACCELERATE_ABOVE_DB + 5)
+    run(p.measurement)
+    monkeypatch.setattr("tensor_cosdi.noise.estimate_snr_db", lambda g: 25.0)
+    run(p.measurement)
+    run(p.measurement, splitting="gap")  # explicit GAP: plain GAP on noisy data
+    run(p.measurement, accelerate=False)  # an explicit GAP setting picks GAP
+    run(p.measurement, rho=0.5)
+    assert seen == [("gap", True), ("admm", RHO), ("gap", False), ("gap", False), ("admm", 0.5)]
+    for bad, match in (
+        ({"splitting": "fista"}, "splitting must be one of"),
+        ({"rho": -1}, "rho must be"),
+        ({"rho": "big"}, "rho must be"),
+        ({"nonneg": "yes"}, "nonneg must be True or False"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            run(p.measurement, **bad)

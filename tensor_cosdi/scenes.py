@@ -10,7 +10,12 @@
 * :func:`light_field` — a spectral light field ``(Nx, Ny, Nλ, U, V)``
   rendered from a cube and a disparity map (per-view shifts);
 * :func:`structured_light` — a seeded height map, its deformed fringe phase
-  and a reflectance, ready for :func:`tensor_cosdi.systems.fringe_cube`.
+  and a reflectance, ready for :func:`tensor_cosdi.systems.fringe_cube`;
+* :func:`cave` — a *real* hyperspectral scene (CAVE, 31 measured bands) of
+  the ``hsi_train`` data folder (:func:`tensor_cosdi.datasets.data_dir`; not
+  shipped with the package), registered as ``"cave.<name>"``.  Judge
+  spectral priors on these: the photo scenes' spectra live in a 3-D
+  subspace, which flatters them.
 
 All take any spatial size and any band list (default 28 bands, 450–650 nm).
 :data:`SCENES` names the spectral scenes every imager's
@@ -43,6 +48,7 @@ __all__ = [
     "SCENES",
     "register_scene",
     "scene_cube",
+    "cave",
 ]
 
 PHOTOS = ("astronaut", "chelsea", "coffee", "rocket")
@@ -413,4 +419,27 @@ SCENES.register("colorchecker", lambda shape, wl: colorchecker(shape, wl), built
 for _name in PHOTOS:
     SCENES.register(_name, lambda shape, wl, _n=_name: photo(_n, shape, wl), builtin=True)
 SCENES.register("motorcycle", lambda shape, wl: motorcycle(shape, wl)[0], builtin=True)
+
+
+def cave(name: str, shape, wavelengths) -> np.ndarray:
+    """The real scene ``name`` of :data:`tensor_cosdi.datasets.HSI_SCENES` (reflectance,
+    256×256, 400-700 nm): a centred crop of ``shape``, linearly resampled onto ``wavelengths``
+    (:func:`tensor_cosdi.datasets.load_hsi`).  Needs the data folder
+    (``TENSOR_COSDI_DATA`` or ``../shared/data``); its absence is a ``FileNotFoundError``
+    naming where it looked."""
+    from .datasets import load_hsi
+
+    return load_hsi(name, wavelengths, shape=shape)[0]
+
+
+def _register_cave():
+    from .datasets import HSI_SCENES
+
+    for name in HSI_SCENES:
+        SCENES.register(
+            f"cave.{name}", lambda shape, wl, _n=name: cave(_n, shape, wl), builtin=True
+        )
+
+
+_register_cave()
 del _name

@@ -60,3 +60,19 @@ def test_real_scene_when_the_data_is_present():
     cube, wl = datasets.load_hsi("balloons", "kaist")
     assert cube.shape == (256, 256, 28) and 0 <= cube.min() and cube.max() <= 1
     assert cube.std(axis=(0, 1)).min() > 0.01  # no band is flat
+
+
+def test_cave_scenes_reach_every_imager_through_make_problem(tmp_path, monkeypatch):
+    # the registry names every hsi_train scene as "cave.<name>"; a folder of our own stands in
+    import tensor_cosdi as tc
+
+    assert {f"cave.{n}" for n in datasets.HSI_SCENES} <= set(tc.scenes.SCENES)
+    raw, wl, _ = _scene(tmp_path, "face.npz")
+    monkeypatch.setenv("TENSOR_COSDI_DATA", str(tmp_path))
+    p = tc.studies.make_problem("sd_cassi", "cave.face", shape=(16, 24), n_bands=6, snr_db=None)
+    r0, c0 = (20 - 16) // 2, (30 - 24) // 2
+    band0 = raw[r0 : r0 + 16, c0 : c0 + 24, 5] / 65535.0  # 450 nm is the 6th band (400 + 5·10)
+    np.testing.assert_allclose(np.asarray(p.cube)[..., 0], band0, rtol=1e-6)
+    assert p.measurement.shape == (16, 24 + 5)
+    with pytest.raises(ValueError, match="larger than the scene's"):
+        tc.studies.make_problem("sd_cassi", "cave.face", shape=(32, 32))

@@ -36,7 +36,7 @@ def _tile_system(system, x0, x1, y0, y1):
     kw = {"n_bands": system.cube_shape[2], "shifts": system.shifts}
     kw["wavelengths"] = system.wavelengths
     if system.name == "sd_cassi":
-        return SDCASSI(system.code[x0:x1, y0:y1], **kw), (y0, y1 + s)
+        return SDCASSI(system.code[x0:x1, y0:y1], colour=system.colour, **kw), (y0, y1 + s)
     return DDCASSI(system.code[x0:x1, y0 : y1 + extra], **kw), (y0, y1)
 
 

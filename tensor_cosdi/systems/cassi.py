@@ -25,9 +25,12 @@ from ._base import (
 __all__ = ["SDCASSI", "DDCASSI", "DualCameraCASSI"]
 
 
-def _shots(code):
-    """Split a code of 2 or 3 axes into a list of per-shot 2-D codes."""
-    return [code] if code.ndim == 2 else [code[:, :, k] for k in range(code.shape[2])]
+def _shots(code, colour: bool = False):
+    """Split a code into a list of per-shot codes: 2-D ``(Nx, Ny)`` or, colour-coded, 3-D
+    ``(Nx, Ny, Nλ)`` (the shots on the last axis)."""
+    if code.ndim == 2 + colour:
+        return [code]
+    return [code[..., k] for k in range(code.shape[-1])]
 
 
 def _finish_shots(system, ops, wavelengths):
@@ -51,7 +54,11 @@ class SDCASSI(System):
     ----------
     code : array_like of shape (Nx, Ny) or (Nx, Ny, K)
         Coded aperture (transmittances ≥ 0: binary, or a measured mask); a
-        third axis gives one code per shot.
+        third axis gives one code per shot.  With ``colour=True``: a
+        colour-coded aperture ``(Nx, Ny, Nλ)`` (or ``(Nx, Ny, Nλ, K)``), one
+        transmittance per pixel and band
+        (:func:`tensor_cosdi.codes.colour_coded_aperture`), ``G = Σ_l
+        shear_l(C[:, :, l] ∘ F[:, :, l])``.
     n_bands : int
         ``Nλ``.
     shifts : int, float or sequence
@@ -59,6 +66,9 @@ class SDCASSI(System):
         (fractional values from a calibrated prism use linear interpolation).
     wavelengths : sequence of float, optional
         Band centres in nm (default: ``Nλ`` evenly spaced over 450–650 nm).
+    colour : bool
+        Whether ``code`` has a band axis (colour-coded CASSI).  ``A Aᵀ`` stays
+        diagonal, so every closed-form step holds.
 
     Attributes
     ----------
@@ -83,15 +93,35 @@ class SDCASSI(System):
     demo_scene = "colorchecker"
     example_options = {"code": None}
 
-    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None):
-        self.code = as_code(code, "code", (2, 3))
+    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None, colour=False):
+        if not isinstance(colour, (bool, np.bool_)):
+            raise ValueError(f"colour must be True or False, got {colour!r}")
+        self.colour = bool(colour)
+        self.code = as_code(
+            code, "colour-coded aperture" if colour else "code", (3, 4) if colour else (2, 3)
+        )
         nl = count(n_bands, "n_bands")
+        if colour and self.code.shape[2] != nl:
+            raise ValueError(
+                f"colour-coded aperture of shape {self.code.shape} has {self.code.shape[2]} bands, "
+                f"expected n_bands = {nl} (shape (Nx, Ny, {nl}) or (Nx, Ny, {nl}, K))"
+            )
         self.shifts, _ = shifts_for(shifts, nl)
         nx, ny = self.code.shape[:2]
         cube = (nx, ny, nl)
         shear = Shear(cube, self.shifts)
-        ops = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in _shots(self.code)]
+        axes = (0, 1, 2) if colour else (0, 1)
+        ops = [
+            SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube, axes=axes)
+            for c in _shots(self.code, self.colour)
+        ]
         _finish_shots(self, ops, wavelengths_for(wavelengths, nl))
+
+    def _state(self):
+        params, arrays = super()._state()
+        if self.colour:  # older states (no key) are plain codes
+            params["colour"] = True
+        return params, arrays
 
     @classmethod
     def example(
@@ -110,8 +140,10 @@ class SDCASSI(System):
         nx, ny, nl = self.cube_shape
         width = self.measurement_shape[1]
         blocks = [
-            coded_shear_sum_matrix(np.repeat(c[:, :, None], nl, axis=2), self.shifts, width)
-            for c in _shots(self.code)
+            coded_shear_sum_matrix(
+                c if self.colour else np.repeat(c[:, :, None], nl, axis=2), self.shifts, width
+            )
+            for c in _shots(self.code, self.colour)
         ]
         return sp.vstack(blocks, format="csr")  # shot k occupies rows Nx·W·k …
 

@@ -112,3 +112,22 @@ def test_a_256x256x28_reconstruction_file_is_at_most_12_mb(tmp_path):
     assert size <= 12e6, f"{size / 1e6:.1f} MB"
     b = load_bundle(tmp_path / "cube.h5")
     assert b.cube.shape == (256, 256, 28) and b.cube.dtype == np.float32
+
+
+def test_direct_path_takes_a_colour_coded_aperture(tmp_path):
+    from tensor_cosdi import codes
+
+    code = codes.colour_coded_aperture((24, 24), 6, n_filters=3, rng=0)
+    sd = tc.systems.SDCASSI(code, n_bands=6, shifts=1, colour=True)
+    cube = tc.scenes.colorchecker((24, 24), np.linspace(450, 650, 6))
+    np.save(tmp_path / "code.npy", code)
+    np.save(tmp_path / "meas.npy", np.asarray(sd.forward(cube)))
+    args = [
+        "reconstruct", "--system", "sd_cassi", "--mask", str(tmp_path / "code.npy"), "--shift",
+        "1", "--bands", "6", "--measurement", str(tmp_path / "meas.npy"), "--out",
+        str(tmp_path / "c.h5"), "--method", "gap_tv", "--quiet",
+    ]  # fmt: skip
+    assert cli.main(args) == 2  # read as 6 shots of a plain code: the measurement does not fit
+    assert cli.main(args + ["--system-option", "colour=true"]) == 0
+    b = load_bundle(tmp_path / "c.h5")
+    assert b.system.colour and b.system.code.shape == (24, 24, 6)

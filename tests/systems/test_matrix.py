@@ -216,3 +216,29 @@ def test_matrix_detects_a_wrong_operator():
 )
 def test_examples_match_their_matrix(system):
     check(system, 7)
+
+
+@given(nx=size, ny=size, nl=bands, shots=st.integers(1, 3), data=st.data(), seed=seeds)
+def test_colour_coded_sdcassi(nx, ny, nl, shots, data, seed):
+    s = data.draw(shifts(nl))
+    g = np.random.default_rng(seed)
+    code = g.random((nx, ny, nl) if shots == 1 else (nx, ny, nl, shots))
+    check(SDCASSI(code, n_bands=nl, shifts=s, colour=True), seed)
+
+
+def test_colour_coded_sdcassi_against_the_loop_of_its_definition():
+    # G[i, j + s_l, k] = Σ_l C[i, j, l, k] F[i, j, l], integer shifts, written out
+    g = np.random.default_rng(5)
+    nx, ny, nl, k = 4, 5, 3, 2
+    code, cube, s = g.random((nx, ny, nl, k)), g.random((nx, ny, nl)), [0, 2, 3]
+    ref = np.zeros((nx, ny + 3, k))
+    for i, j, l, t in np.ndindex(nx, ny, nl, k):
+        ref[i, j + s[l], t] += code[i, j, l, t] * cube[i, j, l]
+    sd = SDCASSI(code, n_bands=nl, shifts=s, colour=True)
+    np.testing.assert_allclose(sd.forward(cube), ref, rtol=1e-12)
+    # a band-constant colour code is the plain code
+    flat = np.repeat(code[:, :, :1, 0], nl, axis=2)
+    plain = SDCASSI(code[:, :, 0, 0], n_bands=nl, shifts=s)
+    np.testing.assert_allclose(
+        SDCASSI(flat, n_bands=nl, shifts=s, colour=True).forward(cube), plain.forward(cube)
+    )

@@ -146,3 +146,12 @@ def test_lenslet_views_round_trip():
     assert cube.shape == lf.cube_shape
     np.testing.assert_array_equal(lf.to_views(cube), L)
     assert cube[4, 5, 1] == L[4 // 3, 5 // 2, 1, 4 % 3, 5 % 2]  # interleaved, Eq. 85
+
+
+def test_colour_coded_sdcassi_errors_name_the_expected_shape():
+    with pytest.raises(ValueError, match=r"has 4 bands, expected n_bands = 3 \(shape \(Nx, Ny, 3"):
+        SDCASSI(np.ones((4, 5, 4)), n_bands=3, colour=True)
+    with pytest.raises(ValueError, match="colour-coded aperture must have 3 or 4 axes"):
+        SDCASSI(np.ones((4, 5)), n_bands=3, colour=True)
+    with pytest.raises(ValueError, match="colour must be True or False"):
+        SDCASSI(np.ones((4, 5)), n_bands=3, colour="yes")

@@ -33,6 +33,7 @@ __all__ = [
     "sweep",
     "conditioning",
     "prism_grid",
+    "colour_code_design",
     "reconstruction_run",
     "write_csv",
 ]
@@ -46,6 +47,7 @@ SCENES = scenes.SCENES
 
 _RENAMED = {"dual_camera": "dual_camera_cassi"}
 
+from ._studies_design import colour_code_design  # noqa: E402 - colour-coded aperture design
 from .optics.design import prism_grid  # noqa: E402 - the prism design study (thesis App. B)
 
 

@@ -137,6 +137,15 @@ def _files_and_figures(ns):
     assert psnr["gap_tv"] > psnr["lsq"] + 2 and psnr["otd"] > psnr["lsq"] + 2, psnr
 
 
+def _colour_code_design(ns):
+    psnr, filters = ns["psnr"], list(ns["filters"])
+    assert psnr.shape == (3, 5) and np.isfinite(psnr).all()
+    if ns["scene"] == "cave.face":  # prints binary ≤ 29.00 dB, #f = 2-8 up to 30.54, #f = 16 29.57
+        coloured = psnr[:, [filters.index(f) for f in (2, 4, 8)]].max()
+        assert coloured > psnr[:, filters.index(1)].max() + 1.0, psnr
+        assert coloured > psnr[:, filters.index(16)].max() + 0.5, psnr
+
+
 def _conditioning(ns):
     kappa = [c["cond_nonzero"] for c in ns["vsi"]]
     assert all(a > b for a, b in zip(kappa, kappa[1:])), kappa  # prints 3528 … 8.7
@@ -145,6 +154,7 @@ def _conditioning(ns):
 
 CHECKS = {
     "plot_conditioning": _conditioning,
+    "plot_colour_code_design": _colour_code_design,
     "plot_files_and_figures": _files_and_figures,
     "plot_real_spectra": _real_spectra,
     "plot_light_field_depth": _light_field,

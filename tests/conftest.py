@@ -49,3 +49,15 @@ def backend(request):
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261122)
+
+
+@pytest.fixture(autouse=True)
+def _seed_torch():
+    """Every test starts from the same torch random state: torch ≥ 2.13 seeds its default
+    generator anew in each process, so an unseeded network initialisation (D-CoSNet's
+    gradient test) differed from run to run and failed about one run in six."""
+    if HAS_TORCH:
+        import torch
+
+        torch.manual_seed(0)
+    yield

@@ -267,33 +267,15 @@ def warm_started_gap(
         start, first, _ = dcosnet(system, g)
         hist = History()
         hist.extend(first)
-    if rho is not None:
-        handed, start = (None if start is None else [start]), None  # admm frees the start
-        x, h2, conv = engine.admm(
-            system.operator,
-            g,
-            prior,
-            rho=rho,
-            start=handed,
-            max_iter=max_iter,
-            tol=tol,
-            progress=progress,
-            desc=desc,
-        )
-        return x, _joined(hist, h2), conv
-    x, h2, conv = engine.gap(
-        system.operator,
-        g,
-        prior,
-        eps=eps,
-        start=start,
-        accelerate=accelerate,
-        max_iter=max_iter,
-        tol=tol,
-        progress=progress,
-        desc=desc,
-        guard=guard,
-    )
+    common = {"max_iter": max_iter, "tol": tol, "progress": progress, "desc": desc}
+    if rho is not None:  # ADMM; a start handed over in a list is freed after its first use
+        handed, start = (None if start is None else [start]), None
+        x, h2, conv = engine.admm(system.operator, g, prior, rho=rho, start=handed, **common)
+    else:
+        x, h2, conv = engine.gap(
+            system.operator, g, prior, eps=eps, start=start, accelerate=accelerate, guard=guard,
+            **common,
+        )  # fmt: skip
     return x, _joined(hist, h2), conv
 
 

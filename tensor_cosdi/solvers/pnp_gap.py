@@ -62,6 +62,9 @@ ADMM_ITER = 80
 #: and a true 20 dB as 19.6-19.8 dB.  At 20 dB (ρ 0.15, 80 iterations): σ 0.1 → 0.06 / 0.09 /
 #: 0.13: 23.60 / 24.83 / 25.87 dB; 0.2 throughout 26.70; 0.3 → 0.2 26.71; 0.3 throughout 26.44
 #: (OTD alone 21.71) — so the level starts at ``max(sigma, sigma_end)``.
+#: At a true 40 dB (read as 34.2-36.9 dB, so ADMM): 30.21 dB against plain GAP's 28.14 and
+#: accelerated GAP's 25.50; σ_end 0.025 there would add 0.16 dB (not adopted: untested on
+#: the report split).
 SIGMA_END_ADMM = {28.5: 0.04, 19.5: 0.2}
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
 #: (balloons, clay; TSA mask; OTD start, σ 0.1): noiseless, accelerated 31.45 dB against 29.68

@@ -2,9 +2,11 @@
 
 The denoiser is band-count agnostic because it works in a spectral subspace:
 
-1. the cube ``x (rows, columns, channels)`` (any trailing axes are folded
-   into ``channels``) is scaled by its robust peak ``s`` (the 99.9th
-   percentile of ``|x|``: a plug-and-play iterate has outliers);
+1. the cube ``x (rows, columns, channels)`` is scaled by its robust peak
+   ``s`` (the 99.9th percentile of ``|x|``: a plug-and-play iterate has
+   outliers); a cube with more axes (fringe patterns, depth planes, views)
+   is denoised one ``(rows, columns, bands)`` slice at a time (``joint=True``
+   folds the trailing axes into ``channels`` instead);
 2. its ``r`` leading spectral eigenvectors ``U (channels, r)`` (the Tucker /
    HOSVD factor of the band mode, from the ``channels × channels`` Gram
    matrix) give ``r`` eigen-images ``Y = x ×₃ Uᵀ``; each eigenvector's sign
@@ -153,9 +155,16 @@ class SpectralDenoiser:
     device : str, optional
         ``"cpu"``, ``"cuda"``…; default: the input's device for torch
         tensors, else CUDA when available, else CPU.
+    joint : bool
+        For cubes of more than three axes: fold the trailing axes into the
+        channels (one subspace for all) instead of one slice at a time.  On
+        CS2LI (real scenes, 96×96×16×4, 30 dB, PnP from OTD) folding the
+        four patterns into 64 channels gave 32.82 dB, per slice 36.95 dB
+        (OTD alone 35.92): the 12-dimensional subspace cannot hold four
+        differently modulated copies of the spectra.
     """
 
-    def __init__(self, weights=None, *, rank: int | None = None, device=None):
+    def __init__(self, weights=None, *, rank: int | None = None, device=None, joint=False):
         torch = require_torch()
         path = Path(weights) if weights is not None else default_weights()
         if not path.is_file():
@@ -181,6 +190,7 @@ class SpectralDenoiser:
         self.rank = int(rank)
         self.device = device
         self.path = path
+        self.joint = bool(joint)
 
     def _device(self, x):
         torch = require_torch()
@@ -198,6 +208,12 @@ class SpectralDenoiser:
         shape = tuple(x.shape)
         if len(shape) < 3:
             raise ValueError(f"expected a cube (rows, columns, channels…), got shape {shape}")
+        if len(shape) > 3 and not self.joint:  # one (rows, columns, bands) slice at a time
+            out = [self(x[(..., *idx)], sigma) for idx in np.ndindex(*shape[3:])]
+            if isinstance(x, torch.Tensor):
+                return torch.stack(out, dim=-1).reshape(shape)
+            stacked = np.stack([np.asarray(B.to_numpy(o)) for o in out], axis=-1)
+            return B.tensor_like(stacked.reshape(shape), x)
         dev = self._device(x)
         if isinstance(x, torch.Tensor):
             t = x

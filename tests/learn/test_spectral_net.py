@@ -181,3 +181,18 @@ def test_pnp_gap_with_the_learned_denoiser_beats_gap_tv_on_a_real_crop():
     p_net = metrics.psnr(cube, np.asarray(net), data_range=1.0)
     # stop 16: 43.22 against 38.18 dB; plain GAP (the stop-15 noisy path) gave 40.29
     assert p_net > p_tv + 3.5, (p_net, p_tv)
+
+
+@needs_torch
+def test_cubes_with_more_axes_are_denoised_one_slice_at_a_time():
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    rng = np.random.default_rng(4)
+    x = (_real("face", (24, 24))[..., ::4, None] * rng.uniform(0.5, 1.5, 3)).astype(np.float32)
+    x = x + rng.normal(0, 0.05, x.shape).astype(np.float32)  # (24, 24, 7, 3): three "patterns"
+    den, joint = SpectralDenoiser(), SpectralDenoiser(joint=True)
+    out = den(x, 0.05)
+    assert out.shape == x.shape and out.dtype == x.dtype
+    for t in range(3):
+        np.testing.assert_allclose(out[..., t], den(x[..., t], 0.05), rtol=1e-5, atol=1e-6)
+    assert np.abs(joint(x, 0.05) - out).max() > 1e-3  # folding the patterns is another denoiser

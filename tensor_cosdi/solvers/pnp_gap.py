@@ -206,7 +206,7 @@ def pnp_gap(
         check_positive("rho", rho)  # validated, unused by GAP
     if sigma_end == "auto":
         sigma_end = snr_schedule(snr, SIGMA_END_ADMM if admm else SIGMA_END)
-        sigma = max(sigma, sigma_end)  # noisy data: no annealing below the noise floor
+        sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)
     if isinstance(max_iter, str):
         if max_iter != "auto":

@@ -50,12 +50,43 @@ def colour_code_design(
     filters ``#f`` and the transmittance ``κ`` (thesis Sec. 6.3.2; :func:`tensor_cosdi.codes.
     colour_coded_aperture`).
 
-    One record per ``(#f, κ, seed)``: ``n_filters``, ``transmittance``, ``seed``,
-    ``psnr``, ``ssim``, ``sam``, ``rmse``, ``cond`` (condition number of ``A Aᵀ``
-    on its range), ``unreached`` (detector pixels no voxel reaches) and ``seconds``.
-    Runs through :func:`~tensor_cosdi.studies.sweep` (``client`` for Dask).  Judge
-    it on a real scene (``"cave.<name>"``, the default): photo-derived spectra
-    live in a 3-D subspace and favour any code.
+    Judge it on a real scene (``"cave.<name>"``, the default): photo-derived
+    spectra live in a 3-D subspace and favour any code.
+
+    Parameters
+    ----------
+    filters : sequence of int
+        Numbers of filters ``#f`` (``1 ≤ #f ≤ n_bands``; 1 is a binary code).
+    transmittances : sequence of float
+        Open fractions ``κ`` in (0, 1].
+    scene : str
+        A name of :data:`tensor_cosdi.scenes.SCENES`.
+    shape, n_bands, snr_db
+        Spatial size, bands (450-650 nm) and measurement SNR of each cell.
+    method : str
+        The reconstruction method (``options`` go to it; ``shifts=`` to the
+        system).
+    seeds : sequence of int
+        Seeds of code and noise; one record per seed.
+    client, progress
+        As for :func:`~tensor_cosdi.studies.sweep` (``client`` for Dask).
+
+    Returns
+    -------
+    list of dict
+        One record per ``(#f, κ, seed)``: ``n_filters``, ``transmittance``,
+        ``seed``, ``psnr``, ``ssim``, ``sam``, ``rmse``, ``cond`` (condition
+        number of ``A Aᵀ`` on its range), ``unreached`` (detector pixels no
+        voxel reaches) and ``seconds``; :func:`~tensor_cosdi.studies.write_csv`
+        writes them.
+
+    Examples
+    --------
+    >>> from tensor_cosdi import studies
+    >>> recs = studies.colour_code_design((1, 4), (0.5,), scene="colorchecker",
+    ...                                   shape=(16, 16), n_bands=8, progress=False)
+    >>> [(r["n_filters"], r["transmittance"]) for r in recs]
+    [(1, 0.5), (4, 0.5)]
     """
     from .studies import sweep
 

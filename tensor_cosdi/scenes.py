@@ -422,11 +422,28 @@ SCENES.register("motorcycle", lambda shape, wl: motorcycle(shape, wl)[0], builti
 
 
 def cave(name: str, shape, wavelengths) -> np.ndarray:
-    """The real scene ``name`` of :data:`tensor_cosdi.datasets.HSI_SCENES` (reflectance,
-    256×256, 400-700 nm): a centred crop of ``shape``, linearly resampled onto ``wavelengths``
-    (:func:`tensor_cosdi.datasets.load_hsi`).  Needs the data folder
-    (``TENSOR_COSDI_DATA`` or ``../shared/data``); its absence is a ``FileNotFoundError``
-    naming where it looked."""
+    """A real CAVE scene as a reflectance cube (registered as ``"cave.<name>"``).
+
+    Parameters
+    ----------
+    name : str
+        A scene of :data:`tensor_cosdi.datasets.HSI_SCENES` (256×256, 400-700 nm).
+    shape : (rows, columns)
+        A centred crop, at most 256×256.
+    wavelengths : array of nm
+        Band centres inside 400-700 nm (linear interpolation,
+        :func:`tensor_cosdi.datasets.load_hsi`).
+
+    Returns
+    -------
+    ndarray (rows, columns, bands), float64 in [0, 1]
+
+    Raises
+    ------
+    FileNotFoundError
+        Without the data folder (``TENSOR_COSDI_DATA`` or ``../shared/data``),
+        naming where it looked.
+    """
     from .datasets import load_hsi
 
     return load_hsi(name, wavelengths, shape=shape)[0]

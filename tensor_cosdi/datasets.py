@@ -30,6 +30,7 @@ __all__ = [
     "REPORT_SCENES",
     "data_dir",
     "load_hsi",
+    "cave",
 ]
 
 #: Band centres (nm) of the 28-band KAIST / TSA-Net CASSI protocol.
@@ -139,3 +140,30 @@ def load_hsi(
         cube = cube[:, :, idx] * (1 - t) + cube[:, :, idx + 1] * t
         wl = target
     return np.ascontiguousarray(cube, dtype=dtype), wl
+
+
+def cave(name: str, shape, wavelengths) -> np.ndarray:
+    """A real CAVE scene as a reflectance cube (the scene ``"cave.<name>"`` of
+    :data:`tensor_cosdi.scenes.SCENES`).
+
+    Parameters
+    ----------
+    name : str
+        A scene of :data:`tensor_cosdi.datasets.HSI_SCENES` (256×256, 400-700 nm).
+    shape : (rows, columns)
+        A centred crop, at most 256×256.
+    wavelengths : array of nm
+        Band centres inside 400-700 nm (linear interpolation,
+        :func:`tensor_cosdi.datasets.load_hsi`).
+
+    Returns
+    -------
+    ndarray (rows, columns, bands), float64 in [0, 1]
+
+    Raises
+    ------
+    FileNotFoundError
+        Without the data folder (``TENSOR_COSDI_DATA`` or ``../shared/data``),
+        naming where it looked.
+    """
+    return load_hsi(name, wavelengths, shape=shape)[0]

@@ -26,6 +26,8 @@ __all__ = [
     "rfftn",
     "irfftn",
     "batched_solve",
+    "unfolding_gram",
+    "on_accelerator",
     "real_dtype_name",
 ]
 
@@ -58,6 +60,18 @@ def to_numpy(x) -> np.ndarray:
     if hasattr(x, "detach") and hasattr(x, "cpu"):  # a torch tensor, whatever backend is active
         return x.detach().cpu().numpy()  # (also on CUDA, where np.asarray would fail)
     return tl.to_numpy(x)
+
+
+def on_accelerator(x) -> bool:
+    """True for a tensor that is neither NumPy nor in host memory (a CUDA tensor, say).
+
+    Steps that have a NumPy path (TV, HOSVD Grams, percentiles) take it for
+    host tensors of other backends (PyTorch on the CPU) through a zero-copy
+    view, and stay on the device only here: at 256×256×28 on two cores
+    ``gap_tv`` took 6.6-6.9 s through the view against 11.6-13.0 s with the
+    same iteration in torch operations (the same result to 1e-8 dB).
+    """
+    return not isinstance(x, np.ndarray) and str(getattr(x, "device", "cpu")) != "cpu"
 
 
 def context_key(x) -> tuple:
@@ -195,3 +209,26 @@ def batched_solve(A, b):
 
         return torch.linalg.solve(A, b)
     return tl.tensor(np.linalg.solve(to_numpy(A), to_numpy(b)[..., None])[..., 0])
+
+
+def unfolding_gram(x, mode: int) -> np.ndarray:
+    """``X₍ₘ₎ X₍ₘ₎ᵀ`` (float64) of a PyTorch tensor, summed where the tensor lives (CPU or GPU)
+    in blocks; only the ``n × n`` result comes back, as a NumPy array.
+
+    The HOSVD of a cube on a GPU thus never copies the cube to the host: the
+    small eigenproblem that follows is ``n × n`` (``n`` ≤ a side of the cube).
+    """
+    import torch
+
+    shape, mode = tuple(x.shape), int(mode)
+    n = shape[mode]
+    pre, post = int(np.prod(shape[:mode])), int(np.prod(shape[mode + 1 :]))
+    v = x.detach().reshape(pre, n, post)
+    gram = torch.zeros((n, n), dtype=torch.float64, device=x.device)
+    cols = min(post, max(1, (1 << 22) // n))  # blocks of ≤ 4 Mi elements (32 MiB in float64)
+    rows = max(1, (1 << 22) // (n * cols))
+    for p0 in range(0, pre, rows):
+        for c0 in range(0, post, cols):
+            blk = v[p0 : p0 + rows, :, c0 : c0 + cols].to(torch.float64)
+            gram += torch.einsum("anb,amb->nm", blk, blk)
+    return gram.cpu().numpy()

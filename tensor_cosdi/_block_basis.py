@@ -85,14 +85,14 @@ def block_hosvd(tensor, mode: int, sizes) -> BlockDense:
     """The HOSVD basis of ``mode`` learned per run of ``sizes`` indices: block ``k`` holds the
     eigenvectors of the diagonal block ``k`` of the mode-``mode`` unfolding's Gram matrix
     (strongest first), i.e. the left singular vectors of the unfolding's rows in that run."""
-    x = B.to_numpy(tensor)
-    if not -x.ndim <= mode < x.ndim:
-        raise ValueError(f"mode {mode} is not an axis of a tensor of shape {x.shape}")
-    mode %= x.ndim
+    shape = np.shape(tensor)  # not copied to the host: only the Gram matrix is
+    if not -len(shape) <= mode < len(shape):
+        raise ValueError(f"mode {mode} is not an axis of a tensor of shape {shape}")
+    mode %= len(shape)
     sizes = [int(s) for s in sizes]
-    if sum(sizes) != x.shape[mode] or min(sizes) < 1:
-        raise ValueError(f"block sizes {sizes} do not cut an axis of {x.shape[mode]}")
-    gram = unfolding_gram(x, mode)
+    if sum(sizes) != shape[mode] or min(sizes) < 1:
+        raise ValueError(f"block sizes {sizes} do not cut an axis of {shape[mode]}")
+    gram = unfolding_gram(tensor, mode)
     edges = np.cumsum([0] + sizes)
     blocks = [
         _gram_basis(gram[a:b, a:b], "block_hosvd: the tensor contains NaN or inf")

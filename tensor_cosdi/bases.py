@@ -160,7 +160,12 @@ _GRAM_BLOCK = 1 << 17
 
 def unfolding_gram(x: np.ndarray, mode: int) -> np.ndarray:
     """``X₍ₘ₎ X₍ₘ₎ᵀ`` of the mode-``mode`` unfolding in float64, streamed in blocks: no copy of
-    the tensor (an unfolding of a non-leading mode and a float64 cast would cost three)."""
+    the tensor (an unfolding of a non-leading mode and a float64 cast would cost three).  A
+    PyTorch tensor on a GPU is summed there (:func:`tensor_cosdi._backend.unfolding_gram`)."""
+    if not isinstance(x, np.ndarray):
+        if B.on_accelerator(x) and hasattr(x, "detach"):
+            return B.unfolding_gram(x, mode)
+        x = np.asarray(B.to_numpy(x))
     n = x.shape[mode]
     pre, post = int(np.prod(x.shape[:mode])), int(np.prod(x.shape[mode + 1 :]))
     v = np.ascontiguousarray(x).reshape(pre, n, post)
@@ -185,14 +190,15 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
     >>> bases[2].shape, is_orthonormal(bases[2])
     ((4, 4), True)
     """
-    x = B.to_numpy(tensor)
-    modes = range(x.ndim) if modes is None else modes
+    shape = np.shape(tensor)  # the tensor stays where it is (a GPU, say): see unfolding_gram
+    modes = range(len(shape)) if modes is None else modes
     out = {}
     for m in modes:
-        if not -x.ndim <= m < x.ndim:
-            raise ValueError(f"mode {m} is not an axis of a tensor of shape {x.shape}")
-        m %= x.ndim
-        out[m] = _gram_basis(unfolding_gram(x, m), "tucker_bases: the tensor contains NaN or inf")
+        if not -len(shape) <= m < len(shape):
+            raise ValueError(f"mode {m} is not an axis of a tensor of shape {shape}")
+        m %= len(shape)
+        gram = unfolding_gram(tensor, m)
+        out[m] = _gram_basis(gram, "tucker_bases: the tensor contains NaN or inf")
     return out
 
 

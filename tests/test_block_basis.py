@@ -79,3 +79,28 @@ def test_otd_with_spatial_blocks_keeps_and_relearns_its_blocks(monkeypatch):
     assert q > qref - 2.0 and q > 20.0, (q, qref)
     with pytest.raises(ValueError, match="spatial_block"):
         tc.reconstruct(p.system, p.measurement, "otd", spatial_block=1)
+
+
+def test_hosvd_of_a_tensor_on_an_accelerator_brings_only_the_gram_to_the_host(monkeypatch):
+    """Forced here (no GPU in CI): the path a CUDA tensor takes."""
+    torch = pytest.importorskip("torch")
+    from tensor_cosdi import _backend
+    from tensor_cosdi.bases import block_hosvd, tucker_bases, unfolding_gram
+
+    monkeypatch.setattr(_backend, "on_accelerator", torch.is_tensor)
+    x = np.random.default_rng(5).random((12, 10, 6)).astype(np.float32)
+    t = torch.from_numpy(x).permute(1, 0, 2)  # not contiguous: a strided view
+    seen = []
+    real = _backend.to_numpy
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_backend, "to_numpy", lambda a: seen.append(tuple(a.shape)) or real(a))
+        got = tucker_bases(t)
+        blocks = block_hosvd(t, 1, [6, 6])
+        gram = unfolding_gram(t, 2)
+    assert all(len(s) == 2 for s in seen)  # Grams and bases only: the tensor never converts
+    ref = tucker_bases(np.ascontiguousarray(x.transpose(1, 0, 2)))
+    for m in range(3):  # eigenvectors are defined up to sign
+        np.testing.assert_allclose(np.abs(got[m].T @ ref[m]), np.eye(ref[m].shape[0]), atol=1e-6)
+    np.testing.assert_allclose(gram, unfolding_gram(t.numpy(), 2), rtol=1e-10)
+    ref_blocks = block_hosvd(t.numpy(), 1, [6, 6])
+    np.testing.assert_allclose(np.abs(blocks.matrix.T @ ref_blocks.matrix), np.eye(12), atol=1e-6)

@@ -34,7 +34,20 @@ def run(backend, system):
 def test_every_imager_runs_on_torch_as_on_numpy(system):
     import torch
 
-    ref, got = run("numpy", system), run("pytorch", system)
+    assert_same(run("numpy", system), run("pytorch", system), torch)
+
+
+@pytest.mark.parametrize("system", ["sd_cassi", "cs2li"])
+def test_the_accelerator_path_gives_what_numpy_gives(system, monkeypatch):
+    """TV, HOSVD Grams, percentiles and TV objectives in backend operations: the path a CUDA
+    tensor takes, forced here on CPU tensors (no GPU in CI)."""
+    import torch
+
+    monkeypatch.setattr(tc._backend, "on_accelerator", torch.is_tensor)
+    assert_same(run("numpy", system), run("pytorch", system), torch)
+
+
+def assert_same(ref, got, torch):
     assert isinstance(got["problem"].measurement, torch.Tensor)
     assert isinstance(got["problem"].cube, torch.Tensor)
     np.testing.assert_allclose(got["g"], ref["g"], rtol=1e-6, atol=1e-9)
@@ -61,3 +74,18 @@ def test_metrics_and_figures_take_torch_tensors():
     titles = [ax.get_title() for ax in tc.plot.compare(t_truth, {"lsq": t_est}, p.wavelengths).axes]
     score = f"{tc.metrics.psnr(p.cube, est, data_range=float(np.max(p.cube))):.2f} dB"
     assert any(t.startswith("lsq") and score in t for t in titles), titles
+
+
+def test_tv_objective_and_robust_peak_stay_on_an_accelerator():
+    torch = pytest.importorskip("torch")
+    from tensor_cosdi import _backend
+    from tensor_cosdi.solvers.priors import robust_peak, total_variation
+
+    x = np.random.default_rng(6).standard_normal((30, 20, 7)).astype(np.float32)
+    t = torch.from_numpy(x)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(_backend, "on_accelerator", torch.is_tensor)  # a CUDA tensor's path
+        mp.setattr(_backend, "to_numpy", lambda a: pytest.fail("copied to the host"))
+        peak, tv = robust_peak(t), total_variation(t)
+    assert peak == robust_peak(x)  # the same order statistic, exactly
+    assert tv == pytest.approx(total_variation(x), rel=1e-6)

@@ -58,12 +58,16 @@ def tv(x, sigma: float, *, n_iter: int = 50):
     Channels are independent, so chunks of them run in threads (NumPy releases
     the GIL in the array operations): the same result as one call, 1.2×
     faster on two cores at 256×256×28 (median of 7, 0.146 → 0.121 s for 10
-    Chambolle steps).
+    Chambolle steps).  A tensor on a GPU is denoised where it lives, by the
+    same iteration with the same per-channel stopping rule
+    (:func:`_tv_on_device`).
     """
     from skimage.restoration import denoise_tv_chambolle
 
-    flat, shape = _host(x)
     weight = float(sigma)
+    if B.on_accelerator(x):
+        return _tv_on_device(x, weight, n_iter)
+    flat, shape = _host(x)
 
     def run(chunk):
         return denoise_tv_chambolle(chunk, weight=weight, max_num_iter=n_iter, channel_axis=2)
@@ -79,6 +83,51 @@ def tv(x, sigma: float, *, n_iter: int = 50):
         with ThreadPoolExecutor(n) as pool:
             out = np.concatenate(list(pool.map(run, chunks)), axis=2)
     return _like(out.reshape(shape), x)
+
+
+def _tv_on_device(x, w: float, n_iter: int, eps: float = 2.0e-4):
+    """scikit-image's ``denoise_tv_chambolle(x, weight=w, eps=eps, max_num_iter=n_iter,
+    channel_axis=2)`` in backend operations, so the tensor never leaves its device.
+
+    All channels step together; a channel stops as scikit-image stops it (its
+    energy changed by less than ``eps`` times its first energy) and keeps the
+    primal of that step.  One vector of energies per step comes to the host.
+    """
+    import tensorly as tl
+
+    if not w > 0:
+        raise ValueError(f"tv: sigma must be > 0, got {w!r}")
+    shape = tuple(x.shape)
+    f = tl.moveaxis(tl.reshape(x, shape[:2] + (-1,)), 2, 0)  # (channels, H, W)
+    p = B.zeros_like_shape((2,) + tuple(f.shape), f)
+    g = B.zeros_like_shape(tuple(p.shape), f)  # its last row / column stay 0
+    d = B.zeros_like_shape(tuple(f.shape), f)
+    result, done, tau = f, np.zeros(f.shape[0], bool), 0.25
+    e_init = e_prev = None
+    for i in range(int(n_iter)):
+        if i > 0:
+            d = -(p[0] + p[1])
+            d[:, 1:] += p[0][:, :-1]
+            d[:, :, 1:] += p[1][:, :, :-1]
+        out = f + d if i > 0 else f
+        g[0][:, :-1] = out[:, 1:] - out[:, :-1]
+        g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
+        norm = tl.sqrt(g[0] * g[0] + g[1] * g[1])
+        energy = tl.sum(tl.reshape(d * d + w * norm, (f.shape[0], -1)), axis=1)
+        p = (p - tau * g) / (1.0 + (tau / w) * norm)
+        e = np.asarray(B.to_numpy(energy), np.float64) / (shape[0] * shape[1])
+        if i == 0:
+            e_init, e_prev = e, e
+            result = out
+            continue
+        stop = (np.abs(e_prev - e) < eps * e_init) & ~done
+        keep = B.tensor_like(np.where(done, 1.0, 0.0)[:, None, None], f)
+        result = keep * result + (1.0 - keep) * out  # channels stopped before keep their primal
+        done |= stop
+        e_prev = np.where(done, e_prev, e)
+        if done.all():
+            break
+    return tl.reshape(tl.moveaxis(result, 0, 2), shape)
 
 
 class WarmTV:
@@ -109,7 +158,7 @@ class WarmTV:
         w = float(sigma)
         if not w > 0:
             raise ValueError(f"WarmTV: sigma must be > 0, got {sigma!r}")
-        if not isinstance(x, np.ndarray):  # other backends (torch, CUDA): stays on the device
+        if B.on_accelerator(x):  # a CUDA tensor, say: stays on its device
             return self._on_device(x, w)
         flat, shape = _host(x)
         f = np.ascontiguousarray(np.moveaxis(flat, 2, 0))  # (channels, H, W): planes contiguous

@@ -47,8 +47,14 @@ def test_warm_tv_errors():
         WarmTV(2)(np.ones((4, 4)), 0.0)
 
 
-def test_torch_tensors_stay_torch_and_match_numpy():
+@pytest.mark.parametrize("accelerator", [False, True])
+def test_torch_tensors_stay_torch_and_match_numpy(accelerator, monkeypatch):
+    """CPU tensors take the NumPy steps through a view; tensors on an accelerator (forced here)
+    step in backend operations."""
     torch = pytest.importorskip("torch")
+    from tensor_cosdi import _backend
+
+    monkeypatch.setattr(_backend, "on_accelerator", lambda a: accelerator and torch.is_tensor(a))
     x = np.random.default_rng(2).random((20, 18, 2, 3))
     ref, got = WarmTV(4), WarmTV(4)
     import tensorly as tl
@@ -58,3 +64,32 @@ def test_torch_tensors_stay_torch_and_match_numpy():
             a, b = ref(x, 0.1), got(torch.from_numpy(x), 0.1)
     assert isinstance(b, torch.Tensor) and b.shape == x.shape
     np.testing.assert_allclose(b.numpy(), a, atol=1e-12)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_tv_on_an_accelerator_is_scikit_images_tv_with_its_stopping_rule(dtype, monkeypatch):
+    """``tv`` on a tensor on an accelerator (forced here: no GPU in CI) runs in backend
+    operations on its device and matches scikit-image, whose per-channel energy test stops some
+    channels early (a constant one at once)."""
+    torch = pytest.importorskip("torch")
+    import tensorly as tl
+    from skimage.restoration import denoise_tv_chambolle
+
+    from tensor_cosdi import _backend
+    from tensor_cosdi.solvers.denoisers import tv
+
+    monkeypatch.setattr(_backend, "on_accelerator", torch.is_tensor)
+    rng = np.random.default_rng(4)
+    x = (rng.random((24, 20, 5)) * np.linspace(0.05, 1, 5)).astype(dtype)
+    x[..., 4] = 0.5
+    ref = denoise_tv_chambolle(x, weight=0.1, max_num_iter=200, channel_axis=2)
+    # the stopping rule matters: 200 steps without it are a different image
+    assert np.abs(WarmTV(200)(x, 0.1) - ref).max() > 1e-4
+    seen = []
+    with tl.backend_context("pytorch"), pytest.MonkeyPatch.context() as mp:
+        real = _backend.to_numpy
+        mp.setattr(_backend, "to_numpy", lambda a: seen.append(tuple(a.shape)) or real(a))
+        got = tv(torch.from_numpy(x), 0.1, n_iter=200)
+    assert isinstance(got, torch.Tensor) and got.dtype == torch.from_numpy(x).dtype
+    np.testing.assert_allclose(got.numpy(), ref, atol=1e-6 if dtype == np.float32 else 1e-12)
+    assert seen and max(seen) == (5,)  # only the channels' energies came to the host

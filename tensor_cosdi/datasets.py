@@ -29,6 +29,7 @@ __all__ = [
     "TUNE_SCENES",
     "REPORT_SCENES",
     "data_dir",
+    "data_file",
     "load_hsi",
     "cave",
 ]
@@ -51,6 +52,14 @@ REPORT_SCENES = ("beads", "face", "real_and_fake_apples")
 TUNE_SCENES = tuple(s for s in HSI_SCENES if s not in REPORT_SCENES)
 
 
+def _roots() -> list[Path]:
+    """Where the project's research data may be: ``$TENSOR_COSDI_DATA``, then ``../shared/data``
+    next to a source checkout (a plain install has neither unless the variable is set)."""
+    env = os.environ.get("TENSOR_COSDI_DATA")
+    shared = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    return ([Path(env)] if env else []) + [shared]
+
+
 def data_dir(path=None) -> Path:
     """The folder holding the ``NAME.npz`` scenes.
 
@@ -59,25 +68,42 @@ def data_dir(path=None) -> Path:
     ``../shared/data/hsi_train`` next to a source checkout.  Raises
     ``FileNotFoundError`` saying where it looked.
     """
-    tried = []
     if path is not None:
         candidates = [Path(path)]
     else:
-        candidates = []
-        env = os.environ.get("TENSOR_COSDI_DATA")
-        if env:
-            candidates += [Path(env) / "hsi_train", Path(env)]
-        candidates.append(
-            Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "hsi_train"
-        )
+        candidates = [c for r in _roots() for c in (r / "hsi_train", r)]
     for c in candidates:
-        tried.append(str(c))
         if c.is_dir() and any(c.glob("*.npz")):
             return c
     raise FileNotFoundError(
         "no hyperspectral scenes (NAME.npz) found; looked in "
-        + ", ".join(tried)
+        + ", ".join(map(str, candidates))
         + " — set TENSOR_COSDI_DATA to the folder of the CAVE hsi_train scenes"
+    )
+
+
+def data_file(relative) -> Path:
+    """A file or folder of the research data (not shipped), e.g. ``"masks/tsa_mask256.mat"``:
+    under ``$TENSOR_COSDI_DATA``, else under ``../shared/data`` next to a source checkout.
+
+    Raises ``FileNotFoundError`` saying where it looked, so an example can
+    fall back to seeded stand-ins and say so.
+
+    Examples
+    --------
+    >>> try:
+    ...     path = data_file("masks/tsa_mask256.mat")
+    ... except FileNotFoundError as err:
+    ...     path = None  # a plain install: use a seeded random code instead
+    """
+    tried = [r / relative for r in _roots()]
+    for p in tried:
+        if p.exists():
+            return p
+    raise FileNotFoundError(
+        f"{relative} is not in the research data; looked in "
+        + ", ".join(map(str, tried))
+        + " — set TENSOR_COSDI_DATA to the folder that holds it"
     )
 
 

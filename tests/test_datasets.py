@@ -76,3 +76,12 @@ def test_cave_scenes_reach_every_imager_through_make_problem(tmp_path, monkeypat
     assert p.measurement.shape == (16, 24 + 5)
     with pytest.raises(ValueError, match="larger than the scene's"):
         tc.studies.make_problem("sd_cassi", "cave.face", shape=(32, 32))
+
+
+def test_data_file_finds_research_files_and_says_where_it_looked(monkeypatch, tmp_path):
+    (tmp_path / "masks").mkdir()
+    (tmp_path / "masks" / "m.mat").write_bytes(b"x")
+    monkeypatch.setenv("TENSOR_COSDI_DATA", str(tmp_path))
+    assert datasets.data_file("masks/m.mat") == tmp_path / "masks" / "m.mat"
+    with pytest.raises(FileNotFoundError, match=r"masks/nope\.mat.*looked in .*TENSOR_COSDI_DATA"):
+        datasets.data_file("masks/nope.mat")

@@ -4,7 +4,8 @@ From raw frames and a calibration to a reconstructed cube
 
 What a lab does with its own prototype, end to end, on simulated captures
 (the real coded aperture ``tsa_mask256.mat`` and the real lenslet capture of
-``../shared/data`` are used where present):
+``$TENSOR_COSDI_DATA`` or ``../shared/data`` are used where present, seeded
+stand-ins where not):
 
 1. **calibrate** (thesis Appendix A): frames of the coded aperture under a
    monochromator, one per band → the dispersion shifts and the code;
@@ -17,7 +18,6 @@ What a lab does with its own prototype, end to end, on simulated captures
 """
 
 # %%
-import os
 import tempfile
 from pathlib import Path
 
@@ -26,22 +26,26 @@ import numpy as np
 import tifffile
 
 import tensor_cosdi as tc
-from tensor_cosdi import io
+from tensor_cosdi import datasets, io
 
-# the project's research-use data (not shipped): $TENSOR_COSDI_DATA, else ../shared/data next to
-# a source checkout
-data = Path(
-    os.environ.get("TENSOR_COSDI_DATA")
-    or Path(tc.__file__).resolve().parents[1] / ".." / "shared" / "data"
-)
-print(f"data folder: {data} ({'found' if data.is_dir() else 'absent: seeded stand-ins are used'})")
+
+def research_data(relative):
+    """The project's research-use data (not shipped): under $TENSOR_COSDI_DATA, else ../shared/data
+    next to a source checkout; None (and a message) where it is absent."""
+    try:
+        return datasets.data_file(relative)
+    except FileNotFoundError as err:
+        print(f"{err}: a seeded stand-in is used")
+        return None
+
+
 work = Path(tempfile.mkdtemp())
 n, nl = 64, 16
 wl = tc.scenes.default_wavelengths(nl)
-mask_file = data / "masks" / "tsa_mask256.mat"
+mask_file = research_data("masks/tsa_mask256.mat")
 true_code = (
     io.read_frame(mask_file, key="mask")[96:160, 96:160]
-    if mask_file.exists()
+    if mask_file is not None
     else tc.codes.random_binary((n, n), rng=0)
 )
 true_system = tc.systems.SDCASSI(true_code, n_bands=nl, shifts=2, wavelengths=wl)
@@ -116,8 +120,8 @@ fig.tight_layout()
 
 # %%
 # 5. A lenslet (light-field) camera: fit the grid on the flat frame, cut the views of the capture
-lf_dir = data / "lenslet_raw_guv"
-if lf_dir.exists():
+lf_dir = research_data("lenslet_raw_guv")
+if lf_dir is not None:
     white = io.read_frame(lf_dir / "Radiometry_GUVExperim1.tif")
     dark_lf = io.read_frame(lf_dir / "DarkFrame_GUVExperim1.tif")
     raw_lf = io.read_frame(lf_dir / "Lightfield_GUVExperim1.tif").astype(float) - dark_lf
@@ -141,7 +145,7 @@ if lf_dir.exists():
     fig.tight_layout()
 else:
     print(
-        f"step 5 skipped: the real lenslet capture ({lf_dir}) is not here — it is research-use "
+        "step 5 skipped: the real lenslet capture is not here — it is research-use "
         "data and not shipped; point TENSOR_COSDI_DATA at a folder holding lenslet_raw_guv/ to "
         "run it"
     )

@@ -157,10 +157,12 @@ def reconstruct_tiled(
         from distributed import as_completed
 
         subs = [job(i) for i in range(len(places))]
+        # scattered first: sub-systems and sub-measurements travel as data, not inside the graph
+        systems, parts = client.scatter([j[0] for j in subs]), client.scatter([j[1] for j in subs])
+        del subs
         futures = client.map(
-            _solve_tile, [j[0] for j in subs], [j[1] for j in subs], method=method,
-            options=options, pure=False,
-        )  # fmt: skip
+            _solve_tile, systems, parts, method=method, options=options, pure=False
+        )
         index = {f.key: i for i, f in enumerate(futures)}
         results = ((index[f.key], c) for f, c in as_completed(futures, with_results=True))
     # one cube-sized array in the measurement's dtype: the weighted sum, divided in place

@@ -1,0 +1,52 @@
+"""Zernike design study of CASSDI-DFA: the crop's share of the PSF's light, the depth
+separation of the optics, the records, and the errors."""
+
+import numpy as np
+import pytest
+
+from tensor_cosdi import optics, studies
+from tensor_cosdi._studies_optics import DEPTHS_MM, _lens, zernike_run
+
+SMALL = dict(scene="colorchecker", shape=(16, 16), n_bands=4, reference_size=41, max_iter=3)
+
+
+def test_energy_is_the_share_of_the_reference_psf_inside_the_crop():
+    full = zernike_run((6, 0.9), 41, **SMALL)
+    assert full["energy"] == pytest.approx(1.0)
+    crops = [zernike_run((6, 0.9), s, **SMALL)["energy"] for s in (5, 9, 21)]
+    assert crops == sorted(crops) and crops[0] < 0.2 < crops[-1] < 1.0, crops
+    # the least share over bands and planes, computed independently
+    wl = np.linspace(450, 650, 4)
+    ref = optics.psf_stack(wl, DEPTHS_MM, lens=_lens(), zernike={6: 0.9}, size=41)
+    want = ref[16:25, 16:25].sum(axis=(0, 1)).min()
+    assert zernike_run((6, 0.9), 9, **SMALL)["energy"] == pytest.approx(want, rel=1e-9)
+
+
+def test_separation_measures_how_distinct_the_depth_planes_psfs_are():
+    same = zernike_run((6, 0.5), 9, depths_mm=(1000.0, 1000.0), **SMALL)
+    assert same["separation"] == pytest.approx(0.0, abs=1e-12)
+    apart = zernike_run((6, 0.5), 9, depths_mm=(600.0, 1000.0, 3000.0), **SMALL)
+    near = zernike_run((6, 0.5), 9, depths_mm=(980.0, 1000.0, 1020.0), **SMALL)
+    assert 0 < near["separation"] < apart["separation"] <= 1
+
+
+def test_records_cover_pure_defocus_and_every_mode_amplitude_and_crop():
+    recs = studies.zernike_design((5, 6), (0.3,), (9, 15), seeds=(0,), progress=False, **SMALL)
+    keys = [(r["mode"], r["amplitude"], r["psf_size"]) for r in recs]
+    assert keys == [(0, 0.0, 9), (0, 0.0, 15), (5, 0.3, 9), (5, 0.3, 15), (6, 0.3, 9), (6, 0.3, 15)]
+    for r in recs:
+        assert 0 <= r["depth_accuracy"] <= 1 and np.isfinite(r["psnr"]) and 0 < r["energy"] <= 1
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"modes": (1,)}, "Noll indices"),
+        ({"amplitudes": (0.0,)}, "amplitudes must be > 0"),
+        ({"psf_sizes": (10,)}, "psf_sizes must be odd"),
+        ({"psf_sizes": (99,)}, "psf_sizes must be odd, 1…reference_size=81"),
+    ],
+)
+def test_bad_designs_are_named(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        studies.zernike_design(**{"progress": False, **kwargs})

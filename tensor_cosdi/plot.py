@@ -17,7 +17,9 @@ import numpy as np
 
 from . import _backend as B
 
-__all__ = ["preview", "bands", "spectra", "compare", "depth", "convergence", "white_point"]
+__all__ = [
+    "preview", "bands", "spectra", "compare", "depth", "convergence", "study", "white_point",
+]  # fmt: skip
 
 
 def _plt():
@@ -196,4 +198,43 @@ def convergence(result, *, ax=None):
     ax.set_xlabel("iteration")
     ax.legend(fontsize=7)
     ax.set_title(getattr(result, "method", "") or "convergence", fontsize=9)
+    return ax
+
+
+def study(records, x: str, y: str, *, by: str | None = None, ax=None, logy: bool = False):
+    """One line of ``y`` against ``x`` per value of ``by`` from a design study's records
+    (:func:`tensor_cosdi.studies.sweep` and the studies built on it); records that share
+    ``(by, x)`` (seeds, say) are averaged.  Returns the axes.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> recs = [{"f": 1, "k": 0.5, "psnr": 28.0}, {"f": 2, "k": 0.5, "psnr": 30.0}]
+    >>> ax = study(recs, "f", "psnr", by="k")
+    >>> ax.get_lines()[0].get_ydata().tolist(), ax.get_legend().get_texts()[0].get_text()
+    ([28.0, 30.0], 'k = 0.5')
+    """
+    plt = _plt()
+    recs = list(records)
+    if not recs:
+        raise ValueError("study needs at least one record")
+    for key in (x, y) + (() if by is None else (by,)):
+        missing = [i for i, r in enumerate(recs) if key not in r]
+        if missing:
+            raise ValueError(f"record {missing[0]} has no {key!r}; it has {sorted(recs[0])}")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 3.5))
+    groups = {}
+    for r in recs:
+        groups.setdefault(None if by is None else r[by], {}).setdefault(r[x], []).append(r[y])
+    for value, cells in groups.items():
+        xs = sorted(cells)
+        ys = [float(np.mean(cells[v])) for v in xs]
+        label = None if by is None else f"{by} = {value}"
+        (ax.semilogy if logy else ax.plot)(xs, ys, "o-", label=label)
+    ax.set_xlabel(x)
+    ax.set_ylabel(y)
+    if by is not None:
+        ax.legend(fontsize=7)
     return ax

@@ -99,3 +99,28 @@ def test_cli_preview_writes_a_labelled_png_and_never_overwrites(tmp_path, capsys
     assert cli.main(["preview", str(tmp_path / "n.npy")]) == 2
     assert "pass --wavelengths" in capsys.readouterr().err
     assert cli.main(["preview", str(tmp_path / "n.npy"), "--wavelengths", "450:650"]) == 0
+
+
+def test_study_draws_one_line_per_group_averaging_repeats():
+    recs = [
+        {"n_filters": f, "transmittance": k, "seed": s, "psnr": 20 + f + k + s, "cond": 10.0**f}
+        for k in (0.25, 0.5)
+        for f in (4, 1, 2)  # unsorted on purpose
+        for s in (0, 1)
+    ]
+    ax = plot.study(recs, "n_filters", "psnr", by="transmittance")
+    lines = ax.get_lines()
+    assert len(lines) == 2
+    np.testing.assert_allclose(lines[0].get_xdata(), [1, 2, 4])
+    np.testing.assert_allclose(lines[0].get_ydata(), [21.75, 22.75, 24.75])  # mean of seeds
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "transmittance = 0.25",
+        "transmittance = 0.5",
+    ]
+    assert ax.get_xlabel() == "n_filters" and ax.get_ylabel() == "psnr"
+    log = plot.study(recs, "n_filters", "cond", logy=True)
+    assert log.get_yscale() == "log" and len(log.get_lines()) == 1 and log.get_legend() is None
+    with pytest.raises(ValueError, match="record 0 has no 'depth'"):
+        plot.study(recs, "n_filters", "depth")
+    with pytest.raises(ValueError, match="at least one record"):
+        plot.study([], "a", "b")

@@ -23,7 +23,7 @@ conditioning alone does not pick the code.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from tensor_cosdi import datasets, studies
+from tensor_cosdi import datasets, plot, studies
 
 try:
     datasets.data_dir()
@@ -43,14 +43,12 @@ for k, row, crow in zip(kappas, psnr, cond):
 
 # %%
 fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
-for k, row, crow in zip(kappas, psnr, cond):
-    axes[0].plot(filters, row, "o-", label=f"κ = {k}")
-    axes[1].semilogy(filters, crow, "s-", label=f"κ = {k}")
+plot.study(recs, "n_filters", "psnr", by="transmittance", ax=axes[0])
+plot.study(recs, "n_filters", "cond", by="transmittance", ax=axes[1], logy=True)
 axes[0].set_xlabel("filters #f")
 axes[0].set_ylabel("PSNR dB (OTD)")
 axes[0].set_title(f"{scene}, 30 dB")
 axes[1].set_xlabel("filters #f")
 axes[1].set_ylabel("κ(A Aᵀ) on its range")
-axes[0].legend()
 fig.tight_layout()
 plt.show()

@@ -131,3 +131,47 @@ def test_direct_path_takes_a_colour_coded_aperture(tmp_path):
     assert cli.main(args + ["--system-option", "colour=true"]) == 0
     b = load_bundle(tmp_path / "c.h5")
     assert b.system.colour and b.system.code.shape == (24, 24, 6)
+
+
+def _write_pair(fmt, d, mask, meas):
+    """The (mask, measurement) pair as a user's files of format ``fmt``; returns their specs."""
+    import h5py
+    import tifffile
+
+    if fmt == "mat73":  # MATLAB v7.3: HDF5 in column-major order behind a 512-byte header
+        for name, a in (("mask", mask), ("meas", meas)):
+            with h5py.File(d / f"{name}.mat", "w", userblock_size=512) as f:
+                f.create_dataset(name, data=a.T).attrs["MATLAB_class"] = np.bytes_("double")
+            with open(d / f"{name}.mat", "r+b") as f:
+                f.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema")
+        return str(d / "mask.mat"), str(d / "meas.mat")
+    if fmt == "h5":
+        with h5py.File(d / "pair.h5", "w") as f:
+            f["mask"], f["meas"] = mask, meas
+        return str(d / "pair.h5") + ":mask", str(d / "pair.h5") + ":meas"
+    if fmt == "tif":
+        tifffile.imwrite(d / "mask.tif", mask.astype(np.float32))
+        tifffile.imwrite(d / "meas.tif", meas.astype(np.float32))
+        return str(d / "mask.tif"), str(d / "meas.tif")
+    if fmt == "npz":
+        np.savez(d / "pair.npz", mask=mask, meas=meas)
+        return str(d / "pair.npz") + ":mask", str(d / "pair.npz") + ":meas"
+    scipy.io.savemat(d / "mask.mat", {"mask": mask})  # MATLAB v5
+    scipy.io.savemat(d / "meas.mat", {"meas": meas})
+    return str(d / "mask.mat"), str(d / "meas.mat")
+
+
+@pytest.mark.parametrize("fmt", ["mat5", "mat73", "h5", "tif", "npz"])
+def test_a_users_pair_of_files_in_any_format_gives_the_same_cube(fmt, tmp_path):
+    pytest.importorskip("h5py")
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(24, 24), n_bands=6, rng=0)
+    mask, meas = np.asarray(p.system.code, float), np.asarray(p.measurement, np.float32)
+    mspec, gspec = _write_pair(fmt, tmp_path, mask, meas)
+    args = [
+        "reconstruct", "--system", "sd_cassi", "--mask", mspec, "--shift", "1", "--bands", "6",
+        "--measurement", gspec, "--out", str(tmp_path / "cube.h5"), "--method", "lsq", "--quiet",
+    ]  # fmt: skip
+    assert cli.main(args) == 0
+    got = load_bundle(tmp_path / "cube.h5").cube
+    want = tc.reconstruct(tc.systems.SDCASSI(mask, n_bands=6, shifts=1), meas, "lsq").cube
+    np.testing.assert_allclose(got, np.asarray(want, np.float32), rtol=1e-4, atol=1e-5)

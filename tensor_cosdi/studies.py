@@ -35,6 +35,7 @@ __all__ = [
     "prism_grid",
     "colour_code_design",
     "zernike_design",
+    "c3slfi_table",
     "reconstruction_run",
     "write_csv",
 ]
@@ -48,7 +49,7 @@ SCENES = scenes.SCENES
 
 _RENAMED = {"dual_camera": "dual_camera_cassi"}
 
-from ._studies_design import colour_code_design  # noqa: E402 - colour-coded aperture design
+from ._studies_design import c3slfi_table, colour_code_design  # noqa: E402 - design studies
 from ._studies_optics import zernike_design  # noqa: E402 - DFA aberration design (Sec. 4.3)
 from .optics.design import prism_grid  # noqa: E402 - the prism design study (thesis App. B)
 

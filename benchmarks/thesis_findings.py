@@ -316,8 +316,8 @@ def main(argv=None):
     text = [
         f"Machine: {platform.machine()}, Python {platform.python_version()}, tensor_cosdi "
         f"{tc.__version__}; "
-        f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seed {args.seed}, scenes "
-        f"{', '.join(SCENES)}.\n"
+        f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seed {args.seed}; scenes: "
+        f"{', '.join(_scene_names())} (CS2LI: {', '.join(SCENES)}).\n"
     ]
     data = {}
     for key in args.studies.split(","):

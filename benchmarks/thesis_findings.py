@@ -327,7 +327,86 @@ def main(argv=None):
         data[key] = d
         (out / "thesis_findings.md").write_text("\n".join(text) + "\n")
         (out / "thesis_findings.json").write_text(json.dumps(data, indent=1))
+    text += ["### Verdicts\n", *verdicts(data)]
+    (out / "thesis_findings.md").write_text("\n".join(text) + "\n")
     print("\n".join(text))
+
+
+def _mean(rows, key, **match):
+    return float(np.mean([r[key] for r in rows if all(r[k] == v for k, v in match.items())]))
+
+
+def verdicts(data):
+    """One row per finding: the thesis' figure, ours, a verdict and one line of reason."""
+    out = ["| finding (thesis) | thesis | ours | verdict | why |", "|---|---|---|---|---|"]
+
+    def row(finding, thesis, ours, ok, why):
+        out.append(f"| {finding} | {thesis} | {ours} | {ok} | {why} |")
+
+    if "vsi" in data:
+        v = data["vsi"]
+        for method in (m for m in ("otd", "avsi") if m in v):
+            best = v[method]["best_alpha_t"]
+            row(
+                f"best αT of CASSI-VSI ({method.upper()}, Eq. 49)", "≈ 0.7", f"{best:.1f}",
+                "reproduced" if 0.6 <= best <= 0.8 else "not reproduced",
+                "combined error of Eq. 49 over αT" if method == "otd" else
+                "A-VSI's z = Df coupling rewards the panchromatic arm (sigma3 → 1e-4 moves it "
+                "to 0.4; see solvers/avsi.py)",
+            )  # fmt: skip
+        if "sd_cassi" in v.get("otd", {}):
+            gain = v["otd"]["vsi_0.7"]["psnr"] - v["otd"]["sd_cassi"]["psnr"]
+            row(
+                "CASSI-VSI over SD-CASSI at equal light", "better", f"{gain:+.2f} dB (OTD)",
+                "reproduced" if gain > 0 else "not reproduced", "same code, same absolute noise",
+            )  # fmt: skip
+    if "dfa" in data:
+        r = data["dfa"]["rows"]
+        z6 = {n: _mean(r, "depth_accuracy", mode=6, amplitude=0.9, psf_size=n) for n in (9, 41)}
+        dfd = {n: _mean(r, "depth_accuracy", mode=0, psf_size=n) for n in (9, 41)}
+        best = max(
+            {(x["mode"], x["amplitude"]) for x in r},
+            key=lambda c: _mean(r, "depth_accuracy", mode=c[0], amplitude=c[1], psf_size=41),
+        )
+        row(
+            "Z6 astigmatism (≈ 0.9 wave) beats pure defocus for depth", "better",
+            f"{z6[41]:.3f} vs {dfd[41]:.3f} planes right (41-px PSFs)",
+            "reproduced" if z6[41] > dfd[41] else "not reproduced",
+            f"only with 9-px PSFs holding 9 % of its light ({z6[9]:.3f} vs {dfd[9]:.3f}); best "
+            f"at 41 px: Z{best[0]} {best[1]} wave (unit-RMS Zernikes; the thesis' unit may "
+            "differ)",
+        )  # fmt: skip
+    if "cs2li" in data:
+        r = data["cs2li"]["rows"]
+        gain = _mean(r, "depth_psnr", method="CS2LI + OTD") - _mean(
+            r, "depth_psnr", method="SL + SD-CASSI (OTD per pattern)"
+        )
+        row(
+            "CS2LI over structured light + SD-CASSI", "up to +4 dB depth", f"{gain:+.2f} dB",
+            "reproduced" if gain > 0 else "not reproduced", "same code, light and frame count",
+        )  # fmt: skip
+    if "table1" in data:
+        r = data["table1"]["rows"]
+        for group in sorted({x["group"] for x in r}):
+            gain, sam = (
+                _mean(r, k, group=group, method="otd", form="3d")
+                - _mean(r, k, group=group, method="wdct", form="3d")
+                for k in ("psnr", "sam")
+            )
+            row(
+                f"Table 1: OTD-3D over WDCT-3D, {group}", "+2.7 to +9.3 dB, 2.4-11° less SAM",
+                f"{gain:+.2f} dB, SAM {sam:+.1f}°",
+                "reproduced" if gain > 0 and sam < 0 else
+                "PSNR only" if gain > 0 else "not reproduced",
+                "means over K and SNR; the thesis' light fields had 100 bands",
+            )  # fmt: skip
+        d3, d5 = (_mean(r, "psnr", method="otd", form=f) for f in ("3d", "5d"))
+        row(
+            "Table 1: OTD-3D over OTD-5D", "+0.4 to +3.3 dB", f"{d3 - d5:+.2f} dB",
+            "reproduced" if d3 - d5 > 0.3 else "not reproduced",
+            "one linear system in two layouts; learned bases per mode reach the same sparsity",
+        )  # fmt: skip
+    return out
 
 
 if __name__ == "__main__":

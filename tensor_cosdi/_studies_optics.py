@@ -53,7 +53,9 @@ def zernike_run(
     planes = scenes.depth_planes(scenes.motorcycle(tuple(shape), [550.0])[1], nz)
     cube = scenes.depth_layers(scenes.scene_cube(scene, tuple(shape), wl), planes, nz)
     zern = {mode: amp} if amp else None
-    ref = optics.psf_stack(wl, depths_mm, lens=lens, zernike=zern, size=int(reference_size))
+    ref = optics.psf_stack(  # the study measures the crops' light itself
+        wl, depths_mm, lens=lens, zernike=zern, size=int(reference_size), min_share=None
+    )
     c, h = int(reference_size) // 2, int(psf_size) // 2
     energy = ref[c - h : c + h + 1, c - h : c + h + 1].sum(axis=(0, 1))  # (Nλ, Nz)
     psfs = ref[c - h : c + h + 1, c - h : c + h + 1] / energy  # the crop, renormalised

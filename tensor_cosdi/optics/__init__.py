@@ -22,7 +22,7 @@ from .fringes import (
 )
 from .glass import GLASSES, Glass, refractive_index, register_glass
 from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism
-from .psf import Lens, defocus_coefficient, psf, psf_stack, psf_width, pupil_psf
+from .psf import Lens, PSFCropWarning, defocus_coefficient, psf, psf_stack, psf_width, pupil_psf
 from .zernike import NAMES as ZERNIKE_NAMES
 from .zernike import noll_to_nm, zernike, zernike_radial
 
@@ -43,6 +43,7 @@ __all__ = [
     "pupil_psf",
     "defocus_coefficient",
     "psf_width",
+    "PSFCropWarning",
     "projector_phase",
     "phase_shift_patterns",
     "gray_code_patterns",

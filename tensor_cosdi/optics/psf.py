@@ -21,7 +21,14 @@ import numpy as np
 
 from .zernike import zernike as _zernike
 
-__all__ = ["Lens", "pupil_psf", "psf", "psf_stack", "defocus_coefficient", "psf_width"]
+__all__ = [
+    "Lens", "pupil_psf", "psf", "psf_stack", "defocus_coefficient", "psf_width", "PSFCropWarning",
+]  # fmt: skip
+
+
+class PSFCropWarning(UserWarning):
+    """A PSF crop holds too little of the PSF's light: renormalised to the crop, it is a different
+    PSF from the optics'."""
 
 
 def _pos(name, v, allow_inf=False):
@@ -121,14 +128,19 @@ def pupil_psf(
     zernike=None,
     pupil_samples: int | None = None,
     supersample: int = 3,
-) -> np.ndarray:
+    return_share: bool = False,
+):
     """PSF (``size × size``, sums to 1) of ``lens`` at one wavelength for a defocus ``omega`` (rad)
     and aberrations.
 
     ``zernike`` maps Noll indices to coefficients in waves (e.g. ``{6: 0.9}``,
     the thesis' vertical astigmatism).  ``pupil_samples`` points across the
     pupil diameter (default: enough to sample the pupil phase at ≤ 1 rad
-    per step, at least 64).
+    per step, at least 64).  ``return_share=True`` also returns the share of
+    the PSF's light inside the crop, before it is renormalised: the crop's
+    intensity against the whole image plane's, which Parseval's theorem
+    gives from the pupil (accurate to ≈ 2 %: 0.99 for a 41-pixel crop of an
+    in-focus f/16.7 PSF, 0.22 for a 9-pixel crop of 0.9 wave of Z6).
     """
     if (
         isinstance(size, bool)
@@ -171,7 +183,11 @@ def pupil_psf(
     s = I.sum()
     if not s > 0:
         raise ValueError("the PSF vanished on this grid; increase size")
-    return I / s
+    if not return_share:
+        return I / s
+    du = 2 * r / pupil_samples  # pupil sample spacing (mm): ∫|E|² = (λ zᵢ)² Σ|P|² / du²
+    total = (lam * lens.image_distance_mm) ** 2 * float(np.sum(np.abs(pupil) ** 2)) / du**2
+    return I / s, float(s * p**2 / total)
 
 
 def psf(
@@ -183,9 +199,10 @@ def psf(
     size: int = 15,
     supersample: int = 3,
     pupil_samples: int | None = None,
-) -> np.ndarray:
+    return_share: bool = False,
+):
     """PSF of a point at ``depth_mm`` imaged at ``wavelength_nm`` (nm) through ``lens`` with
-    aberrations.
+    aberrations (``return_share``: see :func:`pupil_psf`).
 
     Parameters
     ----------
@@ -218,6 +235,7 @@ def psf(
         zernike=zernike,
         pupil_samples=pupil_samples,
         supersample=supersample,
+        return_share=return_share,
     )
 
 
@@ -229,9 +247,16 @@ def psf_stack(
     zernike=None,
     size: int = 15,
     supersample: int = 3,
+    min_share: float | None = 0.9,
 ) -> np.ndarray:
     """PSFs of every (band, depth plane) pair, shaped ``(size, size, Nλ, Nz)`` for
     :class:`~tensor_cosdi.systems.CASSDIDFA`.
+
+    Each PSF is renormalised to its crop; where a crop holds less than
+    ``min_share`` of a PSF's light (:func:`pupil_psf`'s ``return_share``) a
+    :class:`PSFCropWarning` says so — that renormalised PSF is not the
+    optics' (a 9-pixel crop of 0.9 wave of Z6 holds 9-22 % of it).
+    ``min_share=None`` checks nothing.
 
     Depth plane ``z`` of the cube is the scene at ``depths_mm[z]``; the fixed
     aberration ``zernike`` (thesis: ``{6: 0.9}``, vertical astigmatism,
@@ -240,20 +265,33 @@ def psf_stack(
 
     Examples
     --------
-    >>> P = psf_stack([500, 600], [800, 1000, 1300], size=9, zernike={6: 0.9})
+    >>> P = psf_stack([500, 600], [800, 1000, 1300], size=41, zernike={6: 0.9})
     >>> P.shape, bool(np.allclose(P.sum(axis=(0, 1)), 1))
-    ((9, 9, 2, 3), True)
+    ((41, 41, 2, 3), True)
     """
     lam = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
     dep = np.atleast_1d(np.asarray(depths_mm, dtype=np.float64))
     if lam.ndim != 1 or dep.ndim != 1 or not lam.size or not dep.size:
         raise ValueError("wavelengths_nm and depths_mm must be non-empty 1-D lists")
     out = np.empty((size, size, lam.size, dep.size))
+    worst = (2.0, None, None)
     for i, w in enumerate(lam):
         for k, z in enumerate(dep):
-            out[:, :, i, k] = psf(
-                w, z, lens=lens, zernike=zernike, size=size, supersample=supersample
-            )
+            out[:, :, i, k], share = psf(
+                w, z, lens=lens, zernike=zernike, size=size, supersample=supersample,
+                return_share=True,
+            )  # fmt: skip
+            worst = min(worst, (share, w, z), key=lambda t: t[0])
+    if min_share is not None and worst[0] < min_share:
+        import warnings
+
+        warnings.warn(
+            f"psf_stack: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
+            f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); renormalised to the "
+            "crop it is a different PSF — pass a larger size (or min_share=None)",
+            PSFCropWarning,
+            stacklevel=2,
+        )
     return out
 
 

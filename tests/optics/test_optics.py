@@ -156,7 +156,8 @@ def test_psf_astigmatism_breaks_the_symmetry():
 
 def test_psf_stack_feeds_cassdi_dfa():
     wl = [500.0, 550.0, 600.0]
-    P = optics.psf_stack(wl, [800, 1000, 1300], size=7, zernike={6: 0.5})
+    with pytest.warns(optics.PSFCropWarning, match=r"a 7×7 crop holds \d+% of the PSF's light"):
+        P = optics.psf_stack(wl, [800, 1000, 1300], size=7, zernike={6: 0.5})
     assert P.shape == (7, 7, 3, 3)
     assert np.allclose(P.sum(axis=(0, 1)), 1)
     dfa = systems.CASSDIDFA(np.ones((8, 8, 3)), n_bands=3, psfs=P, wavelengths=wl)
@@ -200,3 +201,21 @@ def test_wavelengths_in_micrometres_are_an_error_naming_the_unit():
     with pytest.raises(ValueError, match="nanometres in 200–20000"):
         refractive_index("SF4", [500.0, np.nan])
     assert refractive_index("SF4", 550.0) > 1.7
+
+
+def test_the_share_of_light_in_a_crop_follows_from_the_pupil():
+    """Parseval: the whole image plane holds the pupil's light, so a crop's share needs no
+    larger PSF; it grows with the crop towards 1 and is small for a strong aberration."""
+    import warnings
+
+    lens = Lens(focal_mm=50, aperture_radius_mm=1.5, focus_mm=1000, pixel_um=6)
+    shares = [optics.psf(450, 800, lens=lens, size=n, return_share=True)[1] for n in (5, 9, 41, 81)]
+    assert shares == sorted(shares) and shares[0] < 0.8 and abs(shares[-1] - 1) < 0.02, shares
+    h, share = optics.psf(450, 800, lens=lens, size=9, zernike={6: 0.9}, return_share=True)
+    assert share < 0.3 and h.sum() == pytest.approx(1.0)  # renormalised, whatever it held
+    big = optics.psf(450, 800, lens=lens, size=81, zernike={6: 0.9})
+    assert share == pytest.approx(big[36:45, 36:45].sum(), abs=0.02)  # the same light, measured
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", optics.PSFCropWarning)
+        optics.psf_stack([450, 650], [800, 1300], lens=lens, size=41, zernike={6: 0.25})
+        optics.psf_stack([450], [800], lens=lens, size=5, zernike={6: 0.9}, min_share=None)

@@ -22,7 +22,16 @@ from .fringes import (
 )
 from .glass import GLASSES, Glass, refractive_index, register_glass
 from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism
-from .psf import Lens, PSFCropWarning, defocus_coefficient, psf, psf_stack, psf_width, pupil_psf
+from .psf import (
+    Lens,
+    PSFCropWarning,
+    defocus_coefficient,
+    psf,
+    psf_stack,
+    psf_width,
+    pupil_psf,
+    sweep_psf_stack,
+)
 from .zernike import NAMES as ZERNIKE_NAMES
 from .zernike import noll_to_nm, zernike, zernike_radial
 
@@ -44,6 +53,7 @@ __all__ = [
     "defocus_coefficient",
     "psf_width",
     "PSFCropWarning",
+    "sweep_psf_stack",
     "projector_phase",
     "phase_shift_patterns",
     "gray_code_patterns",

@@ -22,7 +22,8 @@ import numpy as np
 from .zernike import zernike as _zernike
 
 __all__ = [
-    "Lens", "pupil_psf", "psf", "psf_stack", "defocus_coefficient", "psf_width", "PSFCropWarning",
+    "Lens", "pupil_psf", "psf", "psf_stack", "sweep_psf_stack", "defocus_coefficient",
+    "psf_width", "PSFCropWarning",
 ]  # fmt: skip
 
 
@@ -289,6 +290,55 @@ def psf_stack(
             f"psf_stack: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
             f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); renormalised to the "
             "crop it is a different PSF — pass a larger size (or min_share=None)",
+            PSFCropWarning,
+            stacklevel=2,
+        )
+    return out
+
+
+def sweep_psf_stack(
+    wavelengths_nm, depths_mm, focus_mm, *, lens: Lens | None = None, zernike=None,
+    size: int = 41, supersample: int = 3, min_share: float | None = 0.9,
+) -> np.ndarray:  # fmt: skip
+    """PSFs of a focal sweep, ``(size, size, Nλ, Nz, K)`` for
+    :class:`~tensor_cosdi.systems.CASSDIDFA`: at step ``k`` the deformable
+    mirror refocuses the lens on ``focus_mm[k]`` (it adds the defocus ``−Ω(λ,
+    focus_mm[k])``, Z4) on top of the fixed aberration ``zernike``; a point
+    at ``depths_mm[z]`` then has the defocus ``Ω(λ, depths_mm[z]) − Ω(λ,
+    focus_mm[k])``.
+
+    ``min_share`` as for :func:`psf_stack`.
+
+    Examples
+    --------
+    >>> P = sweep_psf_stack([550], [900, 1200], [900, 1200], size=21)
+    >>> P.shape, bool(P[10, 10, 0, 0, 0] > P[10, 10, 0, 0, 1])  # plane 0 sharpest at step 0
+    ((21, 21, 1, 2, 2), True)
+    """
+    lens = Lens() if lens is None else lens
+    lam, dep, foc = (
+        np.atleast_1d(np.asarray(v, dtype=np.float64))
+        for v in (wavelengths_nm, depths_mm, focus_mm)
+    )
+    if any(v.ndim != 1 or not v.size for v in (lam, dep, foc)):
+        raise ValueError("wavelengths_nm, depths_mm and focus_mm must be non-empty 1-D lists")
+    out = np.empty((size, size, lam.size, dep.size, foc.size))
+    worst = (2.0, None, None)
+    for i, w in enumerate(lam):
+        for k, f in enumerate(foc):
+            for z, d in enumerate(dep):
+                omega = defocus_coefficient(lens, w, d) - defocus_coefficient(lens, w, f)
+                out[:, :, i, z, k], share = pupil_psf(
+                    w, lens=lens, size=size, omega=omega, zernike=zernike,
+                    supersample=supersample, return_share=True,
+                )  # fmt: skip
+                worst = min(worst, (share, w, d), key=lambda t: t[0])
+    if min_share is not None and worst[0] < min_share:
+        import warnings
+
+        warnings.warn(
+            f"sweep_psf_stack: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
+            f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); pass a larger size",
             PSFCropWarning,
             stacklevel=2,
         )

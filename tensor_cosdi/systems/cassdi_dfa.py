@@ -7,7 +7,7 @@ import scipy.sparse as sp
 
 from .. import _backend as B
 from ..codes import depth_codes
-from ..operators import Blur, Code, Shear, SumAxis
+from ..operators import Blur, Code, Replicate, Shear, SumAxis
 from ._base import (
     System,
     as_code,
@@ -40,7 +40,7 @@ class CASSDIDFA(System):
     n_bands : int
     shifts, wavelengths
         As for :class:`~tensor_cosdi.systems.SDCASSI`.
-    psfs : array_like of shape (h, w, Nλ, Nz), optional
+    psfs : array_like of shape (h, w, Nλ, Nz) or (h, w, Nλ, Nz, K), optional
         Intensity PSF of every (band, depth) pair, from
         :mod:`tensor_cosdi.optics` (pupil + Zernike aberration + defocus,
         Eq. 51-53) or from calibration.  Sizes 1 along ``Nλ`` or ``Nz`` share
@@ -48,7 +48,16 @@ class CASSDIDFA(System):
         to more than 0; used as given (normalise to 1 for energy
         conservation).  ``None``: ideal imaging (Eq. 58, 60).  The pure-defocus
         "CASSDI-DFD" baseline is this system with PSFs of aberration
-        amplitude 0.
+        amplitude 0.  A 5-D stack (:func:`tensor_cosdi.optics.sweep_psf_stack`)
+        is the **focal sweep**: ``K = codes.shape[2]`` focal steps, each
+        seeing every one of ``Nz`` depth planes through its own PSF
+        ``PSF[l, z, k]`` (in focus where the step's focus meets the plane)::
+
+            G = Σ_k Σ_l shear_l( (Σ_z F[:, :, l, z] ⊛ PSF[l, z, k]) ∘ C[:, :, k] )
+
+        The 4-D form is its diagonal ``z = k``: plane ``z`` is seen only at
+        step ``z``, through code ``z`` — so the codes alone tell the planes
+        apart, which the swept optics do not grant.
 
     Attributes
     ----------
@@ -89,22 +98,26 @@ class CASSDIDFA(System):
         self.psfs = None
         if psfs is not None:
             p = np.array(B.to_numpy(psfs), dtype=np.float64)
-            if p.ndim not in (2, 4):
+            if p.ndim not in (2, 4, 5):
                 raise ValueError(
-                    f"psfs must have shape (h, w) or (h, w, Nλ, Nz) = (h, w, {nl}, {nz}), got "
-                    f"{p.shape}"
+                    f"psfs must have shape (h, w), (h, w, Nλ, Nz) = (h, w, {nl}, {nz}) or, for a "
+                    f"focal sweep, (h, w, Nλ, Nz, K) with K = {nz} steps; got {p.shape}"
                 )
+            if p.ndim == 5:
+                op = self._sweep(p, nl, wavelengths)
+                self._finish(
+                    op,
+                    wavelengths=wavelengths_for(wavelengths, nl),
+                    axes=("x", "y", "λ", "z"),
+                    measurement_axes=("x", "y"),
+                )
+                return
             if p.ndim == 4 and (p.shape[2] not in (1, nl) or p.shape[3] not in (1, nz)):
                 raise ValueError(
                     f"psfs shape {p.shape} does not match the cube: expected (h, w, {nl}, {nz}) "
                     "(one PSF per band and depth plane; size 1 shares)"
                 )
-            if not np.isfinite(p).all():
-                raise ValueError("psfs contain NaN or inf")
-            if (p < 0).any():
-                raise ValueError(f"psfs are intensities and must be ≥ 0; minimum is {p.min():g}")
-            if (p.sum(axis=(0, 1)) <= 0).any():
-                raise ValueError("every PSF must have a positive sum; got an all-zero PSF")
+            _check_psfs(p)
             p = p.reshape(p.shape + (1,) * (4 - p.ndim))
             p.setflags(write=False)
             self.psfs = p
@@ -116,9 +129,39 @@ class CASSDIDFA(System):
             measurement_axes=("x", "y"),
         )
 
+    def _sweep(self, p, nl, wavelengths):
+        """The focal-sweep operator of a 5-D PSF stack (see the class docstring)."""
+        nx, ny, steps = self.codes.shape
+        if p.shape[2] not in (1, nl) or p.shape[4] != steps or p.shape[3] < 1:
+            raise ValueError(
+                f"focal-sweep psfs {p.shape} must be (h, w, Nλ, Nz, K) with Nλ in (1, {nl}) and "
+                f"K = {steps} focal steps (one per code)"
+            )
+        _check_psfs(p)
+        p.setflags(write=False)
+        self.psfs = p
+        nz = p.shape[3]
+        cube, stack, steps_shape = (nx, ny, nl, nz), (nx, ny, nl, nz, steps), (nx, ny, nl, steps)
+        shear = Shear(steps_shape, self.shifts)
+        per_band = SumAxis(shear.output_shape, 2)
+        return (
+            SumAxis(per_band.output_shape, 2)
+            @ per_band
+            @ shear
+            @ Code(self.codes, steps_shape, axes=(0, 1, 3))
+            @ SumAxis(stack, 3)
+            @ Blur(stack, p)
+            @ Replicate(cube, 4, steps)
+        )
+
+    @property
+    def sweep(self) -> bool:
+        """True for a focal-sweep system (5-D PSFs: every plane seen at every step)."""
+        return self.psfs is not None and self.psfs.ndim == 5
+
     @property
     def n_depths(self) -> int:
-        return self.codes.shape[2]
+        return self.psfs.shape[3] if self.sweep else self.codes.shape[2]
 
     # ---- roles (systems/_roles.py) -------------------------------------------------------
     name = "cassdi_dfa"
@@ -184,24 +227,44 @@ class CASSDIDFA(System):
     def matrix(self):
         nx, ny, nl, nz = self.cube_shape
         width = self.measurement_shape[1]
-        # Eq. 60: H = [H_0 … H_{Nz−1}], H_z the coded shear-sum of code z
+        # Eq. 60: H = [H_0 … H_{K−1}], H_k the coded shear-sum of code k (K = Nz but in a sweep)
         H = sp.hstack(
             [
                 coded_shear_sum_matrix(
-                    np.repeat(self.codes[:, :, z, None], nl, axis=2), self.shifts, width
+                    np.repeat(self.codes[:, :, k, None], nl, axis=2), self.shifts, width
                 )
-                for z in range(nz)
+                for k in range(self.codes.shape[2])
             ],
             format="csr",
         )
         if self.psfs is None:
             return H
+        if self.sweep:  # stack block (l, k) = Σ_z blur(l, z, k) of cube block (l, z)
+            steps, p = self.codes.shape[2], self.psfs
+            rows = [
+                [
+                    _convolution_matrix(p[:, :, min(l, p.shape[2] - 1), z, k], nx, ny)
+                    if l == m else None
+                    for z in range(nz) for m in range(nl)
+                ]
+                for k in range(steps) for l in range(nl)
+            ]  # fmt: skip
+            return (H @ sp.bmat(rows, format="csr")).tocsr()
         blocks = []
         for z in range(nz):
             for l in range(nl):
                 p = self.psfs[:, :, min(l, self.psfs.shape[2] - 1), min(z, self.psfs.shape[3] - 1)]
                 blocks.append(_convolution_matrix(p, nx, ny))
         return (H @ sp.block_diag(blocks, format="csr")).tocsr()
+
+
+def _check_psfs(p: np.ndarray) -> None:
+    if not np.isfinite(p).all():
+        raise ValueError("psfs contain NaN or inf")
+    if (p < 0).any():
+        raise ValueError(f"psfs are intensities and must be ≥ 0; minimum is {p.min():g}")
+    if (p.sum(axis=(0, 1)) <= 0).any():
+        raise ValueError("every PSF must have a positive sum; got an all-zero PSF")
 
 
 def _convolution_matrix(psf: np.ndarray, nx: int, ny: int) -> sp.csr_matrix:

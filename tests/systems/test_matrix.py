@@ -199,6 +199,22 @@ def test_matrix_detects_a_wrong_operator():
     assert np.abs(vec(b.forward(F)) - a.matrix() @ vec(F)).max() > 1e-3
 
 
+@given(
+    nx=st.integers(1, 5), ny=st.integers(1, 5), nl=st.integers(1, 4), nz=st.integers(1, 3),
+    steps=st.integers(1, 3), psf=st.integers(1, 3), shared=st.booleans(), data=st.data(),
+    seed=st.integers(0, 2**32 - 1),
+)  # fmt: skip
+def test_sweep_matches_its_explicit_matrix(nx, ny, nl, nz, steps, psf, shared, data, seed):
+    g = np.random.default_rng(seed)
+    psfs = g.random((psf, data.draw(st.integers(1, 3)), 1 if shared else nl, nz, steps))
+    system = CASSDIDFA(
+        codes.depth_codes((nx, ny), steps, rng=g), n_bands=nl, shifts=data.draw(shifts(nl)),
+        psfs=psfs,
+    )  # fmt: skip
+    assert system.sweep and system.n_depths == nz and system.cube_shape == (nx, ny, nl, nz)
+    check(system, seed)
+
+
 @pytest.mark.parametrize(
     "system",
     [

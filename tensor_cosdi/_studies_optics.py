@@ -34,10 +34,11 @@ def _lens():
 
 def zernike_run(
     aberration, psf_size, *, scene="cave.face", shape=(48, 48), n_bands=12, depths_mm=DEPTHS_MM,
-    lens=None, snr_db=30.0, method="dfa", seed=0, reference_size=81, **options,
+    lens=None, snr_db=30.0, method="dfa", seed=0, reference_size=81, sweep=False, **options,
 ) -> dict:  # fmt: skip
     """One cell of :func:`zernike_design`: CASSDI-DFA whose PSFs add ``aberration = (Noll index,
-    waves RMS)`` to defocus (amplitude 0: pure defocus, "DFD"), cropped to ``psf_size``."""
+    waves RMS)`` to defocus (amplitude 0: pure defocus, "DFD"), cropped to ``psf_size``;
+    ``sweep=True``: the focal-sweep model (every plane seen at every step)."""
     from . import codes, optics, scenes
     from .solvers import reconstruct
     from .studies import Problem, score
@@ -53,14 +54,16 @@ def zernike_run(
     planes = scenes.depth_planes(scenes.motorcycle(tuple(shape), [550.0])[1], nz)
     cube = scenes.depth_layers(scenes.scene_cube(scene, tuple(shape), wl), planes, nz)
     zern = {mode: amp} if amp else None
-    ref = optics.psf_stack(  # the study measures the crops' light itself
-        wl, depths_mm, lens=lens, zernike=zern, size=int(reference_size), min_share=None
-    )
+    kw = dict(lens=lens, zernike=zern, size=int(reference_size), min_share=None)
+    if sweep:  # (…, Nλ, Nz, K): the mirror refocuses on each plane in turn
+        ref = optics.sweep_psf_stack(wl, depths_mm, depths_mm, **kw)
+    else:  # the study measures the crops' light itself
+        ref = optics.psf_stack(wl, depths_mm, **kw)
     c, h = int(reference_size) // 2, int(psf_size) // 2
-    energy = ref[c - h : c + h + 1, c - h : c + h + 1].sum(axis=(0, 1))  # (Nλ, Nz)
+    energy = ref[c - h : c + h + 1, c - h : c + h + 1].sum(axis=(0, 1))  # (Nλ, Nz[, K])
     psfs = ref[c - h : c + h + 1, c - h : c + h + 1] / energy  # the crop, renormalised
-    dist = [
-        0.5 * np.abs(ref[:, :, :, i] - ref[:, :, :, j]).sum(axis=(0, 1))
+    dist = [  # per band (and step): how far apart the PSFs of planes i and j are
+        0.5 * np.abs(ref[:, :, :, i] - ref[:, :, :, j]).sum(axis=(0, 1)).reshape(len(wl), -1)
         for i in range(nz)
         for j in range(i + 1, nz)
     ]
@@ -77,7 +80,7 @@ def zernike_run(
         out["depth_accuracy"] = float(np.mean(np.asarray(res.depth) == planes))
     out.update(
         energy=float(energy.min()),
-        separation=float(np.min(dist, axis=0).mean()),
+        separation=float(np.min(np.mean(dist, axis=2), axis=0).mean()),
         seconds=seconds,
     )
     return out
@@ -86,7 +89,7 @@ def zernike_run(
 def zernike_design(
     modes=(5, 6, 7, 8, 9, 11), amplitudes=(0.25, 0.5, 0.9), psf_sizes=(15, 41), *,
     scene="cave.face", shape=(48, 48), n_bands=12, snr_db=30.0, method="dfa", seeds=(0,),
-    reference_size=81, client=None, progress=True, **options,
+    reference_size=81, sweep=False, client=None, progress=True, **options,
 ) -> list[dict]:  # fmt: skip
     """Depth and spectral quality of CASSDI-DFA against the Zernike mode and amplitude the
     deformable mirror adds to defocus, at several PSF crop sizes (thesis Sec. 4.3).
@@ -110,6 +113,12 @@ def zernike_design(
         ``"dfa"`` also gives the depth map; ``options`` go to it).
     reference_size : odd int
         The crop that stands for the whole PSF in ``energy`` and ``separation``.
+    sweep : bool
+        The focal-sweep model (:func:`tensor_cosdi.optics.sweep_psf_stack`:
+        every plane seen at every focal step through its own PSF) instead of
+        the thesis' per-plane model, where plane ``z`` is seen only at step
+        ``z`` and the codes alone tell the planes apart.  ``separation`` then
+        averages over the steps.
 
     Returns
     -------
@@ -128,7 +137,7 @@ def zernike_design(
     >>> [(r["mode"], r["amplitude"], r["psf_size"]) for r in recs]
     [(0, 0.0, 9), (6, 0.5, 9)]
     """
-    from .studies import sweep
+    from .studies import sweep as run_grid
 
     modes = [int(m) for m in modes]
     if any(m < 2 for m in modes):
@@ -143,9 +152,9 @@ def zernike_design(
     grid = {"aberration": cases, "psf_size": sizes, "seed": list(seeds)}
     run = partial(  # a module-level function: picklable for Dask workers
         zernike_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
-        method=method, reference_size=reference_size, **options,
+        method=method, reference_size=reference_size, sweep=bool(sweep), **options,
     )  # fmt: skip
-    recs = sweep(grid, run, client=client, progress=progress)
+    recs = run_grid(grid, run, client=client, progress=progress)
     for r in recs:
         r.pop("aberration", None)
     return recs

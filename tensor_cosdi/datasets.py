@@ -30,6 +30,7 @@ __all__ = [
     "REPORT_SCENES",
     "data_dir",
     "data_file",
+    "scene_or",
     "load_hsi",
     "cave",
 ]
@@ -80,6 +81,23 @@ def data_dir(path=None) -> Path:
         + ", ".join(map(str, candidates))
         + " — set TENSOR_COSDI_DATA to the folder of the CAVE hsi_train scenes"
     )
+
+
+def scene_or(name: str, fallback: str) -> tuple[str, str | None]:
+    """``(name, None)`` when the research scenes are here, else ``(fallback, why)``: how an
+    example runs on a plain install and says so.
+
+    Examples
+    --------
+    >>> scene, note = scene_or("cave.face", "colorchecker")
+    >>> scene in ("cave.face", "colorchecker")
+    True
+    """
+    try:
+        data_dir()
+    except FileNotFoundError as exc:
+        return fallback, f"no hsi_train folder ({exc}); using {fallback!r} instead"
+    return name, None
 
 
 def data_file(relative) -> Path:

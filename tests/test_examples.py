@@ -191,14 +191,20 @@ CHECKS = {
 }
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
-def test_example_runs_and_computes_what_it_shows(path, monkeypatch):
+def _run(path, monkeypatch):
+    """The example's module globals, run headless; it must draw a figure."""
     monkeypatch.setattr(plt, "show", lambda *a, **k: None)
     try:
         ns = runpy.run_path(str(path), run_name="__main__")
         assert plt.get_fignums(), f"{path.name} draws no figure"
     finally:
         plt.close("all")
+    return ns
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_example_runs_and_computes_what_it_shows(path, monkeypatch):
+    ns = _run(path, monkeypatch)
     assert path.stem in CHECKS, f"{path.name} has no check in tests/test_examples.py"
     CHECKS[path.stem](ns)
 
@@ -219,7 +225,7 @@ def test_examples_reach_the_research_data_only_through_datasets():
     assert READS_DATA, "no example reads the research data"
     for path in EXAMPLES:
         code = path.read_text().split('"""', 2)[-1]  # past the module docstring
-        assert '"shared"' not in code and "TENSOR_COSDI_DATA\")" not in code, path.name
+        assert '"shared"' not in code and 'TENSOR_COSDI_DATA")' not in code, path.name
 
 
 @pytest.mark.parametrize("path", READS_DATA, ids=[p.stem for p in READS_DATA])
@@ -231,12 +237,7 @@ def test_example_runs_from_a_plain_install_without_the_research_data(
     from tensor_cosdi import datasets
 
     monkeypatch.setattr(datasets, "_roots", lambda: [tmp_path])
-    monkeypatch.setattr(plt, "show", lambda *a, **k: None)
-    try:
-        ns = runpy.run_path(str(path), run_name="__main__")
-        assert plt.get_fignums(), f"{path.name} draws no figure"
-    finally:
-        plt.close("all")
+    ns = _run(path, monkeypatch)
     out = capsys.readouterr().out
     assert str(tmp_path) in out, f"{path.name} does not say the data are missing"
     CHECKS[path.stem](ns)

@@ -21,12 +21,9 @@ import numpy as np
 from tensor_cosdi import datasets, optics, plot, studies
 from tensor_cosdi._studies_optics import DEPTHS_MM, _lens
 
-try:
-    datasets.data_dir()
-    scene = "cave.face"
-except FileNotFoundError as exc:
-    print(f"no hsi_train folder ({exc}); using the ColorChecker instead")
-    scene = "colorchecker"
+scene, note = datasets.scene_or("cave.face", "colorchecker")  # real spectra where present
+if note:
+    print(note)
 
 # %%
 # The PSF of a point 200 mm in front of focus at 550 nm, cut to 9 and to 41 pixels

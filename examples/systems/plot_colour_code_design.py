@@ -25,12 +25,9 @@ import numpy as np
 
 from tensor_cosdi import datasets, plot, studies
 
-try:
-    datasets.data_dir()
-    scene = "cave.face"
-except FileNotFoundError as exc:
-    print(f"no hsi_train folder ({exc}); using the ColorChecker instead")
-    scene = "colorchecker"
+scene, note = datasets.scene_or("cave.face", "colorchecker")  # real spectra where present
+if note:
+    print(note)
 filters, kappas = (1, 2, 4, 8, 16), (0.25, 0.5, 0.75)
 recs = studies.colour_code_design(
     filters, kappas, scene=scene, shape=(48, 48), n_bands=16, snr_db=30, progress=False

@@ -19,6 +19,8 @@ OWN = {"avsi": {"cassi_vsi"}, "dfa": {"cassdi_dfa"}, "pnp_admm": {"cs2li", "mu_c
 #: Methods whose defaults are weights trained for one configuration (tested in tests/learn, with
 #: a clear error for any other system).
 TRAINED = {"dcosnet"}
+#: Methods for systems with PSFs only (the problems here have none): tests/solvers/test_split_tv.py.
+NEEDS_PSFS = {"split_tv"}
 #: (method, system) pairs measured *not* to beat LSQ at 32×32×8, 30 dB, chelsea, seed 0 — the
 #: thesis'
 #: fixed-basis WDCT baseline gains nothing over LSQ at this size (PSNR dB, WDCT vs LSQ):
@@ -46,7 +48,7 @@ def table():
         p = _problem(name)
         row = {}
         for method, entry in tc.solvers.METHODS.items():
-            if method in OWN and name not in OWN[method] or method in TRAINED:
+            if method in OWN and name not in OWN[method] or method in TRAINED | NEEDS_PSFS:
                 continue
             if not entry.available:  # its defaults need an optional module: a clear error
                 with pytest.raises(ImportError, match="pip install"):

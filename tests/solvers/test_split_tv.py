@@ -11,7 +11,9 @@ from tensor_cosdi.systems import CASSDIDFA
 def problem(n=32, nl=6, size=15, snr=30):
     wl = scenes.default_wavelengths(nl)
     lens = optics.Lens(focal_mm=50, aperture_radius_mm=1.5, focus_mm=1000, pixel_um=6)
-    psfs = optics.psf_stack(wl, [800.0, 1300.0], lens=lens, zernike={6: 0.25}, size=size)
+    psfs = optics.psf_stack(
+        wl, [800.0, 1300.0], lens=lens, zernike={6: 0.25}, size=size, min_share=None
+    )
     planes = scenes.depth_planes(scenes.motorcycle((n, n), [550.0])[1], 2)
     cube = scenes.depth_layers(scenes.photo("chelsea", (n, n), wl), planes, 2)
     system = CASSDIDFA(codes.depth_codes((n, n), 2, rng=0), n_bands=nl, psfs=psfs, wavelengths=wl)
@@ -43,6 +45,16 @@ def test_the_padded_circular_blur_is_the_systems_blur():
     a, b = g.random(pad + (4, 2)), g.random(pad + (4, 2))
     assert np.vdot(conv(a), b) == pytest.approx(np.vdot(a, conv(b, adjoint=True)), rel=1e-12)
     assert power.shape == (pad[0], pad[1] // 2 + 1, 4, 2)
+
+
+def test_split_tv_does_not_depend_on_the_measurement_units():
+    system, _, g = problem(n=16, nl=4, size=9)
+    g = np.asarray(g)
+    ref = np.asarray(tc.reconstruct(system, g, "split_tv", max_iter=10).cube)
+    for scale in (1e-300, 1e-5, 1e300):
+        cube = np.asarray(tc.reconstruct(system, g * scale, "split_tv", max_iter=10).cube)
+        assert np.isfinite(cube).all()
+        assert np.linalg.norm(cube / scale - ref) < 1e-6 * np.linalg.norm(ref), scale
 
 
 def test_split_tv_refuses_what_it_cannot_split():

@@ -147,7 +147,7 @@ def split_tv(
             prior_term=0.0,
         ):
             break
-    return cube, loop.history, loop.converged
+    return tl.copy(cube), loop.history, loop.converged  # not a view of the padded grid
 
 
 register_method(

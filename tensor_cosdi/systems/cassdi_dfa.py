@@ -68,7 +68,8 @@ class CASSDIDFA(System):
     Notes
     -----
     Without PSFs ``A Aᵀ`` is diagonal (closed-form Woodbury); with PSFs it has
-    no cheap structure and ``solve_normal`` uses conjugate gradients (SPEC §4).
+    no cheap structure and ``solve_normal`` uses conjugate gradients; ``method="split_tv"``
+    splits the blur off instead and stays in closed form (SPEC §4).
 
     Examples
     --------
@@ -104,7 +105,7 @@ class CASSDIDFA(System):
                     f"focal sweep, (h, w, Nλ, Nz, K) with K = {nz} steps; got {p.shape}"
                 )
             if p.ndim == 5:
-                op = self._sweep(p, nl, wavelengths)
+                op = self._sweep(p, nl)
                 self._finish(
                     op,
                     wavelengths=wavelengths_for(wavelengths, nl),
@@ -129,7 +130,7 @@ class CASSDIDFA(System):
             measurement_axes=("x", "y"),
         )
 
-    def _sweep(self, p, nl, wavelengths):
+    def _sweep(self, p, nl):
         """The focal-sweep operator of a 5-D PSF stack (see the class docstring)."""
         nx, ny, steps = self.codes.shape
         if p.shape[2] not in (1, nl) or p.shape[4] != steps or p.shape[3] < 1:

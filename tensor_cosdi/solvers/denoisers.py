@@ -85,6 +85,23 @@ def tv(x, sigma: float, *, n_iter: int = 50):
     return _like(out.reshape(shape), x)
 
 
+def _device_step(f, p, g, w: float):
+    """One Chambolle step in backend operations on channel-first planes ``f``: returns the
+    primal ``f + d`` (``d`` the negative divergence of the dual ``p``), ``d``, the gradient
+    norm, and the updated dual.  ``g`` is a work buffer of ``p``'s shape whose last row /
+    column stay 0."""
+    import tensorly as tl
+
+    d = -(p[0] + p[1])
+    d[:, 1:] += p[0][:, :-1]
+    d[:, :, 1:] += p[1][:, :, :-1]
+    out = f + d
+    g[0][:, :-1] = out[:, 1:] - out[:, :-1]
+    g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
+    norm = tl.sqrt(g[0] * g[0] + g[1] * g[1])
+    return out, d, norm, (p - 0.25 * g) / (1.0 + (0.25 / w) * norm)
+
+
 def _tv_on_device(x, w: float, n_iter: int, eps: float = 2.0e-4):
     """scikit-image's ``denoise_tv_chambolle(x, weight=w, eps=eps, max_num_iter=n_iter,
     channel_axis=2)`` in backend operations, so the tensor never leaves its device.
@@ -99,26 +116,16 @@ def _tv_on_device(x, w: float, n_iter: int, eps: float = 2.0e-4):
         raise ValueError(f"tv: sigma must be > 0, got {w!r}")
     shape = tuple(x.shape)
     f = tl.moveaxis(tl.reshape(x, shape[:2] + (-1,)), 2, 0)  # (channels, H, W)
-    p = B.zeros_like_shape((2,) + tuple(f.shape), f)
-    g = B.zeros_like_shape(tuple(p.shape), f)  # its last row / column stay 0
-    d = B.zeros_like_shape(tuple(f.shape), f)
-    result, done, tau = f, np.zeros(f.shape[0], bool), 0.25
+    p = B.zeros_like_shape((2,) + tuple(f.shape), f)  # a zero dual: the first primal is f
+    g = B.zeros_like_shape(tuple(p.shape), f)
+    result, done = f, np.zeros(f.shape[0], bool)
     e_init = e_prev = None
     for i in range(int(n_iter)):
-        if i > 0:
-            d = -(p[0] + p[1])
-            d[:, 1:] += p[0][:, :-1]
-            d[:, :, 1:] += p[1][:, :, :-1]
-        out = f + d if i > 0 else f
-        g[0][:, :-1] = out[:, 1:] - out[:, :-1]
-        g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
-        norm = tl.sqrt(g[0] * g[0] + g[1] * g[1])
+        out, d, norm, p = _device_step(f, p, g, w)
         energy = tl.sum(tl.reshape(d * d + w * norm, (f.shape[0], -1)), axis=1)
-        p = (p - tau * g) / (1.0 + (tau / w) * norm)
         e = np.asarray(B.to_numpy(energy), np.float64) / (shape[0] * shape[1])
         if i == 0:
-            e_init, e_prev = e, e
-            result = out
+            e_init, e_prev, result = e, e, out
             continue
         stop = (np.abs(e_prev - e) < eps * e_init) & ~done
         keep = B.tensor_like(np.where(done, 1.0, 0.0)[:, None, None], f)
@@ -195,16 +202,10 @@ class WarmTV:
             or tuple(self.p.shape[1:]) != tuple(f.shape)
         ):
             self.p = B.zeros_like_shape((2,) + tuple(f.shape), f)
-        p, tau = self.p, 0.25
-        g = B.zeros_like_shape(tuple(p.shape), f)  # its last row / column stay 0
+        p = self.p
+        g = B.zeros_like_shape(tuple(p.shape), f)
         for _ in range(self.n_iter):
-            d = -(p[0] + p[1])
-            d[:, 1:] += p[0][:, :-1]
-            d[:, :, 1:] += p[1][:, :, :-1]
-            out = f + d
-            g[0][:, :-1] = out[:, 1:] - out[:, :-1]
-            g[1][:, :, :-1] = out[:, :, 1:] - out[:, :, :-1]
-            p = (p - tau * g) / (1.0 + (tau / w) * tl.sqrt(g[0] * g[0] + g[1] * g[1]))
+            out, _, _, p = _device_step(f, p, g, w)
         self.p = p
         return tl.reshape(tl.moveaxis(out, 0, 2), shape)
 

@@ -28,6 +28,7 @@ __all__ = [
     "batched_solve",
     "unfolding_gram",
     "on_accelerator",
+    "kth_smallest",
     "real_dtype_name",
 ]
 
@@ -232,3 +233,14 @@ def unfolding_gram(x, mode: int) -> np.ndarray:
             blk = v[p0 : p0 + rows, :, c0 : c0 + cols].to(torch.float64)
             gram += torch.einsum("anb,amb->nm", blk, blk)
     return gram.cpu().numpy()
+
+
+def kth_smallest(x, k: int) -> float:
+    """The ``k``-th smallest entry (from 0) of ``x`` flattened, without sorting it all (NumPy's
+    ``partition``; PyTorch's ``kthvalue`` on the tensor's own device)."""
+    if isinstance(x, np.ndarray):
+        v = x.ravel()
+        return float(np.partition(v, k)[k])
+    if hasattr(x, "kthvalue"):
+        return float(x.reshape(-1).kthvalue(int(k) + 1).values)
+    return kth_smallest(np.asarray(to_numpy(x)), k)

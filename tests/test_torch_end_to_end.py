@@ -83,7 +83,7 @@ def test_tv_objective_and_robust_peak_stay_on_an_accelerator():
 
     x = np.random.default_rng(6).standard_normal((30, 20, 7)).astype(np.float32)
     t = torch.from_numpy(x)
-    with pytest.MonkeyPatch.context() as mp:
+    with pytest.MonkeyPatch.context() as mp, tl.backend_context("pytorch"):
         mp.setattr(_backend, "on_accelerator", torch.is_tensor)  # a CUDA tensor's path
         mp.setattr(_backend, "to_numpy", lambda a: pytest.fail("copied to the host"))
         peak, tv = robust_peak(t), total_variation(t)

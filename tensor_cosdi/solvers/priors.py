@@ -105,18 +105,14 @@ def robust_peak(x) -> float:
     over the noiseless one while the 99.9th percentile moves by < 10 %, and
     a strength tied to the maximum over-smooths every noisy measurement.
     """
-    if B.on_accelerator(x) and hasattr(x, "detach") and x.numel():  # stays on the GPU
-        a = x.detach().abs().flatten()
-        k = min(int(np.ceil(PEAK_PERCENTILE / 100 * (a.numel() - 1))), a.numel() - 1)
-        p = float(a.kthvalue(k + 1).values)  # np.partition's k-th is the (k + 1)-th smallest
-        return max(p if p > 0 else float(a.max()), float(np.finfo(float).tiny))
-    a = np.abs(np.asarray(B.to_numpy(x))).ravel()
-    if a.size == 0:
+    # on an accelerator |x| stays on the device; else a NumPy array (a view for host tensors)
+    a = tl.abs(x) if B.on_accelerator(x) else np.abs(np.asarray(B.to_numpy(x)))
+    size = int(np.prod(tuple(a.shape)))
+    if size == 0:
         return float(np.finfo(float).tiny)
-    k = min(int(np.ceil(PEAK_PERCENTILE / 100 * (a.size - 1))), a.size - 1)
-    p = float(np.partition(a, k)[k])
+    p = B.kth_smallest(a, min(int(np.ceil(PEAK_PERCENTILE / 100 * (size - 1))), size - 1))
     if not p > 0:
-        p = float(a.max())
+        p = float(tl.max(a))
     return max(p, float(np.finfo(float).tiny))
 
 
@@ -130,12 +126,11 @@ def annealed(start: float, end: float, step: int, n_steps: int) -> float:
 
 
 def total_variation(x) -> float:
-    """Isotropic 2-D TV over axes 0 and 1, summed over every other index (in float64; a PyTorch
-    tensor on a GPU stays there)."""
-    if B.on_accelerator(x) and hasattr(x, "detach"):
-        a = x.detach().double()
-        inner = ((a[1:, :-1] - a[:-1, :-1]) ** 2 + (a[:-1, 1:] - a[:-1, :-1]) ** 2).sqrt().sum()
-        edge = (a[-1, 1:] - a[-1, :-1]).abs().sum() + (a[1:, -1] - a[:-1, -1]).abs().sum()
+    """Isotropic 2-D TV over axes 0 and 1, summed over every other index (in float64 on the
+    host; a tensor on an accelerator stays there)."""
+    if B.on_accelerator(x):  # backend operations on the device (in the tensor's dtype)
+        inner = tl.sum(tl.sqrt((x[1:, :-1] - x[:-1, :-1]) ** 2 + (x[:-1, 1:] - x[:-1, :-1]) ** 2))
+        edge = tl.sum(tl.abs(x[-1, 1:] - x[-1, :-1])) + tl.sum(tl.abs(x[1:, -1] - x[:-1, -1]))
         return float(inner + edge)
     a = np.asarray(B.to_numpy(x))
     dx = a[1:, :-1] - a[:-1, :-1]  # forward differences, the last row/column has one neighbour

@@ -270,30 +270,9 @@ def psf_stack(
     >>> P.shape, bool(np.allclose(P.sum(axis=(0, 1)), 1))
     ((41, 41, 2, 3), True)
     """
-    lam = np.atleast_1d(np.asarray(wavelengths_nm, dtype=np.float64))
-    dep = np.atleast_1d(np.asarray(depths_mm, dtype=np.float64))
-    if lam.ndim != 1 or dep.ndim != 1 or not lam.size or not dep.size:
-        raise ValueError("wavelengths_nm and depths_mm must be non-empty 1-D lists")
-    out = np.empty((size, size, lam.size, dep.size))
-    worst = (2.0, None, None)
-    for i, w in enumerate(lam):
-        for k, z in enumerate(dep):
-            out[:, :, i, k], share = psf(
-                w, z, lens=lens, zernike=zernike, size=size, supersample=supersample,
-                return_share=True,
-            )  # fmt: skip
-            worst = min(worst, (share, w, z), key=lambda t: t[0])
-    if min_share is not None and worst[0] < min_share:
-        import warnings
-
-        warnings.warn(
-            f"psf_stack: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
-            f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); renormalised to the "
-            "crop it is a different PSF — pass a larger size (or min_share=None)",
-            PSFCropWarning,
-            stacklevel=2,
-        )
-    return out
+    lam, dep = _lists(wavelengths_nm=wavelengths_nm, depths_mm=depths_mm)
+    out = _psf_grid(lens, lam, dep, None, zernike, size, supersample, min_share, "psf_stack")
+    return out[..., 0]
 
 
 def sweep_psf_stack(
@@ -315,19 +294,32 @@ def sweep_psf_stack(
     >>> P.shape, bool(P[10, 10, 0, 0, 0] > P[10, 10, 0, 0, 1])  # plane 0 sharpest at step 0
     ((21, 21, 1, 2, 2), True)
     """
+    lam, dep, foc = _lists(wavelengths_nm=wavelengths_nm, depths_mm=depths_mm, focus_mm=focus_mm)
+    return _psf_grid(lens, lam, dep, foc, zernike, size, supersample, min_share, "sweep_psf_stack")
+
+
+def _lists(**named):
+    """The named sequences as non-empty 1-D float arrays, or a ``ValueError`` naming them."""
+    out = [np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in named.values()]
+    if any(v.ndim != 1 or not v.size for v in out):
+        raise ValueError(f"{' and '.join(named)} must be non-empty 1-D lists")
+    return out
+
+
+def _psf_grid(lens, lam, dep, foc, zernike, size, supersample, min_share, caller):
+    """PSFs ``(size, size, Nλ, Nz, K)`` of the planes ``dep`` with the lens refocused on each of
+    ``foc`` by the mirror (``None``: not refocused, ``K = 1``); a :class:`PSFCropWarning` when
+    a crop holds less than ``min_share`` of a PSF's light."""
     lens = Lens() if lens is None else lens
-    lam, dep, foc = (
-        np.atleast_1d(np.asarray(v, dtype=np.float64))
-        for v in (wavelengths_nm, depths_mm, focus_mm)
-    )
-    if any(v.ndim != 1 or not v.size for v in (lam, dep, foc)):
-        raise ValueError("wavelengths_nm, depths_mm and focus_mm must be non-empty 1-D lists")
-    out = np.empty((size, size, lam.size, dep.size, foc.size))
+    steps = [None] if foc is None else list(foc)
+    out = np.empty((size, size, lam.size, dep.size, len(steps)))
     worst = (2.0, None, None)
     for i, w in enumerate(lam):
-        for k, f in enumerate(foc):
+        for k, f in enumerate(steps):
             for z, d in enumerate(dep):
-                omega = defocus_coefficient(lens, w, d) - defocus_coefficient(lens, w, f)
+                omega = defocus_coefficient(lens, w, d)
+                if f is not None:
+                    omega -= defocus_coefficient(lens, w, f)
                 out[:, :, i, z, k], share = pupil_psf(
                     w, lens=lens, size=size, omega=omega, zernike=zernike,
                     supersample=supersample, return_share=True,
@@ -337,10 +329,11 @@ def sweep_psf_stack(
         import warnings
 
         warnings.warn(
-            f"sweep_psf_stack: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
-            f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); pass a larger size",
+            f"{caller}: a {size}×{size} crop holds {worst[0]:.0%} of the PSF's light at "
+            f"{worst[1]:g} nm, {worst[2]:g} mm (below min_share={min_share}); renormalised to the "
+            "crop it is a different PSF — pass a larger size (or min_share=None)",
             PSFCropWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
     return out
 

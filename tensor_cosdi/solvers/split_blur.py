@@ -125,16 +125,17 @@ def split_tv(
     htg = embed(H._adjoint(g), (c0, c1))
     loop = engine.Loop(max_iter, tol, progress=progress, desc="split-TV")
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
-    cube = f0
+    cube, cw = f0, conv(w)
     for it in loop:
-        r = htg + r1 * (conv(w) - u1)
+        r = htg + r1 * (cw - u1)
         v = r / r1  # outside the crop H sees nothing: (ρ₁ I)⁻¹
         inner = H.solve_normal(r[c0 : c0 + nx, c1 : c1 + ny], r1)
         v[c0 : c0 + nx, c1 : c1 + ny] = inner
         rhs = r1 * conv(v + u1, adjoint=True) + r2 * (z - u2)
         w = B.irfftn(B.rfftn(rhs, s=pad, axes=(0, 1)) / (r1 * power + r2), s=pad, axes=(0, 1))
         z = tv(w + u2, tau / r2)
-        u1 = u1 + v - conv(w)
+        cw = conv(w)  # used by this dual step and the next v-step
+        u1 = u1 + v - cw
         u2 = u2 + w - z
         new = w[:nx, :ny]
         change = relative_change(new, cube)

@@ -161,6 +161,16 @@ def _zernike_design(ns):
     assert rec[6, 0.9, 41]["depth_accuracy"] < rec[0, 0.0, 41]["depth_accuracy"] - 0.03
 
 
+def _c3slfi_table(ns):
+    psnr = {(r["method"], r["n_snapshots"], r["snr_db"]): r["psnr"] for r in ns["recs"]}
+    assert len(psnr) == 8
+    for snr in (20.0, 40.0):  # a third snapshot helps OTD (+3 to +8.5 dB on face and chelsea);
+        assert psnr["otd", 3, snr] > psnr["otd", 2, snr] + 1.0, psnr  # WDCT: not on chelsea
+    for m in ("otd", "wdct"):  # less noise, better (+1.9 to +6.6 dB)
+        for k in (2, 3):
+            assert psnr[m, k, 40.0] > psnr[m, k, 20.0] + 0.5, psnr
+
+
 def _conditioning(ns):
     kappa = [c["cond_nonzero"] for c in ns["vsi"]]
     assert all(a > b for a, b in zip(kappa, kappa[1:])), kappa  # prints 3528 … 8.7
@@ -171,6 +181,7 @@ CHECKS = {
     "plot_conditioning": _conditioning,
     "plot_colour_code_design": _colour_code_design,
     "plot_zernike_design": _zernike_design,
+    "plot_c3slfi_table": _c3slfi_table,
     "plot_files_and_figures": _files_and_figures,
     "plot_real_spectra": _real_spectra,
     "plot_light_field_depth": _light_field,

@@ -32,6 +32,8 @@ __all__ = [
     "spectral_view",
     "sweep",
     "conditioning",
+    "conditioning_design",
+    "vsi_arms",
     "prism_grid",
     "colour_code_design",
     "zernike_design",
@@ -49,6 +51,7 @@ SCENES = scenes.SCENES
 
 _RENAMED = {"dual_camera": "dual_camera_cassi"}
 
+from ._studies_conditioning import conditioning_design, vsi_arms  # noqa: E402 - design κ
 from ._studies_design import c3slfi_table, colour_code_design  # noqa: E402 - design studies
 from ._studies_optics import zernike_design  # noqa: E402 - DFA aberration design (Sec. 4.3)
 from .optics.design import prism_grid  # noqa: E402 - the prism design study (thesis App. B)

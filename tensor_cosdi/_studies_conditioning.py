@@ -16,6 +16,8 @@ SHAPE_PARAMETERS = {
     ("cs2li", "n_patterns"): 3,
     ("mu_cosdi", "n_patterns"): 3,
 }
+#: The thesis' splitting ratios αT = 0, 0.1, …, 1.
+ALPHAS = tuple(round(0.1 * i, 1) for i in range(11))
 #: Default cube shapes of the sweep (32 × 32 × 8, plus the extra axis of 4-D imagers).
 DEFAULT_SHAPES = {"cassdi_dfa": (32, 32, 8, 3), "cs2li": (32, 32, 8, 4), "mu_cosdi": (32, 32, 8, 4)}
 
@@ -118,7 +120,7 @@ def _row_blocks_hdt(system):
 
 
 def vsi_arms(
-    scenes=("cave.face",), alphas=tuple(np.round(np.arange(0.0, 1.01, 0.1), 2)), *, snr_db=20.0,
+    scenes=("cave.face",), alphas=ALPHAS, *, snr_db=20.0,
     shape=(64, 64), n_bands=12, seeds=(0,), beta=0,
 ) -> list[dict]:  # fmt: skip
     """The CASSI-VSI beam-splitter design study of the thesis (Sec. 3.3.1, Fig. 19-20).

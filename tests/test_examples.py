@@ -174,7 +174,11 @@ def _c3slfi_table(ns):
 def _conditioning(ns):
     kappa = [c["cond_nonzero"] for c in ns["vsi"]]
     assert all(a > b for a, b in zip(kappa, kappa[1:])), kappa  # prints 3528 … 8.7
-    assert [c["structure"] for c in ns["sd"]] == ["diagonal"] + ["pixel_blocks"] * 3
+    assert [c["structure"] for c in ns["shots"]] == ["diagonal"] + ["pixel_blocks"] * 3
+    planes = [c["cond_nonzero"] for c in ns["planes"]]
+    assert all(a < b for a, b in zip(planes, planes[1:])), planes  # 7 … 35
+    h, hd = [r["cond_H"] for r in ns["arms"][1:-1]], [r["cond_HDt"] for r in ns["arms"][1:-1]]
+    assert h[0] > h[-1] and hd[0] < hd[-1]  # the thesis' Fig. 19: they cross
 
 
 CHECKS = {

@@ -13,6 +13,7 @@ from ._base import METHODS, Method, Result, methods, reconstruct, register_metho
 from .avsi import avsi
 from .dcosnet import dcosnet
 from .dfa import multiresolution_dfa
+from .dictionary import PatchDictionary, dictionary_admm, train_dictionary
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
 from .nonlocal_prior import nonlocal_tucker
@@ -46,6 +47,9 @@ __all__ = [
     "split_tv",
     "dcosnet",
     "twist_tv",
+    "dictionary_admm",
+    "train_dictionary",
+    "PatchDictionary",
     "denoisers",
     "multiresolution_dfa",
     "nonlocal_tucker",

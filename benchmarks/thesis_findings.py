@@ -378,9 +378,10 @@ def table1_dl_study(args, log):
         log(f"C3SLFI DL {r['scene']:12s} K={r['n_snapshots']} {r['method']} PSNR {r['psnr']:.2f}")
     ks = sorted({r["n_snapshots"] for r in recs})
     lines = [
-        f"{size}×{size} lenslet image, 4×4 views, 31 bands, 20 dB, scenes {', '.join(names)}; "
-        "the dictionary (2× over-complete, 3968 atoms) learned on the tuning scenes' light "
-        "fields; PSNR dB / SAM ° / seconds (means).\n",
+        f"{size}×{size} lenslet image, 4×4 views, {n_bands} bands, 20 dB, scenes "
+        f"{', '.join(names)}; the dictionary (8×8 patches, 2× over-complete: "
+        f"{2 * 64 * n_bands} atoms) learned on the tuning scenes' light fields; PSNR dB / "
+        "SAM ° / seconds (means).\n",
         "| method | " + " | ".join(f"K = {k}" for k in ks) + " |",
         "|---" + "|---" * len(ks) + "|",
     ]

@@ -173,7 +173,8 @@ class PatchDictionary:
         Y = win[rows][:, cols].transpose(0, 1, 3, 4, 2).reshape(len(rows) * len(cols), -1).T
         dim = Y.shape[0]
         tol = dim * (NOISE_GAIN * max(float(sigma), 1e-12)) ** 2
-        X = _omp(self.atoms, Y, n_nonzero=self.max_nonzero, tol=tol, G=self._gram())
+        k = min(self.max_nonzero, self.n_atoms)
+        X = _omp(self.atoms, Y, n_nonzero=k, tol=tol, G=self._gram())
         P = (self.atoms @ X).T.reshape(len(rows), len(cols), p, p, self.channels)
         out = np.zeros_like(xn)
         weight = np.zeros(xn.shape[:2])

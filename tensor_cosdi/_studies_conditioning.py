@@ -106,16 +106,17 @@ def conditioning_design(
 def _row_blocks_hdt(system):
     """Per-detector-row blocks of ``H Dᵀ`` (``Nx`` matrices ``(Ny + S) × Ny``) of CASSI-VSI.
 
-    ``Dᵀ`` spreads a panchromatic image over the bands; CASSI-VSI's rows do
-    not mix, so probing every column ``j`` of all rows at once gives column
-    ``j`` of every row's block."""
-    nx, ny, nl = system.cube_shape
-    width = system.measurement_shape[1]
-    blocks = np.zeros((nx, width, ny))
+    ``Dᵀ`` (the adjoint of :attr:`~tensor_cosdi.systems.System.decimation`)
+    spreads a panchromatic image over the bands; CASSI-VSI's rows do not mix,
+    so probing every column ``j`` of all rows at once gives column ``j`` of
+    every row's block."""
+    nx, ny, _ = system.cube_shape
+    spread = system.decimation.adjoint
+    blocks = np.zeros((nx, system.measurement_shape[1], ny))
     for j in range(ny):
-        z = np.zeros((nx, ny, nl))
-        z[:, j, :] = 1.0
-        blocks[:, :, j] = np.asarray(system.forward(z))
+        z = np.zeros((nx, ny))
+        z[:, j] = 1.0
+        blocks[:, :, j] = np.asarray(system.forward(spread(z)))
     return blocks
 
 

@@ -178,11 +178,11 @@ class PatchDictionary:
         P = (self.atoms @ X).T.reshape(len(rows), len(cols), p, p, self.channels)
         out = np.zeros_like(xn)
         weight = np.zeros(xn.shape[:2])
-        for i in range(p):
+        for i in range(p):  # within one offset the patches' pixels are distinct: plain adds
             for j in range(p):
-                ri, cj = (rows + i)[:, None], (cols + j)[None, :]
-                np.add.at(out, (ri, cj), P[:, :, i, j])
-                np.add.at(weight, (ri, cj), 1.0)
+                at = np.ix_(rows + i, cols + j)
+                out[at] += P[:, :, i, j]
+                weight[at] += 1.0
         out /= weight[:, :, None]
         return B.tensor_like(out.astype(np.asarray(B.to_numpy(x)).dtype, copy=False), x)
 

@@ -181,7 +181,16 @@ def _conditioning(ns):
     assert h[0] > h[-1] and hd[0] < hd[-1]  # the thesis' Fig. 19: they cross
 
 
+def _dl_baseline(ns):
+    psnr = ns["psnr"]
+    if ns["test"] == "cave.face":  # real spectra: measured 28.0 dB against 25.6 / 24.7
+        assert psnr["dl"] > max(psnr["wdct"], psnr["otd"]) + 1.5, psnr
+    else:  # photos (no research data): measured 20.7 dB, LSQ 20.5 dB
+        assert psnr["dl"] > 19.5, psnr
+
+
 CHECKS = {
+    "plot_dl_baseline": _dl_baseline,
     "plot_conditioning": _conditioning,
     "plot_colour_code_design": _colour_code_design,
     "plot_zernike_design": _zernike_design,

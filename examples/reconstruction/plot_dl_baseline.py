@@ -1,0 +1,51 @@
+"""
+A learned patch dictionary (K-SVD) as a prior: the thesis' DL-3D baseline
+=========================================================================
+
+The thesis compares its online Tucker dictionary (OTD) with "DL": an
+over-complete dictionary of ``patch × patch × bands`` patches learned by
+K-SVD on *other* scenes.  :func:`tensor_cosdi.solvers.train_dictionary`
+learns one, and ``method="dl"`` reconstructs with it as the prior of GAP.
+Here: C3SLFI light fields (the 3-D lenslet form), a dictionary learned on
+four tuning scenes, scored on a held-back real scene (32×32, 8 bands,
+20 dB: DL 28.0 dB against WDCT 25.6 and OTD 24.7).  Without the research
+data it learns on photos and scores the colour checker, where it trails
+(20.7 dB against 21.8 and 22.0, least squares 20.5): a dictionary is only as good as its
+training scenes are like the scene.
+"""
+
+# %%
+import matplotlib.pyplot as plt
+import numpy as np
+
+import tensor_cosdi as tc
+from tensor_cosdi import datasets, studies
+
+opts = {"shape": (32, 32), "n_bands": 8, "rng": 0, "n_snapshots": 2, "views": (2, 2)}
+test, why = datasets.scene_or("cave.face", "colorchecker")
+if why:
+    print(why)
+    train = ["chelsea", "coffee", "astronaut", "rocket"]
+else:
+    train = [f"cave.{s}" for s in datasets.TUNE_SCENES[:4]]
+cubes = [studies.make_problem("c3slfi", s, **opts).cube for s in train]
+dictionary = tc.solvers.train_dictionary(cubes, patch=6, n_patches=1500, n_iter=3)
+print(dictionary)
+
+# %%
+p = studies.make_problem("c3slfi", test, snr_db=20.0, **opts)
+psnr, cubes_out = {}, {}
+for method, options in (("wdct", {}), ("otd", {}), ("dl", {"dictionary": dictionary})):
+    res = tc.reconstruct(p.system, p.measurement, method, **options)
+    psnr[method], cubes_out[method] = studies.score(p, res.cube)["psnr"], res.cube
+    print(f"{method:5s} {psnr[method]:.2f} dB in {res.seconds:.2f} s")
+
+# %%
+band = p.system.cube_shape[2] // 2
+fig, axes = plt.subplots(1, 4, figsize=(10, 2.8))
+for ax, (title, cube) in zip(axes, [("truth", p.cube), *cubes_out.items()]):
+    ax.imshow(np.asarray(cube)[:, :, band], cmap="gray", vmin=0, vmax=float(np.max(p.cube)))
+    ax.set_title(title if title == "truth" else f"{title} {psnr[title]:.1f} dB")
+    ax.axis("off")
+fig.tight_layout()
+plt.show()

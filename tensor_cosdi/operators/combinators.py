@@ -287,12 +287,25 @@ class Stack(TensorOperator):
         return out
 
     def _gram_pattern(self):
-        from .woodbury import Pattern
+        """Per-pixel blocks across the shots when no shot couples pixels; a band along one
+        axis with the shot axis folded in when the shots couple neighbours along it (a
+        dispersed frame beside an undispersed one); else unknown."""
+        from .woodbury import MAX_BANDWIDTH, Pattern, pattern_from_terms
 
         routes = [o._routing() for o in self.operators]
         if all(r is not None and r.single for r in routes) and len({r.key for r in routes}) == 1:
             return Pattern("blocks", self.axis)
-        return None
+        # shot k's entry o and shot k''s entry o' are coupled exactly when the terms of the sum
+        # Σ_k A_k would couple o and o': the same widths, with the shot axis added
+        inner = pattern_from_terms(self.operators[0], self.operators)
+        if inner is None:
+            return None
+        if inner.kind == "diag":
+            return Pattern("blocks", self.axis)
+        axis = inner.axis + (inner.axis >= self.axis)
+        if (inner.width + 1) * len(self.operators) - 1 > MAX_BANDWIDTH:
+            return None
+        return Pattern("band", axis, inner.width, block_axis=self.axis)
 
     def _to_matrix(self):
         K = len(self.operators)

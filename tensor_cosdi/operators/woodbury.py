@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import scipy.linalg
@@ -66,12 +67,14 @@ class Pattern:
 
     ``kind`` is ``"diag"``; ``"blocks"`` (entries that differ only along
     ``axis``); or ``"band"`` (entries that differ only along ``axis``, by at
-    most ``width``).
+    most ``width``, and, with ``block_axis``, along ``block_axis`` freely:
+    :class:`~tensor_cosdi.operators._folded.FoldedBanded`).
     """
 
     kind: str
     axis: int = -1
     width: int = 0
+    block_axis: int | None = None
 
 
 # --------------------------------------------------------------------- patterns
@@ -184,26 +187,35 @@ def _probe(op, pattern: Pattern):
         # cols[k][..., k'] = (A Aᵀ)[k', k]
         Q = np.stack(cols, axis=-1)
         return PixelBlocks(Q, axis)
+    if pattern.kind == "band" and pattern.block_axis is not None:
+        from ._folded import probe_folded
+
+        return probe_folded(op, pattern, _apply_gram, _probe_band)
     if pattern.kind == "band":
-        axis, b = pattern.axis, pattern.width
-        n = shape[axis]
-        m = 2 * b + 1
-        pos = np.arange(n)
-        results = []
-        for r in range(min(m, n)):
-            comb = (pos % m == r).astype(float)
-            probe = np.broadcast_to(
-                comb.reshape([-1 if a == axis else 1 for a in range(len(shape))]), shape
-            ).copy()
-            results.append(np.moveaxis(_apply_gram(op, probe), axis, -1))
-        res = np.stack(results)  # (r, ..., n)
-        bands = np.zeros((b + 1,) + res.shape[1:])
-        for o in range(b + 1):
-            p = np.arange(n - o)
-            # the comb that holds column p + o has residue (p + o) mod m
-            bands[o, ..., : n - o] = np.moveaxis(res[(p + o) % m, ..., p], 0, -1)
-        return RowBanded(bands, axis)
+        bands = _probe_band(partial(_apply_gram, op), shape, pattern.axis, pattern.width)
+        return RowBanded(bands, pattern.axis)
     raise ValueError(f"unknown pattern kind {pattern.kind!r}")
+
+
+def _probe_band(gram, shape, axis: int, b: int) -> np.ndarray:
+    """``bands[o, ..., p] = (A Aᵀ)[p, p + o]`` along ``axis`` (moved last) from ``2b + 1`` combs."""
+    n = shape[axis]
+    m = 2 * b + 1
+    pos = np.arange(n)
+    results = []
+    for r in range(min(m, n)):
+        comb = (pos % m == r).astype(float)
+        probe = np.broadcast_to(
+            comb.reshape([-1 if a == axis else 1 for a in range(len(shape))]), shape
+        ).copy()
+        results.append(np.moveaxis(gram(probe), axis, -1))
+    res = np.stack(results)  # (r, ..., n)
+    bands = np.zeros((b + 1,) + res.shape[1:])
+    for o in range(b + 1):
+        p = np.arange(n - o)
+        # the comb that holds column p + o has residue (p + o) mod m
+        bands[o, ..., : n - o] = np.moveaxis(res[(p + o) % m, ..., p], 0, -1)
+    return bands
 
 
 # --------------------------------------------------------------------- structures

@@ -16,6 +16,7 @@ from .dfa import multiresolution_dfa
 from .dictionary import PatchDictionary, dictionary_admm, train_dictionary
 from .gap_tv import gap_tv, tv_denoise  # importing a method module registers it
 from .lsq import regularised_lsq
+from .lytro import lytro_cassi, lytro_dictionary
 from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
@@ -49,6 +50,8 @@ __all__ = [
     "twist_tv",
     "dictionary_admm",
     "train_dictionary",
+    "lytro_cassi",
+    "lytro_dictionary",
     "PatchDictionary",
     "denoisers",
     "multiresolution_dfa",

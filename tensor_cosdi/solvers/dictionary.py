@@ -280,14 +280,20 @@ def train_dictionary(
 
 def dictionary_admm(
     system, measurement, *, dictionary=None, sigma=0.05, sigma_end=0.01, max_iter=30,
-    warm="gap_tv", warm_iter=20, accelerate="auto", eps="auto", tol=1e-5, progress=False,
+    warm="gap_tv", warm_iter=20, accelerate="auto", eps="auto", splitting="gap", rho=0.15,
+    tol=1e-5, progress=False,
 ):  # fmt: skip
-    """GAP with a K-SVD patch dictionary as its prior (registered as ``"dl"``).
+    """GAP (or ADMM) with a K-SVD patch dictionary as its prior (registered as ``"dl"``).
 
     ``dictionary`` is a :class:`PatchDictionary` or the path of one saved
     with :meth:`PatchDictionary.save`; train it on other scenes with
-    :func:`train_dictionary`.
+    :func:`train_dictionary`.  ``splitting="admm"`` replaces GAP's
+    ``(AAᵀ + εI)⁻¹`` projection by ADMM's ``(AᵀA + ρI)⁻¹`` step (``ρ = rho``
+    relative to the sensing gain), which does not amplify noise along the
+    weak directions of an ill-conditioned ``A Aᵀ`` (Lytro-CASSI, κ ≈ 10⁸);
+    ``warm`` is ``"gap_tv"``, ``"otd"`` or ``"none"``.
     """
+    from ._base import check_positive
     from .pnp_gap import gap_settings, warm_started_gap
     from .priors import Denoiser
 
@@ -300,12 +306,16 @@ def dictionary_admm(
         dictionary = PatchDictionary.load(dictionary)
     if not isinstance(dictionary, PatchDictionary):
         raise TypeError(f"dictionary must be a PatchDictionary or a path, got {type(dictionary)}")
+    if splitting not in ("gap", "admm"):
+        raise ValueError(f"splitting must be 'gap' or 'admm', got {splitting!r}")
+    check_positive("rho", rho)
     dictionary._check(tuple(system.cube_shape))
     accelerate, eps, _ = gap_settings(measurement, accelerate, eps)
     prior = Denoiser(dictionary, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=True)
     return warm_started_gap(
         system, measurement, prior, warm=warm, warm_iter=warm_iter, accelerate=accelerate,
-        eps=eps, max_iter=max_iter, tol=tol, progress=progress, desc="GAP K-SVD dictionary",
+        eps=eps, max_iter=max_iter, tol=tol, progress=progress,
+        desc="K-SVD dictionary " + splitting.upper(), rho=rho if splitting == "admm" else None,
     )  # fmt: skip
 
 
@@ -318,7 +328,7 @@ def _register():
         {
             "dictionary": None, "sigma": 0.05, "sigma_end": 0.01, "max_iter": 30,
             "warm": "gap_tv", "warm_iter": 20, "accelerate": "auto", "eps": "auto",
-            "tol": 1e-5, "progress": False,
+            "splitting": "gap", "rho": 0.15, "tol": 1e-5, "progress": False,
         },  # fmt: skip
         "GAP with a K-SVD patch dictionary learned on other scenes (thesis' DL baseline)",
     )

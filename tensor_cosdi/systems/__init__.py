@@ -9,6 +9,7 @@ system                      cube → measurement                                
 :class:`CASSIVSI`           ``(Nx, Ny, Nλ) → (Nx, Ny+S)``                         row-banded
 :class:`CASSDIDFA`          ``(Nx, Ny, Nλ, Nz) → (Nx, Ny+S)``                     diagonal; PSFs: CG
 :class:`C3SLFI`             ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2, K)`` or 5-D                  K×K per pixel
+:class:`LytroCASSI`         ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2+S, K+3)``                     none (CG)
 :class:`CS2LI`              ``(Nx, Ny, Nλ, Nt) → (Nx, Ny, Nt)``                   diagonal
 :class:`MuCoSDI`            SL / LF / monocular on the dual-disperser core       diagonal
 ==========================  ==================================================  =================
@@ -19,7 +20,7 @@ system                      cube → measurement                                
 thesis' explicit sensing matrix, for tests), and ``Cls.example(...)`` builds
 a seeded instance.  :data:`REGISTRY` names them all (``"sd_cassi"``,
 ``"dd_cassi"``, ``"dual_camera_cassi"``, ``"cassi_vsi"``, ``"cassdi_dfa"``,
-``"c3slfi"``, ``"cs2li"``, ``"mu_cosdi"``); each class also carries its
+``"c3slfi"``, ``"lytro_cassi"``, ``"cs2li"``, ``"mu_cosdi"``); each class also carries its
 bundle state, frame order, depth channel and seeded problem
 (:mod:`~tensor_cosdi.systems._roles`).
 """
@@ -32,6 +33,7 @@ from .cassdi_dfa import CASSDIDFA
 from .cassi import DDCASSI, SDCASSI, DualCameraCASSI
 from .cassi_vsi import CASSIVSI
 from .cs2li import CS2LI, fringe_cube
+from .lytro_cassi import LytroCASSI
 from .mu_cosdi import MODALITIES, MuCoSDI
 
 
@@ -60,7 +62,8 @@ class SystemRegistry(Registry):
 REGISTRY = SystemRegistry("system")
 """``name → System subclass``, read-only: every imager the library knows (``register_class`` adds
 yours)."""
-for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, CS2LI, MuCoSDI):
+for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, LytroCASSI, CS2LI,
+             MuCoSDI):
     REGISTRY.register_class(_cls, builtin=True)
 del _cls
 
@@ -74,6 +77,7 @@ __all__ = [
     "CASSIVSI",
     "CASSDIDFA",
     "C3SLFI",
+    "LytroCASSI",
     "CS2LI",
     "MuCoSDI",
     "MODALITIES",

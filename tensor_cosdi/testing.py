@@ -199,6 +199,10 @@ def _systems():
         lambda g: S.DDCASSI.example((5, 6, 4), rng=g, shifts=[0, 0.5, 1, 2.5]).operator,
     )
     r("system_dual_camera", lambda g: S.DualCameraCASSI.example((4, 5, 3), rng=g).operator)
+    r(
+        "system_lytro_cassi",
+        lambda g: S.LytroCASSI.example((4, 6, 3), rng=g, shifts=[0, 0.5, 2]).operator,
+    )
     r("system_cassi_vsi", lambda g: S.CASSIVSI.example((4, 6, 4), rng=g, beta=2).operator)
     r("system_cassdi_dfa", lambda g: S.CASSDIDFA.example((4, 5, 3, 2), rng=g).operator)
     r(

@@ -15,7 +15,12 @@ from tensor_cosdi.systems import REGISTRY, System
 
 SYSTEMS = list(REGISTRY)
 #: The thesis' own algorithms and the systems they are written for.
-OWN = {"avsi": {"cassi_vsi"}, "dfa": {"cassdi_dfa"}, "pnp_admm": {"cs2li", "mu_cosdi"}}
+OWN = {
+    "avsi": {"cassi_vsi"},
+    "dfa": {"cassdi_dfa"},
+    "pnp_admm": {"cs2li", "mu_cosdi"},
+    "lytro": {"lytro_cassi"},
+}
 #: Methods whose defaults are weights trained for one configuration (tested in tests/learn, with
 #: a clear error for any other system).
 TRAINED = {"dcosnet"}
@@ -34,11 +39,17 @@ NOT_BETTER = {
     ("wdct", "cs2li"),
     ("wdct", "cassdi_dfa"),
     ("wdct", "dual_camera_cassi"),
+    ("twist", "lytro_cassi"),  # 23.46 vs 23.55
 }
+#: Lytro-CASSI's A Aᵀ is ill-conditioned (κ ≈ 8e7 here): accelerated GAP with ε = 1e-6 fits the
+#: noise along its weak directions (GAP-TV −6.8 dB, DL from its GAP-TV start 8.7 dB; LSQ 23.6) and
+#: WDCT reaches 21.0 dB.  Measured, not hidden: test_gap_overfits_noise_on_lytro_cassi and
+#: test_admm_reconstructs_lytro_cassi below.
+ILL_CONDITIONED = {("gap_tv", "lytro_cassi"), ("dl", "lytro_cassi"), ("wdct", "lytro_cassi")}
 
 
 def _problem(name, scene="chelsea"):
-    opts = {"views": (2, 2), "n_snapshots": 2} if name == "c3slfi" else {}
+    opts = {"views": (2, 2), "n_snapshots": 2} if name in ("c3slfi", "lytro_cassi") else {}
     return studies.make_problem(name, scene, shape=(32, 32), n_bands=8, snr_db=30, rng=0, **opts)
 
 
@@ -83,16 +94,36 @@ def table():
 
 @pytest.mark.parametrize("name", SYSTEMS)
 def test_every_method_beats_least_squares(table, name):
-    row = table[name]
+    row = dict(table[name])  # the fixture is shared: leave it whole
     lsq = row.pop("lsq")
     assert row, f"no method ran on {name}"
     for method, psnr in row.items():
+        if (method, name) in ILL_CONDITIONED:
+            continue
         if (method, name) in NOT_BETTER:
             assert psnr > lsq - 1.5, f"{method} on {name}: {psnr:.2f} dB, LSQ {lsq:.2f} dB"
         else:
             assert psnr > lsq + 0.1, (
                 f"{method} on {name}: {psnr:.2f} dB does not beat LSQ {lsq:.2f} dB"
             )
+
+
+def test_gap_overfits_noise_on_lytro_cassi(table):
+    """The known failure: below least squares, and far below OTD (ADMM)."""
+    row = table["lytro_cassi"]
+    for method, _ in sorted(ILL_CONDITIONED):
+        assert row[method] < row["lsq"] < row["otd"] - 3, (method, row)
+
+
+def test_admm_reconstructs_lytro_cassi(table):
+    """ADMM's (AᵀA + ρI)⁻¹ does not amplify the weak directions: the same DL prior as the failing
+    GAP run, and the Lytro baseline (RGB-learned ⊗ DCT dictionary), beat LSQ by > 4 dB."""
+    p = _problem("lytro_cassi")
+    dl = tc.reconstruct(p.system, p.measurement, "dl", dictionary=_dl(8, "lytro_cassi"),
+                        splitting="admm", warm="otd")  # fmt: skip
+    lsq = table["lytro_cassi"]["lsq"]
+    assert studies.score(p, dl.cube)["psnr"] > lsq + 4
+    assert table["lytro_cassi"]["lytro"] > lsq + 4
 
 
 @pytest.mark.parametrize("method", sorted(OWN))

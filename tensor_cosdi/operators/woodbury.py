@@ -9,7 +9,9 @@ Three structures cover the five imagers:
   inverses, cached per ``μ``.
 * :class:`RowBanded` — banded along one axis, independent across the others
   (CASSI-VSI): a banded Cholesky factor per fibre (``scipy.linalg``), cached
-  per ``μ``.
+  per ``μ``; :class:`~tensor_cosdi.operators._folded.FoldedBanded` is the
+  same with a frame axis folded into the band axis (a dispersed frame stacked
+  with undispersed ones: dual-camera CASSI, Lytro-CASSI).
 
 :func:`conjugate_gradient` is the fallback when no structure is known.
 

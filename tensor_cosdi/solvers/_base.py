@@ -245,10 +245,18 @@ class History(dict):
 
 
 def relative_change(new, old) -> float:
-    """``‖new − old‖ / ‖new‖`` (the stopping quantity of every iterative method)."""
+    """``‖new − old‖ / ‖new‖`` (the stopping quantity of every iterative method); ``inf`` when
+    ``new`` is all zero and ``old`` is not (a prior that zeroed the iterate has not converged).
+
+    >>> relative_change(np.zeros(3), np.ones(3)), relative_change(np.zeros(3), np.zeros(3))
+    (inf, 0.0)
+    """
     import tensorly as tl
 
-    return float(tl.norm(new - old)) / max(float(tl.norm(new)), np.finfo(float).tiny)
+    diff, norm = float(tl.norm(new - old)), float(tl.norm(new))
+    if norm == 0.0:
+        return 0.0 if diff == 0.0 else float("inf")
+    return diff / norm
 
 
 def relative_residual(system, cube, g) -> float:

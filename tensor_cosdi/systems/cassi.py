@@ -225,8 +225,9 @@ class DualCameraCASSI(System):
     Notes
     -----
     ``A Aᵀ`` couples every panchromatic pixel with the ``Nλ`` CASSI pixels its
-    bands land on, which is not one of the cheap structures of SPEC §4:
-    ``solve_normal`` falls back to conjugate gradients.
+    bands land on: banded along the columns once the two frames are folded
+    into them (:class:`~tensor_cosdi.operators._folded.FoldedBanded`), so
+    ``solve_normal`` is a banded Cholesky per detector row.
 
     Examples
     --------

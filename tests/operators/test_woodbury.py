@@ -23,6 +23,7 @@ from tensor_cosdi.operators import (
     vec,
     weighted_sum,
 )
+from tensor_cosdi.operators._folded import FoldedBanded
 from tensor_cosdi.operators.woodbury import Pattern, StructureError, check_structure
 from tensor_cosdi.testing import registry
 
@@ -69,7 +70,8 @@ EXPECTED = {  # every registry entry (tests/operators: a new entry must state it
     "system_cassi_vsi": RowBanded,
     "system_cs2li": Diagonal,
     "system_ddcassi": Diagonal,
-    "system_dual_camera": type(None),
+    "system_dual_camera": FoldedBanded,
+    "system_lytro_cassi": FoldedBanded,
     "system_mu_cosdi_lf": Diagonal,
     "system_mu_cosdi_sl": Diagonal,
     "system_sdcassi": Diagonal,

@@ -14,6 +14,7 @@ from tensor_cosdi import _backend as B
 from tensor_cosdi import codes
 from tensor_cosdi.noise import snr_db
 from tensor_cosdi.operators import Diagonal, PixelBlocks, RowBanded, vec
+from tensor_cosdi.operators._folded import FoldedBanded
 from tensor_cosdi.systems import (
     C3SLFI,
     CASSDIDFA,
@@ -22,6 +23,7 @@ from tensor_cosdi.systems import (
     DDCASSI,
     SDCASSI,
     DualCameraCASSI,
+    LytroCASSI,
     MuCoSDI,
     fringe_cube,
 )
@@ -44,7 +46,8 @@ SYSTEMS = [
     ("sdcassi_shots", lambda: SDCASSI.example((5, 6, 4), shots=3, shifts=2), PixelBlocks),
     ("sdcassi_fractional", lambda: SDCASSI.example((5, 6, 4), shifts=[0, 0.5, 1.5, 2]), RowBanded),
     ("ddcassi", lambda: DDCASSI.example((6, 7, 5)), Diagonal),
-    ("dual_camera", lambda: DualCameraCASSI.example((5, 6, 4)), type(None)),
+    ("dual_camera", lambda: DualCameraCASSI.example((5, 6, 4)), FoldedBanded),
+    ("lytro_cassi", lambda: LytroCASSI.example((6, 8, 4), n_snapshots=3), FoldedBanded),
     ("cassi_vsi", lambda: CASSIVSI.example((6, 7, 5), beta=2), RowBanded),
     ("cassdi_dfa", lambda: CASSDIDFA.example((5, 6, 4, 3)), Diagonal),
     ("cassdi_dfa_psf", lambda: CASSDIDFA.example((5, 5, 3, 2), psf_size=3), type(None)),

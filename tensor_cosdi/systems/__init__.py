@@ -5,11 +5,11 @@ system                      cube → measurement                                
 ==========================  ==================================================  =================
 :class:`SDCASSI`            ``(Nx, Ny, Nλ) → (Nx, Ny+S[, K])``                    diagonal / K×K
 :class:`DDCASSI`            ``(Nx, Ny, Nλ) → (Nx, Ny[, K])``                      diagonal / K×K
-:class:`DualCameraCASSI`    ``(Nx, Ny, Nλ) → (Nx, Ny+S, 2)``                      banded, frames folded
+:class:`DualCameraCASSI`    ``(Nx, Ny, Nλ) → (Nx, Ny+S, 2)``                      folded banded
 :class:`CASSIVSI`           ``(Nx, Ny, Nλ) → (Nx, Ny+S)``                         row-banded
 :class:`CASSDIDFA`          ``(Nx, Ny, Nλ, Nz) → (Nx, Ny+S)``                     diagonal; PSFs: CG
 :class:`C3SLFI`             ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2, K)`` or 5-D                  K×K per pixel
-:class:`LytroCASSI`         ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2+S, K+3)``                     banded, frames folded
+:class:`LytroCASSI`         ``(Ñ1, Ñ2, N3) → (Ñ1, Ñ2+S, K+3)``                     folded banded
 :class:`CS2LI`              ``(Nx, Ny, Nλ, Nt) → (Nx, Ny, Nt)``                   diagonal
 :class:`MuCoSDI`            SL / LF / monocular on the dual-disperser core       diagonal
 ==========================  ==================================================  =================

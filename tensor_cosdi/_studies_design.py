@@ -155,9 +155,11 @@ def c3slfi_table_run(
 
     if form not in ("3d", "5d"):
         raise ValueError(f"form must be '3d' or '5d', got {form!r}")
+    if method == "lytro" and form != "3d":
+        raise ValueError("the Lytro-CASSI baseline images the 3-D lenslet cube: use form='3d'")
     p = make_problem(
-        "c3slfi", scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db, rng=seed,
-        n_snapshots=n_snapshots, views=tuple(views),
+        "lytro_cassi" if method == "lytro" else "c3slfi", scene, shape=tuple(shape),
+        n_bands=n_bands, snr_db=snr_db, rng=seed, n_snapshots=n_snapshots, views=tuple(views),
     )  # fmt: skip
     system, g = p.system, p.measurement
     if method == "dl":  # DL-3D: a K-SVD dictionary of lenslet patches from other scenes
@@ -188,7 +190,11 @@ def c3slfi_table(
     (K = 5, 9); here ``n_bands`` (default 31) with K = 2, 3 gives
     6.5 % and 9.7 %.  ``options`` go to every method.  ``"dl"`` (DL-3D, the
     3-D form only) trains its K-SVD dictionary on other scenes with
-    :func:`c3slfi_dictionary` unless ``dictionary=`` is given.
+    :func:`c3slfi_dictionary` unless ``dictionary=`` is given.  ``"lytro"``
+    is the thesis' Lytro-CASSI baseline: the same lenslet cube seen by
+    :class:`~tensor_cosdi.systems.LytroCASSI` (an RGB arm plus ``K`` CASSI
+    snapshots, so three more frames than C3SLFI's ``K``), reconstructed with
+    a dictionary learned from its own RGB arm (3-D form only).
 
     Parameters
     ----------

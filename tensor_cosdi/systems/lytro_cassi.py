@@ -110,7 +110,7 @@ class LytroCASSI(System):
     """
 
     name = "lytro_cassi"
-    example_options = {"views": (2, 2), "n_snapshots": 2, "max_disparity": 1.0}
+    example_options = {"views": (4, 4), "n_snapshots": 2, "max_disparity": 1.0}
 
     def __init__(self, code, *, n_bands, shifts=1, wavelengths=None, response=None, views=None):
         from .c3slfi import _views

@@ -126,7 +126,7 @@ def _scale_problem():
         m
         for m, e in tc.solvers.METHODS.items()
         if e.available
-        and m not in ("avsi", "dfa", "pnp_admm", "dcosnet", "split_tv")  # other systems/weights
+        and m not in ("avsi", "dfa", "pnp_admm", "dcosnet", "split_tv", "lytro")  # other systems
     ],
 )
 def test_results_do_not_depend_on_the_measurement_units(method):

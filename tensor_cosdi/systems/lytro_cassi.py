@@ -28,6 +28,7 @@ from ._base import (
     shifts_for,
     wavelengths_for,
 )
+from .cassi import _shots
 
 __all__ = ["LytroCASSI", "camera_response"]
 
@@ -133,8 +134,7 @@ class LytroCASSI(System):
             raise ValueError(f"a {nx}×{ny} lenslet image cannot hold views {self.views}")
         cube = (nx, ny, nl)
         shear = Shear(cube, self.shifts)
-        codes = [self.code] if self.code.ndim == 2 else np.moveaxis(self.code, 2, 0)
-        cassi = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in codes]
+        cassi = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in _shots(self.code)]
         pad = Pad((nx, ny), axis=1, before=0, after=extra)
         rgb = [
             pad @ SumAxis(cube, 2) @ Code(self.response[:, c], cube, axes=(2,))
@@ -228,10 +228,9 @@ class LytroCASSI(System):
     def matrix(self):
         nx, ny, nl = self.cube_shape
         width = self.measurement_shape[1]
-        codes = [self.code] if self.code.ndim == 2 else np.moveaxis(self.code, 2, 0)
         blocks = [
             coded_shear_sum_matrix(np.repeat(c[:, :, None], nl, axis=2), self.shifts, width)
-            for c in codes
+            for c in _shots(self.code)
         ]
         u = np.tile(np.arange(nx * ny), nl)  # pixel of every voxel (band-major columns)
         cols = np.arange(nx * ny * nl)

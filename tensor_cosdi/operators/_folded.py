@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _backend as B
-from .woodbury import RowBanded
+from .woodbury import RowBanded, _apply_gram, _probe_band
 
 
 class _Fold:
@@ -75,14 +75,14 @@ class FoldedBanded(RowBanded):
                 f"block_axis={self.fold.block_axis})")  # fmt: skip
 
 
-def probe_folded(op, pattern, apply_gram, probe_band):
+def probe_folded(op, pattern):
     """Measure a folded band pattern: the band probes of the folded tensor, unfolded to ``op``."""
     shape = op.output_shape
     fold = _Fold(shape, pattern.axis, pattern.block_axis)
     width = (pattern.width + 1) * shape[pattern.block_axis] - 1
 
     def gram(folded_probe):
-        return fold.fold(apply_gram(op, fold.unfold(folded_probe)))
+        return fold.fold(_apply_gram(op, fold.unfold(folded_probe)))
 
-    bands = probe_band(gram, fold.folded_shape, len(fold.folded_shape) - 1, width)
+    bands = _probe_band(gram, fold.folded_shape, len(fold.folded_shape) - 1, width)
     return FoldedBanded(bands, shape, pattern.axis, pattern.block_axis)

@@ -192,7 +192,7 @@ def _probe(op, pattern: Pattern):
     if pattern.kind == "band" and pattern.block_axis is not None:
         from ._folded import probe_folded
 
-        return probe_folded(op, pattern, _apply_gram, _probe_band)
+        return probe_folded(op, pattern)
     if pattern.kind == "band":
         bands = _probe_band(partial(_apply_gram, op), shape, pattern.axis, pattern.width)
         return RowBanded(bands, pattern.axis)

@@ -49,6 +49,9 @@ import argparse
 import json
 import platform
 import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -82,37 +85,44 @@ def _scene_names():
     return names[:1] if QUICK else names
 
 
-def vsi_study(args, log):
+def vsi_run(scene, case, size, bands, snr, seed):
+    """One VSI cell: ``case = (method, αT)``, αT ``None`` for SD-CASSI with the same code and the
+    same absolute noise (equal light)."""
+    method, alpha_t = case
+    wl = scenes.default_wavelengths(bands)
+    code = tc.codes.random_binary((size, size), rng=seed)
+    cube = scenes.scene_cube(scene, (size, size), wl)
+    sd = systems.SDCASSI(code, n_bands=bands, shifts=1, wavelengths=wl)
+    clean_sd = sd.forward(cube)
+    sigma = np.sqrt(np.mean(clean_sd**2) / 10 ** (snr / 10))  # equal light: one absolute level
+    noise = np.random.default_rng(seed + 1).standard_normal(clean_sd.shape) * sigma
+    if alpha_t is None:
+        system, clean = sd, clean_sd
+    else:
+        system = systems.CASSIVSI(code, n_bands=bands, alpha_t=alpha_t, shifts=1, wavelengths=wl)
+        clean = system.forward(cube)
+    res = tc.reconstruct(system, clean + noise, method)
+    return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | _scores(cube, res.cube)
+
+
+def vsi_study(args, log, client=None):
     alphas = np.round(np.arange(0.1, 1.01, 0.1), 2)
-    wl = scenes.default_wavelengths(args.bands)
     names, methods = _scene_names(), args.method.split(",")
-    rows = []
-    code = tc.codes.random_binary((args.size, args.size), rng=args.seed)
-    for scene in names:
-        cube = scenes.scene_cube(scene, (args.size, args.size), wl)
-        sd = systems.SDCASSI(code, n_bands=args.bands, shifts=1, wavelengths=wl)
-        clean_sd = sd.forward(cube)
-        sigma = np.sqrt(
-            np.mean(clean_sd**2) / 10 ** (args.snr / 10)
-        )  # equal light: one absolute noise level
-        noise = np.random.default_rng(args.seed + 1).standard_normal(clean_sd.shape) * sigma
-        for method in methods:
-            if method in tc.solvers.METHODS and method != "avsi":  # A-VSI is VSI-only
-                res = tc.reconstruct(sd, clean_sd + noise, method)
-                rows.append(
-                    {"scene": scene, "system": "sd_cassi", "method": method, "alpha_t": None}
-                    | _scores(cube, res.cube)
-                )
-            for a in alphas:
-                vsi = systems.CASSIVSI(
-                    code, n_bands=args.bands, alpha_t=float(a), shifts=1, wavelengths=wl
-                )
-                res = tc.reconstruct(vsi, vsi.forward(cube) + noise, method)
-                rows.append(
-                    {"scene": scene, "system": "cassi_vsi", "method": method, "alpha_t": float(a)}
-                    | _scores(cube, res.cube)
-                )
-                log(f"VSI {scene:12s} {method:5s} αT={a:.1f} PSNR {rows[-1]['psnr']:.2f}")
+    cases = [
+        (m, a)
+        for m in methods
+        for a in ([None] if m in tc.solvers.METHODS and m != "avsi" else [])  # A-VSI: VSI only
+        + [float(a) for a in alphas]
+    ]
+    rows = tc.studies.sweep(
+        {"scene": names, "case": cases},
+        partial(vsi_run, size=args.size, bands=args.bands, snr=args.snr, seed=args.seed),
+        client=client, progress=False,
+    )  # fmt: skip
+    for r in rows:
+        r["method"], r["alpha_t"] = r.pop("case")
+        where = "SD-CASSI" if r["alpha_t"] is None else f"αT={r['alpha_t']:.1f}"
+        log(f"VSI {r['scene']:12s} {r['method']:5s} {where} PSNR {r['psnr']:.2f}")
     lines = [
         f"Scenes {', '.join(names)}.\n",
         "| method | αT | " + " | ".join(f"{a:.1f}" for a in alphas) + " |",
@@ -155,7 +165,7 @@ def vsi_study(args, log):
     return "\n".join(lines), {"rows": rows, **summary}
 
 
-def dfa_study(args, log):
+def dfa_study(args, log, client=None):
     """Which Zernike aberration encodes depth (Sec. 4.3), with PSFs cropped to 9 pixels (what
     this study used until stop 17: 9 % of Z6's light at 0.9 wave) and to 41 (≥ 96 %)."""
     names = _scene_names()
@@ -164,7 +174,7 @@ def dfa_study(args, log):
         for r in tc.studies.zernike_design(
             modes=(5, 6, 8, 11), amplitudes=(0.25, 0.9), psf_sizes=(9, 41), scene=scene,
             shape=(args.size, args.size), n_bands=args.bands, snr_db=args.snr,
-            seeds=(args.seed,), progress=False,
+            seeds=(args.seed,), client=client, progress=False,
         ):  # fmt: skip
             recs.append({"scene": scene, **r})
             log(
@@ -197,7 +207,7 @@ def dfa_study(args, log):
     return "\n".join(lines), {"rows": recs}
 
 
-def sweep_study(args, log):
+def sweep_study(args, log, client=None):
     """The same question in the focal-sweep model (every plane seen at every step through its
     own PSF), where the codes alone no longer tell the planes apart; 41-pixel PSFs."""
     names, recs = _scene_names(), []
@@ -205,7 +215,7 @@ def sweep_study(args, log):
         for r in tc.studies.zernike_design(
             modes=(6, 11), amplitudes=(0.25, 0.9), psf_sizes=(41,), scene=scene,
             shape=(args.size, args.size), n_bands=args.bands, snr_db=args.snr,
-            seeds=(args.seed,), sweep=True, progress=False,
+            seeds=(args.seed,), sweep=True, client=client, progress=False,
         ):  # fmt: skip
             recs.append({"scene": scene, **r})
             log(
@@ -228,50 +238,48 @@ def sweep_study(args, log):
     return "\n".join(lines), {"rows": recs}
 
 
-def cs2li_study(args, log):
-    wl = scenes.default_wavelengths(args.bands)
-    K = 4
-    rows = []
-    for scene in SCENES[:1] if QUICK else SCENES:
-        sl = scenes.structured_light(
-            (args.size, args.size), wl, frequencies=(4.0,), photo_name=scene, rng=args.seed
-        )
-        cube = np.asarray(systems.fringe_cube(sl.reflectance, sl.phase, n_steps=K, amplitude=0.5))
-        code = tc.codes.random_binary((args.size, args.size + args.bands - 1), rng=args.seed)
-        cs = systems.CS2LI(code, n_bands=args.bands, n_patterns=K, shifts=1, wavelengths=wl)
-        sd = systems.SDCASSI(code[:, : args.size], n_bands=args.bands, shifts=1, wavelengths=wl)
-        hmax = float(sl.height.max())
-        for name in ("CS2LI + OTD", "CS2LI + PnP-ADMM", "SL + SD-CASSI (OTD per pattern)"):
-            t0 = time.perf_counter()
-            if name.startswith("CS2LI"):
-                g = cs.simulate(cube, snr_db=args.snr, rng=args.seed)
-                res = tc.reconstruct(cs, g, "otd" if "OTD" in name else "pnp_admm")
-                est = np.asarray(res.cube)
-            else:
-                est = np.empty_like(cube)
-                for t in range(K):
-                    g = sd.simulate(cube[..., t], snr_db=args.snr, rng=args.seed + t)
-                    est[..., t] = np.asarray(tc.reconstruct(sd, g, "otd").cube)
-            phi = depth.wrapped_phase(est.sum(axis=2))
-            h = sl.height + depth.wrap(phi - sl.phase[..., 0]) / sl.phase_per_height
-            rmse_h = float(np.sqrt(np.mean((h - sl.height) ** 2)))
-            rows.append(
-                {
-                    "scene": scene,
-                    "method": name,
-                    "height_rmse": rmse_h,
-                    "depth_psnr": float(20 * np.log10(hmax / rmse_h)),
-                    "phase_mae": float(np.abs(depth.wrap(phi - sl.phase[..., 0])).mean()),
-                    "cube_psnr": metrics.psnr(
-                        cube.reshape(args.size, args.size, -1),
-                        est.reshape(args.size, args.size, -1),
-                    ),
-                    "seconds": time.perf_counter() - t0,
-                }
-            )
-            log(f"CS2LI {scene:10s} {name:32s} depth PSNR {rows[-1]['depth_psnr']:.2f}")
+CS2LI_METHODS = ("CS2LI + OTD", "CS2LI + PnP-ADMM", "SL + SD-CASSI (OTD per pattern)")
+
+
+def cs2li_run(scene, method, size, bands, snr, seed, n_patterns=4):
+    """One CS2LI cell: depth and cube quality of ``method`` (one of :data:`CS2LI_METHODS`)."""
+    wl, K = scenes.default_wavelengths(bands), n_patterns
+    sl = scenes.structured_light((size, size), wl, frequencies=(4.0,), photo_name=scene, rng=seed)
+    cube = np.asarray(systems.fringe_cube(sl.reflectance, sl.phase, n_steps=K, amplitude=0.5))
+    code = tc.codes.random_binary((size, size + bands - 1), rng=seed)
+    t0 = time.perf_counter()
+    if method.startswith("CS2LI"):
+        cs = systems.CS2LI(code, n_bands=bands, n_patterns=K, shifts=1, wavelengths=wl)
+        g = cs.simulate(cube, snr_db=snr, rng=seed)
+        est = np.asarray(tc.reconstruct(cs, g, "otd" if "OTD" in method else "pnp_admm").cube)
+    else:
+        sd = systems.SDCASSI(code[:, :size], n_bands=bands, shifts=1, wavelengths=wl)
+        est = np.empty_like(cube)
+        for t in range(K):
+            g = sd.simulate(cube[..., t], snr_db=snr, rng=seed + t)
+            est[..., t] = np.asarray(tc.reconstruct(sd, g, "otd").cube)
+    phi = depth.wrapped_phase(est.sum(axis=2))
+    h = sl.height + depth.wrap(phi - sl.phase[..., 0]) / sl.phase_per_height
+    rmse_h = float(np.sqrt(np.mean((h - sl.height) ** 2)))
+    return {
+        "height_rmse": rmse_h,
+        "depth_psnr": float(20 * np.log10(float(sl.height.max()) / rmse_h)),
+        "phase_mae": float(np.abs(depth.wrap(phi - sl.phase[..., 0])).mean()),
+        "cube_psnr": metrics.psnr(cube.reshape(size, size, -1), est.reshape(size, size, -1)),
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def cs2li_study(args, log, client=None):
+    rows = tc.studies.sweep(
+        {"scene": list(SCENES[:1] if QUICK else SCENES), "method": list(CS2LI_METHODS)},
+        partial(cs2li_run, size=args.size, bands=args.bands, snr=args.snr, seed=args.seed),
+        client=client, progress=False,
+    )  # fmt: skip
+    for r in rows:
+        log(f"CS2LI {r['scene']:10s} {r['method']:32s} depth PSNR {r['depth_psnr']:.2f}")
     lines = ["| method | depth PSNR dB | phase MAE rad | cube PSNR dB |", "|---|---|---|---|"]
-    for name in ("CS2LI + OTD", "CS2LI + PnP-ADMM", "SL + SD-CASSI (OTD per pattern)"):
+    for name in CS2LI_METHODS:
         rs = [r for r in rows if r["method"] == name]
         lines.append(
             f"| {name} | {np.mean([r['depth_psnr'] for r in rs]):.2f} | "
@@ -281,7 +289,7 @@ def cs2li_study(args, log):
     return "\n".join(lines), {"rows": rows}
 
 
-def vsi_design_study(args, log):
+def vsi_design_study(args, log, client=None):
     """Sec. 3.3.1, Fig. 19-20: κ of H and H Dᵀ, the arms' SNRs and dynamic range over αT, at the
     thesis' 64×64×12 (20 dB; seeds 0-2 where it averaged 1000 codes and 50 scenes)."""
     names = _scene_names()
@@ -319,7 +327,7 @@ def vsi_design_study(args, log):
     return "\n".join(lines), {"rows": recs, **summary}
 
 
-def table1_study(args, log):
+def table1_study(args, log, client=None):
     """Table 1 (Sec. 5.3.2): OTD / WDCT on the 3-D and 5-D C3SLFI forms over K and SNR, on real
     spectra and on photo-derived ones."""
     size, n_bands = (64, 31) if QUICK else (128, 31)
@@ -332,7 +340,7 @@ def table1_study(args, log):
         for r in tc.studies.c3slfi_table(
             names[:1] if QUICK else names, (2, 3), snrs, ("otd", "wdct"), ("3d", "5d"),
             shape=(size, size), views=(4, 4), n_bands=n_bands, seeds=(args.seed,),
-            progress=False,
+            client=client, progress=False,
         ):  # fmt: skip
             recs.append({"group": group, **r})
             log(
@@ -365,7 +373,7 @@ def table1_study(args, log):
     return "\n".join(lines), {"rows": recs}
 
 
-def table1_dl_study(args, log):
+def table1_dl_study(args, log, client=None):
     """Table 1's baselines: DL-3D (a K-SVD dictionary of 8×8×31 lenslet patches trained on the
     tuning scenes' light fields) and Lytro-CASSI (an RGB arm plus K CASSI snapshots; a
     dictionary learned on its own RGB arm ⊗ a spectral DCT), against OTD-3D and WDCT-3D (64×64
@@ -375,7 +383,8 @@ def table1_dl_study(args, log):
     recs = []
     for r in tc.studies.c3slfi_table(
         names, (2,) if QUICK else (2, 3), (20.0,), ("otd", "wdct", "dl", "lytro"), ("3d",),
-        shape=(size, size), views=(4, 4), n_bands=n_bands, seeds=(args.seed,), progress=False,
+        shape=(size, size), views=(4, 4), n_bands=n_bands, seeds=(args.seed,), client=client,
+        progress=False,
     ):  # fmt: skip
         recs.append(r)
         log(
@@ -417,7 +426,14 @@ def main(argv=None):
     ap.add_argument("--studies", default="vsi_design,vsi,dfa,sweep,cs2li,table1,table1_dl")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true", help="32×32×8, one scene: a smoke run")
+    ap.add_argument(
+        "--workers", type=int, default=2,
+        help="Dask worker processes (one thread each) sharing every study's cells; 1 runs "
+        "serially here without Dask",
+    )  # fmt: skip
     args = ap.parse_args(argv)
+    if args.workers < 1:
+        ap.error(f"--workers must be ≥ 1, got {args.workers}")
     if args.quick:
         global QUICK
         QUICK, args.size, args.bands = True, 32, 8
@@ -447,17 +463,47 @@ def main(argv=None):
         f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seed {args.seed}; scenes: "
         f"{', '.join(_scene_names())} (CS2LI: {', '.join(SCENES)}).\n"
     ]
-    data = {}
-    for key in args.studies.split(","):
-        title, fn = funcs[key]
-        table, d = fn(args, lambda m: print(m, flush=True))
-        text += [f"### {title}\n", table, ""]
-        data[key] = d
-        (out / "thesis_findings.md").write_text("\n".join(text) + "\n")
-        (out / "thesis_findings.json").write_text(json.dumps(data, indent=1))
+    keys = args.studies.split(",")
+    unknown = [k for k in keys if k not in funcs]
+    if unknown:
+        ap.error(f"unknown studies {unknown}; choose from {', '.join(funcs)}")
+    data, t0 = {}, time.perf_counter()
+    with _client(args.workers) as client, ThreadPoolExecutor(max(1, len(keys))) as pool:
+        # every study submits its cells to the same workers at once, so they balance
+        log = partial(print, flush=True)
+        running = {
+            k: pool.submit(funcs[k][1], args, log, client) if client else None for k in keys
+        }
+        for key in keys:
+            title, fn = funcs[key]
+            table, d = running[key].result() if client else fn(args, log)
+            text += [f"### {title}\n", table, ""]
+            data[key] = d
+            (out / "thesis_findings.md").write_text("\n".join(text) + "\n")
+            (out / "thesis_findings.json").write_text(json.dumps(data, indent=1))
+    minutes = (time.perf_counter() - t0) / 60
+    text[0] = text[0].rstrip("\n") + f" Whole run: {minutes:.1f} min, {args.workers} worker(s).\n"
     text += ["### Verdicts\n", *verdicts(data)]
     (out / "thesis_findings.md").write_text("\n".join(text) + "\n")
     print("\n".join(text))
+
+
+@contextmanager
+def _client(workers):
+    """A local Dask cluster of ``workers`` single-threaded processes (BLAS threads pinned to 1 by
+    Dask's nanny), or ``None`` (serial, here) for one worker."""
+    if workers == 1:
+        yield None
+        return
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise SystemExit(
+            "--workers > 1 needs Dask: pip install -e '.[dask]', or run with --workers 1"
+        ) from None
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as cluster:
+        with Client(cluster) as client:
+            yield client
 
 
 def _mean(rows, key, **match):

@@ -75,6 +75,8 @@ def run_train_dcosnet(args) -> int:
         stages=args.stages,
         width=args.width,
         unet_width=args.unet_width,
+        prior=args.prior,
+        prior_weights=args.prior_weights,
         loss=args.loss,
         mask=args.mask,
         steps=args.steps,

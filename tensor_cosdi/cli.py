@@ -354,6 +354,15 @@ def build_parser() -> argparse.ArgumentParser:
     dc.add_argument("--width", type=_positive_int, default=16, help="channels of the arms' convs")
     dc.add_argument("--unet-width", type=_positive_int, default=32, help="U-Net base channels")
     dc.add_argument(
+        "--prior", default="unet",
+        help="unet (the thesis' per-stage U-Net, from scratch) or spectral (the learned spectral "
+        "denoiser shared by the stages, starting from --prior-weights)",
+    )  # fmt: skip
+    dc.add_argument(
+        "--prior-weights", default="shipped",
+        help="the spectral prior's starting weights: shipped, or a train-denoiser .pt file",
+    )  # fmt: skip
+    dc.add_argument(
         "--loss", default="l1+ssim", help="l1+ssim (Eq. 152), l1 or ssim (Table 2's ablation)"
     )
     dc.add_argument(

@@ -46,7 +46,7 @@ import tensorly as tl
 from .. import _backend as B
 from . import require_torch
 
-__all__ = ["DCoSNet", "Sensing", "build_dcosnet", "ssim", "default_weights"]
+__all__ = ["DCoSNet", "Sensing", "build_dcosnet", "ssim", "default_weights", "PRIORS"]
 
 WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
 #: Shipped weights per system name.
@@ -141,8 +141,65 @@ def _per_sample(t, x):
     return t.reshape(-1, *([1] * (x.ndim - 1)))
 
 
-def build_dcosnet(torch, channels: int, stages: int = 1, width: int = 32, unet_width: int = 32):
-    """The untrained network (a ``torch.nn.Module``) for cubes of ``channels`` channels."""
+#: Stage priors: the thesis' U-Net, or the learned subspace denoiser of ``spectral_net``.
+PRIORS = ("unet", "spectral")
+
+
+def _spectral_prior(torch, stages: int, r_max: int = 12, width: int = 64, blocks: int = 4):
+    """The ``"spectral"`` stage prior: one :mod:`~tensor_cosdi.learn.spectral_net` network shared
+    by the stages, each stage with its own learned noise level ``σₖ`` (in units of the
+    normalised cube), applied as :class:`~tensor_cosdi.learn.spectral_net.SpectralDenoiser`
+    does (robust-peak scale, ``r_max`` leading spectral eigen-images, the complement dropped)
+    and kept non-negative.  The eigenvectors are held constant under differentiation."""
+    from .spectral_net import _build_net, _robust_peak
+
+    nn = torch.nn
+
+    class SpectralPrior(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.net = _build_net(torch, r_max, width, blocks)
+            # σ from 0.1 down to 0.03 of the bright level: plug-and-play ADMM's usual schedule
+            sig = torch.from_numpy(np.geomspace(0.1, 0.03, stages).astype(np.float32))
+            self.sigma = nn.Parameter(torch.log(torch.expm1(sig)))
+
+        def forward(self, x, k):
+            b, c, h, w = x.shape
+            flat = x.reshape(b, c, h * w).transpose(1, 2)  # (B, P, C)
+            scale = torch.stack([torch.tensor(_robust_peak(f)) for f in flat]).to(x)
+            flat = flat / _per_sample(scale.clamp_min(1e-12), flat)
+            with torch.no_grad():
+                gram = torch.matmul(flat.transpose(1, 2).double(), flat.double())
+                u = torch.linalg.eigh(gram)[1].flip(-1)[..., : min(r_max, c)].to(x.dtype)
+            y = torch.matmul(flat, u)
+            sign = torch.where(y.sum(dim=1, keepdim=True) < 0, -1.0, 1.0).to(x.dtype)
+            u, y = u * sign, (y * sign).transpose(1, 2)  # y: (B, r, P)
+            r = y.shape[1]
+            img = torch.zeros(b, r_max, h * w, dtype=x.dtype, device=x.device)
+            img[:, :r] = y
+            img = img.reshape(b, r_max, h, w)
+            sig = nn.functional.softplus(self.sigma[k]) / scale.clamp_min(1e-12)
+            clean = (img - self.net(img, sig))[:, :r].reshape(b, r, h * w)
+            out = torch.matmul(u, clean).reshape(b, c, h, w)
+            return (out * _per_sample(scale, out)).clamp_min(0)
+
+    return SpectralPrior()
+
+
+def build_dcosnet(
+    torch, channels: int, stages: int = 1, width: int = 32, unet_width: int = 32,
+    prior: str = "unet",
+):  # fmt: skip
+    """The untrained network (a ``torch.nn.Module``) for cubes of ``channels`` channels.
+
+    ``prior="unet"`` is the thesis' Module II, one U-Net per stage trained
+    from scratch; ``"spectral"`` is the subspace denoiser of
+    :mod:`~tensor_cosdi.learn.spectral_net` shared by the stages (to be
+    loaded with pretrained weights: :func:`~tensor_cosdi.learn.dcosnet_train.train_dcosnet`
+    starts from the shipped denoiser).
+    """
+    if prior not in PRIORS:
+        raise ValueError(f"prior must be one of {PRIORS}, got {prior!r}")
     nn = torch.nn
 
     def conv_stack(n_layers):
@@ -212,7 +269,14 @@ def build_dcosnet(torch, channels: int, stages: int = 1, width: int = 32, unet_w
             self.c_in = nn.ModuleList([conv_stack(2) for _ in range(stages)])
             self.c_up = nn.ModuleList([conv_stack(4) for _ in range(stages)])
             self.c_lo = nn.ModuleList([conv_stack(3) for _ in range(stages)])
-            self.unet = nn.ModuleList([UNet() for _ in range(stages)])
+            self.prior = prior
+            if prior == "unet":
+                self.unet = nn.ModuleList([UNet() for _ in range(stages)])
+            else:
+                self.spectral = _spectral_prior(torch, stages)
+
+        def denoise(self, x, k):
+            return self.unet[k](x) if self.prior == "unet" else self.spectral(x, k)
 
         def forward(self, g, sensing):
             if sensing.channels != self.channels:
@@ -234,7 +298,7 @@ def build_dcosnet(torch, channels: int, stages: int = 1, width: int = 32, unet_w
                 s = sensing.forward(r) / (_per_sample(mu, d) + d)
                 ats = sensing.adjoint(s)
                 f = (r - ats) / muc + self.c_lo[k](r / db) - self.c_up[k](ats / db)
-                w = self.unet[k](f + u)
+                w = self.denoise(f + u, k)
                 u = u + f - w
             return w, sensing.forward(w)
 
@@ -297,7 +361,7 @@ class DCoSNet:
             cfg = dict(ckpt["config"])
             net = build_dcosnet(
                 torch, int(cfg["channels"]), int(cfg["stages"]), int(cfg["width"]),
-                int(cfg["unet_width"]),
+                int(cfg["unet_width"]), cfg.get("prior", "unet"),
             )  # fmt: skip
             net.load_state_dict(ckpt["model"])
         except (KeyError, TypeError, RuntimeError) as exc:

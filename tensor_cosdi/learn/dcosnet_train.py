@@ -27,6 +27,10 @@ class DCoSNetConfig:
     ``mask``: ``"tsa"`` (random crops of the real TSA 256×256 coded aperture
     in ``../shared/data/masks``), ``"random"`` (a fresh Bernoulli(½) code per
     sample) or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    ``prior``: ``"unet"`` (the thesis' per-stage U-Net, from scratch) or
+    ``"spectral"`` (the learned subspace denoiser shared by the stages,
+    starting from ``prior_weights``: ``"shipped"`` for the package's
+    ``spectral_denoiser.pt``, or a file of ``tensor-cosdi train-denoiser``).
     Measurements are noiseless for ``noiseless_fraction`` of the samples, else
     at an SNR drawn uniformly from ``[snr_min, snr_max]`` dB.
     """
@@ -37,6 +41,8 @@ class DCoSNetConfig:
     stages: int = 3
     width: int = 16
     unet_width: int = 32
+    prior: str = "unet"
+    prior_weights: str = "shipped"
     loss: str = "l1+ssim"
     mask: str = "tsa"
     steps: int = 3000
@@ -54,6 +60,10 @@ class DCoSNetConfig:
     def check(self):
         if self.system not in TRAINABLE_SYSTEMS:
             raise ValueError(f"system must be one of {TRAINABLE_SYSTEMS}, got {self.system!r}")
+        from .dcosnet import PRIORS
+
+        if self.prior not in PRIORS:
+            raise ValueError(f"prior must be one of {PRIORS}, got {self.prior!r}")
         if self.loss not in LOSSES:
             raise ValueError(f"loss must be one of {LOSSES}, got {self.loss!r}")
         from ._loop import check_config
@@ -191,6 +201,23 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
     )  # fmt: skip
 
 
+def _build(torch, cfg: DCoSNetConfig, data):
+    """The network; the ``"spectral"`` prior starts from the pretrained denoiser's weights."""
+    net = build_dcosnet(torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width, cfg.prior)
+    if cfg.prior == "spectral":
+        from .spectral_net import SpectralDenoiser
+
+        pre = SpectralDenoiser(None if cfg.prior_weights == "shipped" else cfg.prior_weights)
+        try:
+            net.spectral.net.load_state_dict(pre.net.state_dict())
+        except RuntimeError as exc:
+            raise ValueError(
+                f"{pre.path}: a denoiser of another shape than D-CoSNet's spectral prior "
+                f"(r_max 12, width 64, 4 blocks): {exc}"
+            ) from None
+    return net
+
+
 def train_dcosnet(
     out,
     config: DCoSNetConfig | None = None,
@@ -217,9 +244,7 @@ def train_dcosnet(
         config=config,
         config_cls=DCoSNetConfig,
         prepare=lambda cfg: _training_data(cfg, folder),
-        build=lambda torch, cfg, data: build_dcosnet(
-            torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width
-        ),
+        build=_build,
         batch_loss=_dcosnet_loss,
         weights_config=lambda cfg: {
             "system": cfg.system,
@@ -228,6 +253,7 @@ def train_dcosnet(
             "stages": cfg.stages,
             "width": cfg.width,
             "unet_width": cfg.unet_width,
+            "prior": cfg.prior,
         },
         resume=resume,
         force=force,

@@ -86,6 +86,39 @@ def test_untrained_network_is_the_woodbury_admm_step():
 
 
 @needs_torch
+def test_spectral_prior_is_the_shipped_denoiser_and_trains():
+    """``prior="spectral"``: each stage denoises exactly as ``SpectralDenoiser`` at that stage's
+    σ (kept ≥ 0), with gradients to σ, the shared network and the input."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import build_dcosnet
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, _build
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    cfg = DCoSNetConfig(n_bands=6, stages=2, width=4, prior="spectral")
+    net = _build(torch, cfg, None)
+    ref = SpectralDenoiser()
+    x = _real("face", (24, 24), np.linspace(420, 680, 6)).transpose(2, 0, 1)[None]
+    x = torch.from_numpy(x + 0.05 * np.random.default_rng(0).standard_normal(x.shape))
+    x = x.float().requires_grad_()
+    for k in range(2):
+        sig = float(torch.nn.functional.softplus(net.spectral.sigma[k].detach()))
+        want = np.clip(ref(x.detach()[0].permute(1, 2, 0).numpy(), sig), 0, None)
+        got = net.spectral(x, k)[0].permute(1, 2, 0).detach().numpy()
+        np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-5)
+    start = torch.nn.functional.softplus(net.spectral.sigma.detach())
+    np.testing.assert_allclose(start.numpy(), [0.1, 0.03], rtol=1e-5)  # the schedule at the start
+    net.spectral(x, 1).sum().backward()
+    assert float(net.spectral.sigma.grad.abs().sum()) > 0
+    assert float(net.spectral.net.tail.weight.grad.abs().sum()) > 0
+    assert float(x.grad.abs().sum()) > 0
+    with pytest.raises(ValueError, match="prior must be one of"):
+        build_dcosnet(torch, 6, prior="dncnn")
+    with pytest.raises(ValueError, match="prior must be one of"):
+        DCoSNetConfig(prior="dncnn").check()
+
+
+@needs_torch
 def test_ssim_equals_scikit_image():
     import torch
     from skimage.metrics import structural_similarity
@@ -110,8 +143,10 @@ def test_ssim_equals_scikit_image():
 
 
 @needs_torch
-@pytest.mark.parametrize("system", ["sd_cassi", "mu_cosdi"])
-def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system):
+@pytest.mark.parametrize(
+    "system, prior", [("sd_cassi", "unet"), ("mu_cosdi", "unet"), ("sd_cassi", "spectral")]
+)
+def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system, prior):
     import torch
 
     from tensor_cosdi.learn.dcosnet import DCoSNet
@@ -120,7 +155,7 @@ def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system):
     _real()
     cfg = DCoSNetConfig(
         system=system, n_bands=4, shift=1, stages=1, width=4, unet_width=4, steps=3, batch=2,
-        patch=16, mask="random", checkpoint_every=1, warmup=1,
+        patch=16, mask="random", checkpoint_every=1, warmup=1, prior=prior,
     )  # fmt: skip
     a = train_dcosnet(tmp_path / "a.pt", cfg, progress=False, device="cpu")
     assert a["finished"] and np.isfinite(a["final_loss"])

@@ -82,6 +82,8 @@ def run_train_dcosnet(args) -> int:
         steps=args.steps,
         batch=args.batch,
         patch=args.patch,
+        lr=args.lr,
+        lr_end=min(1e-5, args.lr),
         seed=args.seed,
     )
     return _run_training(args, train_dcosnet, cfg.check())

@@ -369,6 +369,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--mask", default="tsa", help="tsa (crops of the real TSA mask), random, or a .npy/.mat"
     )
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
+    dc.add_argument(
+        "--lr", type=float, default=1e-3,
+        help="peak learning rate (default 1e-3; lower to fine-tune the spectral prior)",
+    )  # fmt: skip
     dc.set_defaults(func=run_train_dcosnet)
     return parser
 

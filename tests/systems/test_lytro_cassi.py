@@ -128,3 +128,17 @@ def test_dl_splitting_is_checked():
         tc.reconstruct(p.system, p.measurement, "dl", dictionary=d, splitting="fista")
     with pytest.raises(ValueError, match="rho"):
         tc.reconstruct(p.system, p.measurement, "dl", dictionary=d, splitting="admm", rho=-1)
+
+
+def test_lytro_does_not_depend_on_the_measurement_units():
+    """As every method on its systems (tests/solvers/test_reconstruct.py): the same cube, scaled,
+    from a measurement in any units — here the dictionary is learned from the measurement too."""
+    p = studies.make_problem("lytro_cassi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
+    g = np.asarray(p.measurement)
+    opts = dict(n_patches=300, n_iter=1, max_iter=4)
+    ref = np.asarray(tc.reconstruct(p.system, g, "lytro", **opts).cube)
+    for scale in (1e-300, 1e-5, 1e300):
+        cube = np.asarray(tc.reconstruct(p.system, g * scale, "lytro", **opts).cube)
+        assert np.isfinite(cube).all()
+        rel = np.linalg.norm(cube / scale - ref) / np.linalg.norm(ref)
+        assert rel < 1e-6, (scale, rel)

@@ -216,6 +216,10 @@ def test_cli_train_dcosnet(tmp_path, capsys):
     assert cli.main(args + ["--resume"]) == 0 and out.exists()
     assert cli.main(args + ["--system", "c3slfi"]) == 2
     assert "system must be one of" in capsys.readouterr().err
+    assert cli.main(args + ["--force", "--prior", "dncnn"]) == 2
+    assert "prior must be one of" in capsys.readouterr().err
+    assert cli.main(args + ["--force", "--lr", "-1"]) == 2
+    assert "lr" in capsys.readouterr().err
 
 
 def _tsa_crop(n=64):

@@ -53,13 +53,11 @@ class FoldedBanded(RowBanded):
     def _host(self, b) -> np.ndarray:
         return self.fold.fold(np.asarray(B.to_numpy(b), dtype=np.float64))
 
-    def solve(self, b, mu):
-        x = super().solve(self._host(b), mu)
-        return B.tensor_like(self.fold.unfold(np.asarray(x)), b)
+    def solve(self, b, mu):  # on the host, as RowBanded; back on b's backend and device
+        return B.tensor_like(self.fold.unfold(self._solve_host(self._host(b), mu)), b)
 
     def matvec(self, b):
-        y = super().matvec(self._host(b))
-        return B.tensor_like(self.fold.unfold(np.asarray(y)), b)
+        return B.tensor_like(self.fold.unfold(self._matvec_host(self._host(b))), b)
 
     def to_dense(self) -> np.ndarray:
         folded = super().to_dense()  # in the folded tensor's column-major order

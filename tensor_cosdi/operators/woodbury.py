@@ -358,25 +358,30 @@ class RowBanded(_Structure):
         return out
 
     def solve(self, b, mu):
+        return B.tensor_like(self._solve_host(np.asarray(B.to_numpy(b), dtype=np.float64), mu), b)
+
+    def matvec(self, b):
+        """``(A Aᵀ) b`` from the stored bands (host computation)."""
+        return B.tensor_like(self._matvec_host(np.asarray(B.to_numpy(b), dtype=np.float64)), b)
+
+    def _solve_host(self, b: np.ndarray, mu) -> np.ndarray:
         factors = self._cached(("chol", mu), lambda: self._factors(mu))
-        bn = np.moveaxis(np.asarray(B.to_numpy(b), dtype=np.float64), self.axis, -1)
+        bn = np.moveaxis(b, self.axis, -1)
         lead = bn.shape[:-1]
         flat = bn.reshape(-1, bn.shape[-1])
         x = np.empty_like(flat)
         for f, cb in enumerate(factors):
             x[f] = scipy.linalg.cho_solve_banded((cb, False), flat[f], check_finite=False)
-        x = np.moveaxis(x.reshape(lead + (bn.shape[-1],)), -1, self.axis)
-        return B.tensor_like(x, b)
+        return np.moveaxis(x.reshape(lead + (bn.shape[-1],)), -1, self.axis)
 
-    def matvec(self, b):
-        """``(A Aᵀ) b`` from the stored bands (host computation)."""
-        bn = np.moveaxis(np.asarray(B.to_numpy(b), dtype=np.float64), self.axis, -1)
+    def _matvec_host(self, b: np.ndarray) -> np.ndarray:
+        bn = np.moveaxis(b, self.axis, -1)
         n = bn.shape[-1]
         out = self.bands[0] * bn
         for o in range(1, self.bandwidth + 1):
             out[..., : n - o] += self.bands[o, ..., : n - o] * bn[..., o:]
             out[..., o:] += self.bands[o, ..., : n - o] * bn[..., : n - o]
-        return B.tensor_like(np.moveaxis(out, -1, self.axis), b)
+        return np.moveaxis(out, -1, self.axis)
 
     def to_dense(self) -> np.ndarray:
         n = self.bands.shape[-1]

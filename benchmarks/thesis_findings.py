@@ -493,20 +493,19 @@ def main(argv=None):
 
 @contextmanager
 def _client(workers):
-    """A local Dask cluster of ``workers`` single-threaded processes (BLAS threads pinned to 1 by
-    Dask's nanny), or ``None`` (serial, here) for one worker."""
+    """``studies.local_client(workers)`` (single-threaded worker processes), or ``None``
+    (serial, here) for one worker."""
     if workers == 1:
         yield None
         return
     try:
-        from dask.distributed import Client, LocalCluster
+        import dask.distributed  # noqa: F401
     except ImportError:
         raise SystemExit(
             "--workers > 1 needs Dask: pip install -e '.[dask]', or run with --workers 1"
         ) from None
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as cluster:
-        with Client(cluster) as client:
-            yield client
+    with tc.studies.local_client(workers) as client:
+        yield client
 
 
 def _mean(rows, key, **match):

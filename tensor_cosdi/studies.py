@@ -12,7 +12,9 @@ from __future__ import annotations
 import csv
 import itertools
 import numbers
+import os
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +33,7 @@ __all__ = [
     "score_depth",
     "spectral_view",
     "sweep",
+    "local_client",
     "conditioning",
     "conditioning_design",
     "vsi_arms",
@@ -235,8 +238,9 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
         :func:`reconstruction_run` is one for the usual study.
     client : None, ``"local"``, a scheduler address or a ``dask.distributed.Client``
         ``None`` runs serially here; ``"local"`` starts a local cluster for the
-        sweep (and closes it); an address (``"tcp://host:8786"``) connects to
-        a running scheduler; a client is used as is.  Needs the ``.[dask]`` extra.
+        sweep (:func:`local_client`, closed after it); an address
+        (``"tcp://host:8786"``) connects to a running scheduler; a client is used
+        as is.  Needs the ``.[dask]`` extra.
     progress : bool
         A tqdm bar (serial) or Dask's progress bar.
 
@@ -265,17 +269,48 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
         raise ImportError(
             "a Dask sweep needs the dask extra: pip install 'tensor_cosdi[dask]'"
         ) from None
-    own = isinstance(client, str)
-    if own:
-        client = Client(processes=True) if client == "local" else Client(client)
-    try:
+    def gather(client):
         futures = client.map(_call, [run] * len(combos), combos, pure=False)
         if progress:
             dask_progress(futures)
         return client.gather(futures)
-    finally:
-        if own:
-            client.close()
+
+    if client == "local":
+        with local_client() as own:
+            return gather(own)
+    if isinstance(client, str):
+        with Client(client) as own:
+            return gather(own)
+    return gather(client)
+
+
+@contextmanager
+def local_client(n_workers: int | None = None):
+    """A Dask client on a local cluster of ``n_workers`` single-threaded worker processes
+    (default: one per CPU), closed on exit — what ``sweep(client="local")`` uses.
+
+    Each worker's BLAS / OpenMP runs one thread.  Dask's nanny would also set
+    ``MALLOC_TRIM_THRESHOLD_`` in its workers; that fixes glibc's mmap threshold, so every
+    array over 128 kB is mapped and unmapped afresh, and the page faults cost as much system
+    time as the reconstructions themselves (``benchmarks/thesis_findings.py --quick`` on
+    2 cores: 1 min 48 s with it, 1 min 7 s without; system time 82 s → 6 s).  It is left out.
+    Needs the ``.[dask]`` extra.
+    """
+    try:
+        import dask
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ImportError(
+            "a Dask cluster needs the dask extra: pip install 'tensor_cosdi[dask]'"
+        ) from None
+    n = (os.cpu_count() or 1) if n_workers is None else n_workers
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+        raise ValueError(f"n_workers must be a positive integer, got {n_workers!r}")
+    environ = {k: 1 for k in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+        with LocalCluster(n_workers=int(n), threads_per_worker=1, processes=True) as cluster:
+            with Client(cluster) as client:
+                yield client
 
 
 def reconstruction_run(

@@ -51,3 +51,22 @@ def test_sweep_errors_and_csv(tmp_path):
     assert back == [{"x": "1", "y": "5", "value": "6"}, {"x": "2", "y": "5", "value": "9"}]
     with pytest.raises(FileExistsError):
         studies.write_csv(rows, path)
+
+
+def test_local_client_pins_threads_and_keeps_glibcs_mmap_threshold():
+    """``sweep(client="local")``'s cluster: single-threaded workers whose environment has the
+    BLAS pins but not Dask's MALLOC_TRIM_THRESHOLD_ (page faults: see ``local_client``)."""
+    pytest.importorskip("dask.distributed")
+    import os
+
+    with studies.local_client(1) as client:
+        env = client.run(lambda: {k: os.environ.get(k) for k in ("OMP_NUM_THREADS",
+                                                                   "MALLOC_TRIM_THRESHOLD_")})
+        assert list(env.values()) == [{"OMP_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": None}]
+        rows = studies.sweep({"x": [1, 2], "y": [5]}, _square, client=client, progress=False)
+    assert [r["value"] for r in rows] == [6, 9]
+    assert [r["value"] for r in studies.sweep({"x": [3], "y": [0]}, _square, client="local",
+                                             progress=False)] == [9]  # fmt: skip
+    with pytest.raises(ValueError, match="n_workers"):
+        with studies.local_client(0):
+            pass

@@ -39,9 +39,9 @@ photos.
         [--out benchmarks/results]
 
 Every study's cells go to one local Dask cluster of ``--workers`` single-threaded
-processes (``--workers 1``: serially, no Dask); the whole default run took 27 min on
+processes (``--workers 1``: serially, no Dask); the whole default run took 15.5 min on
 2 cores (stop 20).  ``--quick`` (32×32×8, one scene; Table 1 at 64×64, 20 dB) is a
-smoke run of about 2 minutes.
+smoke run of about a minute.
 
 Writes ``thesis_findings.md`` / ``.json``; asserts nothing.
 """

@@ -97,7 +97,8 @@ def reconstruct_tiled(
         default.
     client : dask.distributed.Client, optional
         Reconstruct the tiles on this cluster (``client.map``); ``None``: one
-        after the other in this process.
+        after the other in this process.  On one machine,
+        :func:`tensor_cosdi.studies.local_client` starts a suitable cluster.
     progress : bool
         A progress bar over tiles (serial runs).
 

@@ -1,5 +1,7 @@
 """Orthonormal per-mode bases: exact inverses, agreement with SciPy/PyWavelets, learned bases."""
 
+import warnings
+
 import numpy as np
 import pytest
 import pywt
@@ -10,12 +12,14 @@ from hypothesis import strategies as st
 from tensor_cosdi import _backend as B
 from tensor_cosdi.bases import (
     KroneckerBasis,
+    Wavelet,
     dct,
     identity,
     is_orthonormal,
     svd_basis,
     tucker_bases,
     wavelet,
+    wavelet_level,
 )
 
 
@@ -31,20 +35,33 @@ def test_dct_is_orthonormal_and_is_scipys(n):
     "n, name", [(256, "sym8"), (64, "sym8"), (48, "db4"), (28, "haar"), (28, "sym8"), (7, "sym8")]
 )
 def test_wavelet_is_orthonormal_and_is_pywts(n, name):
-    psi = wavelet(n, name)
-    assert np.abs(psi.T @ psi - np.eye(n)).max() < 1e-14
     x = np.random.default_rng(0).standard_normal(n)
-    level = pywt.dwt_max_level(n, pywt.Wavelet(name).dec_len)
-    while level and n % 2**level:
-        level -= 1
-    ref = np.concatenate(pywt.wavedec(x, name, mode="periodization", level=level)) if level else x
-    np.testing.assert_allclose(psi.T @ x, ref, atol=1e-11)
+    for mode in ("auto", "boundary"):
+        psi = wavelet(n, name, level=mode)
+        assert np.abs(psi.T @ psi - np.eye(n)).max() < 1e-14
+        if mode == "boundary":
+            level = pywt.dwt_max_level(n, pywt.Wavelet(name).dec_len)
+        else:  # the deepest periodised level: the largest power of two dividing n
+            level = int(np.log2(n & -n))
+        while level and n % 2**level:
+            level -= 1
+        assert wavelet_level(n, name, mode) == level
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # pywt warns of levels deeper than its boundary rule
+            ref = np.concatenate(pywt.wavedec(x, name, mode="periodization", level=level))
+        np.testing.assert_allclose(psi.T @ x, ref if level else x, atol=1e-11)
 
 
 def test_wavelet_levels_and_errors():
     assert np.array_equal(
-        wavelet(28), np.eye(28)
+        wavelet(28, level="boundary"), np.eye(28)
     )  # Symlet-8 has no boundary-free level on 28 samples
+    assert wavelet_level(28) == 2 and wavelet_level(96) == 5 and wavelet_level(7) == 0
+    assert np.array_equal(wavelet(64, level=None), wavelet(64, level="boundary"))
+    assert Wavelet(64).level == 6 and "level=6" in repr(Wavelet(64))
+    for bad in ("deep", 1.5, True, -1):
+        with pytest.raises(ValueError, match="level must be"):
+            wavelet(16, level=bad)
     assert not np.array_equal(wavelet(256), np.eye(256))
     assert is_orthonormal(wavelet(32, level=5))
     with pytest.raises(ValueError, match="divisible by 8"):

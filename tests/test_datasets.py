@@ -49,7 +49,29 @@ def test_split_is_fixed_and_disjoint():
     assert len(datasets.KAIST_WAVELENGTHS) == 28 and np.all(np.diff(datasets.KAIST_WAVELENGTHS) > 0)
     assert set(datasets.REPORT_SCENES).isdisjoint(datasets.TUNE_SCENES)
     assert sorted(datasets.REPORT_SCENES + datasets.TUNE_SCENES) == sorted(datasets.HSI_SCENES)
-    assert len(datasets.TUNE_SCENES) == 8
+    assert len(datasets.TUNE_SCENES) == 28 and len(datasets.HSI_SCENES) == 31
+
+
+def test_tune_folds_partition_the_tuning_scenes_reproducibly():
+    folds = datasets.tune_folds(4)
+    assert [len(f) for f in folds] == [7, 7, 7, 7]
+    flat = [s for f in folds for s in f]
+    assert sorted(flat) == sorted(datasets.TUNE_SCENES) and len(set(flat)) == 28
+    assert datasets.tune_folds(4) == folds and datasets.tune_folds(4, seed=1) != folds
+    assert not set(flat) & set(datasets.REPORT_SCENES)
+    for bad in (1, 29, True, 2.0):
+        with pytest.raises(ValueError, match="k must be an integer"):
+            datasets.tune_folds(bad)
+    with pytest.raises(ValueError, match="seed"):
+        datasets.tune_folds(4, seed=-1)
+
+
+def test_every_listed_scene_is_in_the_data_folder():
+    try:
+        folder = datasets.data_dir()
+    except FileNotFoundError:
+        pytest.skip("../shared/data/hsi_train not present (set TENSOR_COSDI_DATA)")
+    assert sorted(p.stem for p in folder.glob("*.npz")) == sorted(datasets.HSI_SCENES)
 
 
 def test_real_scene_when_the_data_is_present():

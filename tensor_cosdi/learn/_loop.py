@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..datasets import TUNE_SCENES
 from . import require_torch
 
 
@@ -184,7 +185,7 @@ def run(
         "threads": torch.get_num_threads(),
         "torch": torch.__version__,
         "command": command,
-        "scenes": "datasets.TUNE_SCENES",
+        "scenes": list(TUNE_SCENES),
         **(extra_summary or {}),
     }
     net_cpu = {k: v.detach().cpu() for k, v in net.state_dict().items()}

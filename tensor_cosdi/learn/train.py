@@ -4,7 +4,8 @@ Patches of the tuning scenes (:data:`tensor_cosdi.datasets.TUNE_SCENES`; the
 report scenes are never read) at their native 31 bands or resampled to the
 28 KAIST bands, with random band ranges and strides (3 to 31 channels, so
 that the network serves any band count), random subspace ranks, flips and
-rotations, plus white Gaussian noise of a log-uniform level — for half of
+rotations, a random smooth illuminant and shading (:func:`_illuminate`),
+plus white Gaussian noise of a log-uniform level — for half of
 the batches (``coded_fraction``) with its projection onto the row space of a
 random SD-CASSI operator removed, which is the structured error a
 plug-and-play GAP step hands the denoiser (a network trained on white noise
@@ -47,6 +48,9 @@ class TrainConfig:
     sigma_max: float = 0.25
     warmup: int = 200
     coded_fraction: float = 0.5
+    #: probability that a patch's spectra are tilted (a random smooth illuminant) and, apart,
+    #: that it is shaded by a random linear ramp across the image plane
+    illumination: float = 0.5
     r_max: int = 12
     width: int = 64
     blocks: int = 4
@@ -61,8 +65,10 @@ class TrainConfig:
         )
         if self.patch < 8 or self.patch % 2:
             raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
-        if not 0 <= self.coded_fraction <= 1:
-            raise ValueError(f"coded_fraction must lie in [0, 1], got {self.coded_fraction}")
+        for name in ("coded_fraction", "illumination"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
+                raise ValueError(f"{name} must be a number in [0, 1], got {v!r}")
         if not 0 < self.sigma_min < self.sigma_max:
             raise ValueError(
                 f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
@@ -106,22 +112,49 @@ def _batch(rng, cubes, cfg: TrainConfig):
         patch = np.rot90(patch, int(rng.integers(4)))
         if rng.random() < 0.5:
             patch = patch[::-1]
-        out[i] = patch
+        out[i] = _illuminate(rng, patch, bands / max(nb - 1, 1), cfg.illumination)
     return out.reshape(cfg.batch, p * p, n), rank
+
+
+def _illuminate(rng, patch, position, probability):
+    """``patch (p, p, n)`` under a random illuminant and shading, each with ``probability``.
+
+    The illuminant is a smooth positive spectral weight ``1 + a t + b (t² − ⅓)``
+    (``t`` the band's position in the scene's range mapped to [−1, 1], ``a`` in
+    ±0.6, ``b`` in ±0.4, floored at 0.15): a warmer or bluer light than
+    CAVE's calibrated reflectance.  The shading is a linear ramp across the
+    patch (slopes in ±0.6, floored at 0.15).  Both keep a spectrum smooth and
+    positive, so the denoiser meets more spectral shapes without leaving real
+    reflectance behind.  The random stream is drawn from either way.
+    """
+    t = 2.0 * np.asarray(position, dtype=np.float64) - 1.0
+    a, b = rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4)
+    sx, sy = rng.uniform(-0.6, 0.6, 2)
+    tilt, shade = rng.random() < probability, rng.random() < probability
+    out = patch
+    if tilt:
+        w = np.maximum(1.0 + a * t + b * (t * t - 1.0 / 3.0), 0.15)
+        out = out * w.astype(np.float32)
+    if shade:
+        ramp = np.linspace(-0.5, 0.5, patch.shape[0])
+        s = np.maximum(1.0 + sx * ramp[:, None] + sy * ramp[None, :], 0.15)
+        out = out * s[:, :, None].astype(np.float32)
+    return out
 
 
 def _nullspace_noise(torch, noise, rng, p: int):
     """White noise ``(B, p², n)`` minus its projection onto the row space of a random SD-CASSI
     operator: ``(I − Aᵀ(AAᵀ)⁻¹A) n``, the error a plug-and-play GAP step leaves.
 
-    A random binary code per sample (density ½) and a random shift of 1 or 2
-    pixels per band; ``AAᵀ`` is diagonal (the code sums ``Φ``), so the
+    A random binary code per sample (density drawn from 0.3–0.7 per batch) and
+    a random shift of 1, 2 or 3 pixels per band; ``AAᵀ`` is diagonal (the code sums ``Φ``), so the
     projection is one shear-sum, a division and the transposed shear.
     """
     b, _, n = noise.shape
-    step = int(rng.choice([1, 2]))
+    step = int(rng.choice([1, 2, 3]))
+    density = rng.uniform(0.3, 0.7)
     x = noise.reshape(b, p, p, n)
-    code = torch.from_numpy((rng.random((b, p, p)) < 0.5).astype(np.float32)).to(noise.device)
+    code = torch.from_numpy((rng.random((b, p, p)) < density).astype(np.float32)).to(noise.device)
     width = p + step * (n - 1)
     g = torch.zeros(b, p, width, dtype=noise.dtype, device=noise.device)
     phi = torch.zeros_like(g)

@@ -73,6 +73,7 @@ def avsi(
     inner_iter: int = 8,
     tol: float = 1e-4,
     wavelet_name: str = "sym8",
+    wavelet_level="auto",
     progress: bool = False,
 ):
     """A-VSI (thesis Alg. 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as
@@ -89,6 +90,9 @@ def avsi(
         least squares) and of its band sum.
     inner_iter : int
         Conjugate-gradient iterations of the ``f``-step (warm-started).
+    wavelet_name, wavelet_level
+        The spatial wavelet of ``Ψ`` and its depth (:func:`tensor_cosdi.bases.wavelet`;
+        default as deep as the periodised transform allows).
     max_iter, tol, progress
         Iteration cap, relative-change stop, tqdm bar.
 
@@ -134,7 +138,7 @@ def avsi(
 
     f = H.solve_normal(H._adjoint(g), s1)
     z = D._forward(f)
-    wx, wy = _bases.Wavelet(nx, wavelet_name), _bases.Wavelet(ny, wavelet_name)
+    wx, wy = (_bases.Wavelet(n, wavelet_name, level=wavelet_level) for n in (nx, ny))
     psi_f = _bases.KroneckerBasis((nx, ny, nl), {0: wx, 1: wy, 2: _bases.DCT(nl)})
     psi_z = _bases.KroneckerBasis((nx, ny), {0: wx, 1: wy})
     rms_f, rms_z = rms(f), rms(z)
@@ -196,6 +200,7 @@ register_method(
         "inner_iter": 8,
         "tol": 1e-4,
         "wavelet_name": "sym8",
+        "wavelet_level": "auto",
         "progress": False,
     },
     "A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",

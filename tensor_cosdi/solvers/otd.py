@@ -66,6 +66,7 @@ def initial_bases(
     *,
     spatial: str = "panchromatic",
     wavelet_name: str = "sym8",
+    wavelet_level="auto",
     pan_iter: int = 60,
     pan_atoms: int = 3,
     pan_weight="auto",
@@ -87,6 +88,9 @@ def initial_bases(
         both (the WDCT baseline).  ``"dct"``: 2-D DCT.
     wavelet_name : str
         A PyWavelets orthogonal wavelet (default Symlet-8).
+    wavelet_level : int, "auto" or "boundary"
+        Its depth (:func:`tensor_cosdi.bases.wavelet`; ``"auto"``: as deep as
+        the periodised transform allows).
     pan_iter, pan_atoms, pan_weight, pan_tv_steps
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
@@ -129,7 +133,7 @@ def initial_bases(
             else:
                 mats[m] = Dense(tucker_bases(z, modes=[m])[m])
     elif spatial == "wavelet":
-        mats[0], mats[1] = Wavelet(shape[0], wavelet_name), Wavelet(shape[1], wavelet_name)
+        mats[0], mats[1] = (Wavelet(n, wavelet_name, level=wavelet_level) for n in shape[:2])
     else:
         mats[0], mats[1] = DCT(shape[0]), DCT(shape[1])
     return mats, start
@@ -342,12 +346,19 @@ def online_tucker_admm(
     )
 
 
-def wdct_admm(system, measurement, *, wavelet_name: str = "sym8", **options):
+def wdct_admm(
+    system, measurement, *, wavelet_name: str = "sym8", wavelet_level="auto", **options
+):
     """WDCT-ADMM: the same ADMM with the fixed basis Symlet-8 ⊗ Symlet-8 ⊗ DCT (thesis baseline).
 
-    Registered as ``"wdct"``; every mode beyond the two spatial ones is DCT.
+    Registered as ``"wdct"``; every mode beyond the two spatial ones is DCT.  ``wavelet_level``
+    is the spatial wavelet's depth (:func:`tensor_cosdi.bases.wavelet`; default as deep as the
+    periodised transform allows).
     """
-    bases, _ = initial_bases(system, measurement, spatial="wavelet", wavelet_name=wavelet_name)
+    bases, _ = initial_bases(
+        system, measurement, spatial="wavelet", wavelet_name=wavelet_name,
+        wavelet_level=wavelet_level,
+    )  # fmt: skip
     options.setdefault("plane_support", False)
     return tucker_admm(system, measurement, bases, desc="WDCT", **options)
 
@@ -374,6 +385,6 @@ register_method(
     "wdct",
     wdct_admm,
     # the fixed-basis baseline's DFA estimate is too poor to pick planes from (−0.5 to −0.7 dB)
-    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8", "plane_support": False},
+    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8", "wavelet_level": "auto", "plane_support": False},
     "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis",
 )

@@ -73,7 +73,8 @@ def tune_folds(k: int = 4, seed: int = 0) -> tuple[tuple[str, ...], ...]:
     >>> len(folds), sum(len(f) for f in folds)
     (4, 28)
     """
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= len(TUNE_SCENES):
+    n = len(TUNE_SCENES)
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= n:
         raise ValueError(f"k must be an integer in [2, {len(TUNE_SCENES)}], got {k!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")

@@ -385,6 +385,9 @@ register_method(
     "wdct",
     wdct_admm,
     # the fixed-basis baseline's DFA estimate is too poor to pick planes from (−0.5 to −0.7 dB)
-    {**_COMMON, "mu": 0.05, "wavelet_name": "sym8", "wavelet_level": "auto", "plane_support": False},
+    {
+        **_COMMON, "mu": 0.05, "wavelet_name": "sym8", "wavelet_level": "auto",
+        "plane_support": False,
+    },  # fmt: skip
     "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis",
 )

@@ -1,24 +1,34 @@
-"""Reconstruction on real hyperspectral scenes: the standard 256×256×28 SD-CASSI protocol.
+"""Reconstruction on real hyperspectral scenes: the standard 256×256×28 SD-CASSI protocol,
+with defaults chosen by cross-validation over scene folds.
 
-Protocol: CAVE scenes of ``../shared/data/hsi_train`` (2×2-averaged to
-256×256) resampled onto the 28 KAIST band centres (453–648 nm, linear
-interpolation), SD-CASSI with the real TSA 256×256 mask and 2 px per band
-(measurement 256×310), noiseless and at 30 dB, float32, PSNR over the cube
-with data range 1 (mean of the per-band PSNRs), SSIM per band, SAM in degrees.
+Protocol (``benchmarks/_protocol.py``): CAVE scenes of the research data
+(``TENSOR_COSDI_DATA``, else ``../shared/data``) resampled onto the 28 KAIST
+band centres, SD-CASSI with 2 px per band and the real TSA mask or a seeded
+random binary code, noiseless / 30 dB / 20 dB, PSNR over the cube (data range
+1, estimates clipped to [0, 1]), SSIM, SAM.  ``plain_gap_tv`` is a reference
+written in a few lines (accelerated GAP with scikit-image's Chambolle TV,
+weight 0.2, 80 iterations) — the baseline this library must beat.
 
-Scenes: the held-back :data:`tensor_cosdi.datasets.REPORT_SCENES` by default
-(``--split tune`` for the scenes defaults may be tuned on — never report those).
-Methods: any registered method, plus ``plain_gap_tv``, a reference written
-here in a few lines (accelerated GAP, ``x ← TV(x + Aᵀ((ĝ − A x) / Φsum))``,
-scikit-image's Chambolle TV (10 inner iterations) with weight 0.2 in reflectance units, 80
-iterations) — the baseline this library must beat.
+Two modes:
 
-Every run is appended to ``<out>/<name>.json`` as it finishes and skipped
-when the file already holds it (a killed run resumes); the Markdown table
-``<out>/<name>.md`` holds means over scenes and median seconds.
+* **report** (default): ``--methods`` on the three report scenes
+  (:data:`tensor_cosdi.datasets.REPORT_SCENES`, never tuned on) for every
+  ``--snr`` × ``--masks`` condition; ``<out>/<name>.md``.
+* **cross-validation** (``--cv METHOD --grid JSON``): every candidate of the
+  grid on the 28 tuning scenes; per condition, for each of the 4 folds of
+  :func:`tensor_cosdi.datasets.tune_folds`, the candidate best on the other
+  three folds is scored on it (fold mean ± spread), and the candidate best on
+  all 28 is then scored once on the report scenes, beside ``plain_gap_tv``.
+  ``<out>/cv_<METHOD>[_<name>].md``.
 
-    python benchmarks/real_spectra.py [--methods plain_gap_tv,gap_tv,otd] [--snr none,30]
-        [--split report|tune] [--scenes a,b] [--name real_spectra] [--out benchmarks/results]
+Every run is appended to a JSON file as it finishes and skipped when the file
+already holds it, so a killed run resumes with the same command.  The
+Markdown tables carry the date, machine, commit and command.
+
+    python benchmarks/real_spectra.py [--methods plain_gap_tv,gap_tv,otd]
+        [--snr none,30,20] [--masks tsa,random] [--name real_spectra]
+    python benchmarks/real_spectra.py --cv otd --grid '{"lam": [0.05, 0.1, 0.2]}'
+        [--snr none,30,20] [--masks tsa,random] [--scenes-per-fold N]
 
 Never asserts anything; read the numbers.
 """
@@ -27,146 +37,196 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
-import time
+import sys
 from pathlib import Path
 
 import numpy as np
 
-import tensor_cosdi as tc
-from tensor_cosdi import datasets, metrics
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _protocol import (  # noqa: E402  (the benchmarks folder is not a package)
+    MASKS,
+    RESULTS,
+    Store,
+    candidates,
+    cross_validate,
+    plain_gap_tv,
+    problem,
+    provenance,
+    provenance_lines,
+    score,
+    snr_label,
+)
+
+from tensor_cosdi import datasets  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The real TSA mask (``dcosnet_speed.py`` and ``dcosnet_ablation.py`` read it too).
 MASK = ROOT / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
 
-
-def plain_gap_tv(system, g, *, iters=80, weight=0.2, tv_iter=10):
-    """The reference: accelerated GAP-TV in a few lines (Φsum = A Aᵀ's diagonal)."""
-    from skimage.restoration import denoise_tv_chambolle
-
-    op = system.operator
-    phisum = np.asarray(op.gram_dual().d, dtype=g.dtype)
-    phisum = np.where(phisum == 0, 1, phisum)
-    x = op.adjoint(g / phisum)
-    y1 = np.zeros_like(g)
-    for _ in range(iters):
-        ax = op.forward(x)
-        y1 = y1 + (g - ax)
-        x = x + op.adjoint((y1 - ax) / phisum)
-        x = denoise_tv_chambolle(x, weight=weight, max_num_iter=tv_iter, channel_axis=-1)
-    return x
+__all__ = ["MASK", "plain_gap_tv", "problem", "score", "main"]
 
 
-def problem(scene, snr, mask, seed=0):
-    cube, wl = datasets.load_hsi(scene, "kaist", dtype="float32")
-    system = tc.systems.SDCASSI(mask, n_bands=28, shifts=2, wavelengths=wl)
-    g = system.simulate(cube, snr_db=snr, rng=seed)
-    return system, cube, np.asarray(g, dtype=np.float32)
+def _conditions(args):
+    snrs = [None if s.strip().lower() == "none" else float(s) for s in args.snr.split(",")]
+    masks = [m.strip() for m in args.masks.split(",")]
+    for m in masks:
+        if m not in MASKS:
+            raise SystemExit(f"--masks: {m!r} is not one of {', '.join(MASKS)}")
+    return [(s, m) for m in masks for s in snrs]
 
 
-def score(truth, est):
-    est = np.asarray(est, dtype=np.float64)
-    truth = np.asarray(truth, dtype=np.float64)
-    return {
-        "psnr": metrics.psnr(truth, est, data_range=1.0),
-        "ssim": metrics.ssim(truth, est, data_range=1.0),
-        "sam": metrics.sam(truth, est),
-    }
+def _mean(rows, field):
+    return float(np.mean([r[field] for r in rows]))
 
 
-def run(method, system, g, options):
-    t0 = time.perf_counter()
-    if method == "plain_gap_tv":
-        cube = plain_gap_tv(system, g, **options)
-    else:
-        cube = tc.reconstruct(system, g, method, **options).cube
-    return cube, time.perf_counter() - t0
-
-
-def summarise(runs, methods, snrs):
+def report(args, store, cache):
+    methods = args.methods.split(",")
+    options = json.loads(args.options)
+    scenes = args.scenes.split(",") if args.scenes else list(datasets.REPORT_SCENES)
+    conds = _conditions(args)
+    for scene in scenes:
+        for snr, mk in conds:
+            for m in methods:
+                store.ensure(scene, snr, mk, m, options.get(m, {}), cache=cache)
     lines = [
-        "| SNR | method | PSNR dB | SSIM | SAM ° | median s | scenes |",
-        "|---|---|---|---|---|---|---|",
+        "| code | SNR | method | PSNR dB | SSIM | SAM ° | median s | scenes |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for snr in snrs:
+    for snr, mk in conds:
         for m in methods:
-            rs = [r for r in runs if r["method"] == m and r["snr_db"] == snr]
-            if not rs:
-                continue
+            rs = [store.get(s, snr, mk, m, options.get(m, {})) for s in scenes]
             lines.append(
-                f"| {'noiseless' if snr is None else f'{snr:g} dB'} | {m} | "
-                f"{np.mean([r['psnr'] for r in rs]):.2f} | "
-                f"{np.mean([r['ssim'] for r in rs]):.3f} | "
-                f"{np.mean([r['sam'] for r in rs]):.2f} | "
-                f"{np.median([r['seconds'] for r in rs]):.2f} | "
-                f"{len(rs)} |"
+                f"| {mk} | {snr_label(snr)} | {m} | {_mean(rs, 'psnr'):.2f} | "
+                f"{_mean(rs, 'ssim'):.3f} | {_mean(rs, 'sam'):.2f} | "
+                f"{np.median([r['seconds'] for r in rs]):.2f} | {len(rs)} |"
             )
+    head = (
+        f"# Real spectra: {', '.join(scenes)}\n\nSD-CASSI 256×256×28 (KAIST bands), 2 px/band, "
+        f"float32; options {json.dumps(options)}.\n\n"
+    )
+    return head + "\n".join(lines)
+
+
+def cv(args, store, cache):
+    method = args.cv
+    grid = json.loads(args.grid)
+    cands = candidates(grid)
+    folds = datasets.tune_folds(4)
+    if args.scenes_per_fold:
+        folds = tuple(f[: args.scenes_per_fold] for f in folds)
+    tune = [s for f in folds for s in f]
+    conds = _conditions(args)
+    # cheapest first: every candidate on a scene before the next scene
+    for snr, mk in conds:
+        for scene in tune:
+            for c in cands:
+                store.ensure(scene, snr, mk, method, c, cache=cache)
+            if args.baseline_on_tune:
+                store.ensure(scene, snr, mk, "plain_gap_tv", {}, cache=cache)
+    results = {}
+    for snr, mk in conds:
+
+        def psnrs(c, scenes, snr=snr, mk=mk):
+            return [store.get(s, snr, mk, method, c)["psnr"] for s in scenes]
+
+        res = cross_validate(psnrs, cands, folds)
+        chosen = res["chosen_on_all"]
+        rep = {}
+        for m, opts in ((method, chosen), ("plain_gap_tv", {})):
+            rows = [
+                store.ensure(s, snr, mk, m, opts, cache=cache) for s in datasets.REPORT_SCENES
+            ]
+            rep[m] = {
+                "psnr": _mean(rows, "psnr"),
+                "ssim": _mean(rows, "ssim"),
+                "sam": _mean(rows, "sam"),
+                "seconds": float(np.median([r["seconds"] for r in rows])),
+                "per_scene": [r["psnr"] for r in rows],
+            }
+        if args.baseline_on_tune:
+            base = [store.get(s, snr, mk, "plain_gap_tv", {})["psnr"] for s in tune]
+            res["gap_tv_tune_mean"] = float(np.mean(base))
+        res["report"] = rep
+        results[f"{mk}/{snr_label(snr)}"] = res
+    return _cv_markdown(method, grid, folds, results, args), results
+
+
+def _cv_markdown(method, grid, folds, results, args):
+    fmt = lambda c: ", ".join(f"{k}={v}" for k, v in c.items()) or "defaults"  # noqa: E731
+    n = sum(len(f) for f in folds)
+    lines = [
+        f"# Cross-validated choice for `{method}`",
+        "",
+        f"Grid {json.dumps(grid)} ({len(candidates(grid))} candidates); 4 folds of "
+        f"{n} tuning scenes (`datasets.tune_folds(4)`): "
+        + "; ".join(f"fold {k}: {', '.join(f)}" for k, f in enumerate(folds))
+        + ".  Each fold is scored with the candidate best on the other three.",
+        "",
+        "| code | SNR | chosen per fold | held-out PSNR dB, mean ± spread | chosen on all 28 |"
+        " report PSNR dB | plain GAP-TV, report | lead dB |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for cond, res in results.items():
+        mk, snr = cond.split("/")
+        rep = res["report"]
+        lead = rep[method]["psnr"] - rep["plain_gap_tv"]["psnr"]
+        chosen = "; ".join(fmt(f["chosen"]) for f in res["folds"])
+        lines.append(
+            f"| {mk} | {snr} | {chosen} | {res['mean']:.2f} ± {res['spread']:.2f} | "
+            f"{fmt(res['chosen_on_all'])} | {rep[method]['psnr']:.2f} | "
+            f"{rep['plain_gap_tv']['psnr']:.2f} | {lead:+.2f} |"
+        )
+    lines += ["", "Mean PSNR (dB) of every candidate over the tuning scenes:", ""]
+    cands = candidates(grid)
+    lines.append("| code | SNR | " + " | ".join(fmt(c) for c in cands) + " |")
+    lines.append("|---|---|" + "---|" * len(cands))
+    for cond, res in results.items():
+        mk, snr = cond.split("/")
+        best = int(np.argmax(res["all_means"]))
+        cells = [
+            f"**{v:.2f}**" if i == best else f"{v:.2f}" for i, v in enumerate(res["all_means"])
+        ]
+        lines.append(f"| {mk} | {snr} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--methods", default="plain_gap_tv,gap_tv,otd")
-    ap.add_argument("--snr", default="none,30", help="comma list; 'none' = noiseless")
-    ap.add_argument("--split", choices=("report", "tune"), default="report")
-    ap.add_argument("--scenes", default=None, help="override the split's scenes")
-    ap.add_argument("--options", default="{}", help='JSON {"method": {option: value}}')
-    ap.add_argument("--name", default="real_spectra")
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
-    args = ap.parse_args(argv)
-    import scipy.io
-
-    mask = scipy.io.loadmat(MASK)["mask"].astype(np.float64)
-    methods = args.methods.split(",")
-    snrs = [None if s.strip().lower() == "none" else float(s) for s in args.snr.split(",")]
-    scenes = (
-        args.scenes.split(",")
-        if args.scenes
-        else list(datasets.REPORT_SCENES if args.split == "report" else datasets.TUNE_SCENES)
+    ap.add_argument("--snr", default="none,30,20", help="comma list; 'none' = noiseless")
+    ap.add_argument("--masks", default="tsa,random", help=f"comma list of {', '.join(MASKS)}")
+    ap.add_argument("--scenes", default=None, help="report mode: override the report scenes")
+    ap.add_argument("--options", default="{}", help='report mode: JSON {"method": {option: v}}')
+    ap.add_argument("--cv", metavar="METHOD", help="cross-validate METHOD over --grid")
+    ap.add_argument("--grid", default="{}", help='JSON {"option": [values, ...]} for --cv')
+    ap.add_argument("--scenes-per-fold", type=int, default=None, help="--cv: a smaller run")
+    ap.add_argument(
+        "--baseline-on-tune", action="store_true", help="--cv: also plain GAP-TV on the folds"
     )
-    options = json.loads(args.options)
+    ap.add_argument("--name", default=None, help="results file stem")
+    ap.add_argument("--out", default=str(RESULTS))
+    args = ap.parse_args(argv)
+    try:
+        datasets.data_dir()
+    except FileNotFoundError as exc:
+        raise SystemExit(f"real_spectra.py needs the research scenes: {exc}") from None
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    store = out / f"{args.name}.json"
-    runs = json.loads(store.read_text())["runs"] if store.exists() else []
-    done = {
-        (r["scene"], r["snr_db"], r["method"], json.dumps(r["options"], sort_keys=True))
-        for r in runs
-    }
-    for scene in scenes:
-        for snr in snrs:
-            system, cube, g = problem(scene, snr, mask)
-            for m in methods:
-                opts = options.get(m, {})
-                key = (scene, snr, m, json.dumps(opts, sort_keys=True))
-                if key in done:
-                    continue
-                est, sec = run(m, system, g, opts)
-                row = {
-                    "scene": scene,
-                    "snr_db": snr,
-                    "method": m,
-                    "options": opts,
-                    "seconds": sec,
-                    **score(cube, est),
-                }
-                runs.append(row)
-                done.add(key)
-                print(
-                    f"{scene:24s} {str(snr):5s} {m:14s} PSNR {row['psnr']:6.2f} SSIM "
-                    f"{row['ssim']:.3f} "
-                    f"SAM {row['sam']:5.2f} {sec:6.2f} s",
-                    flush=True,
-                )
-                store.write_text(json.dumps({"runs": runs}, indent=1))
-    head = (
-        f"SD-CASSI 256×256×28 (KAIST bands), TSA mask, 2 px/band, float32; scenes "
-        f"{', '.join(scenes)} ({args.split} split); {platform.machine()}, NumPy {np.__version__}, "
-        f"tensor_cosdi {tc.__version__}.\n\n"
-    )
-    table = summarise([r for r in runs if r["scene"] in scenes], methods, snrs)
-    (out / f"{args.name}.md").write_text(head + table + "\n")
-    print(head + table)
+    if args.cv:
+        name = args.name or f"cv_{args.cv}"
+    else:
+        name = args.name or "real_spectra"
+    store = Store(out / f"{name}.json")
+    cache = {}
+    if args.cv:
+        text, results = cv(args, store, cache)
+        (out / f"{name}.summary.json").write_text(json.dumps(results, indent=1))
+    else:
+        text = report(args, store, cache)
+    text = text + "\n\n" + provenance_lines(provenance()) + "\n"
+    (out / f"{name}.md").write_text(text)
+    print(text)
 
 
 if __name__ == "__main__":

@@ -4,8 +4,6 @@ The public API, re-exported.  See ``SPEC.md``/``DESIGN.md`` in the project
 docs for the systems and the operator protocol.
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
 from . import (
     bases,
     codes,
@@ -24,13 +22,9 @@ from . import (
     systems,
     testing,
 )
+from ._version import __version__
 from .operators import TensorOperator
 from .solvers import Result, reconstruct, reconstruct_tiled
-
-try:
-    __version__ = version("tensor_cosdi")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.0.0+unknown"
 
 __all__ = [
     "plot",

@@ -13,6 +13,7 @@ __all__ = [
     "snr_db",
     "estimate_sigma",
     "estimate_snr_db",
+    "snr_db_from_sigma",
     "snr_schedule",
     "auto_weight",
 ]
@@ -89,14 +90,23 @@ def estimate_sigma(measurement) -> float:
     return float(np.mean([_mad_sigma(frames[..., k]) for k in range(frames.shape[2])]))
 
 
+def snr_db_from_sigma(power: float, sigma: float) -> float:
+    """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``)."""
+    return float("inf") if sigma == 0 else float(10.0 * np.log10(power / sigma**2))
+
+
 def estimate_snr_db(measurement) -> float:
-    """``10 log10(mean g² / σ̂²)`` with :func:`estimate_sigma` (``inf`` when σ̂ = 0)."""
+    """``10 log10(mean g² / σ̂²)`` with :func:`estimate_sigma` (``inf`` when σ̂ = 0).
+
+    From the measurement alone, so a code's fine texture reads as noise; with
+    the system at hand, :func:`tensor_cosdi.solvers.snr.estimate_snr` also
+    reads the residual of a fit through it.
+    """
     g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
     power = float(np.mean(g * g))
     if power == 0.0:
         raise ValueError("the measurement is all zero: there is no signal to reconstruct")
-    sigma = estimate_sigma(g)
-    return float("inf") if sigma == 0 else 10.0 * np.log10(power / sigma**2)
+    return snr_db_from_sigma(power, estimate_sigma(g))
 
 
 def snr_schedule(snr_db: float, anchors: dict) -> float:
@@ -125,7 +135,7 @@ def snr_schedule(snr_db: float, anchors: dict) -> float:
 
 
 def auto_weight(
-    measurement, *, at_30db: float, at_20db: float, floor: float | None = None
+    measurement, *, at_30db: float, at_20db: float, floor: float | None = None, snr=None
 ) -> float:
     """A regularisation weight that follows the measurement's estimated SNR.
 
@@ -133,9 +143,10 @@ def auto_weight(
     below ``floor`` (default ``at_30db``): noisier data get more
     regularisation; clean data keep the 30 dB value (on real scenes the best
     noise-free weight depends on the scene more than on the noise, so it is
-    not extrapolated).
+    not extrapolated).  ``snr`` (dB) replaces the measurement-only estimate
+    (e.g. :func:`tensor_cosdi.solvers.snr.estimate_snr`'s).
     """
-    snr = estimate_snr_db(measurement)
+    snr = estimate_snr_db(measurement) if snr is None else float(snr)
     lo = at_30db if floor is None else floor
     if not np.isfinite(snr):
         return float(lo)

@@ -1,5 +1,8 @@
-"""House style CI enforces: `ruff check` clean (pyproject.toml rules), files ≤ 450 lines."""
+"""House style CI enforces: `ruff check` clean (pyproject.toml rules), and a package without
+import cycles (module- and function-level imports alike): split by concern into sub-packages,
+never into siblings that import each other."""
 
+import ast
 import shutil
 import subprocess
 import sys
@@ -20,10 +23,95 @@ def test_ruff_check_is_clean():
     assert out.returncode == 0, out.stdout + out.stderr
 
 
-def test_no_package_file_over_450_lines():
-    long = {
-        str(p.relative_to(ROOT)): n
-        for p in (ROOT / "tensor_cosdi").rglob("*.py")
-        if (n := len(p.read_text(encoding="utf-8").splitlines())) > 450
-    }
-    assert long == {}
+def import_graph(package_dir: Path, package: str) -> dict[str, set[str]]:
+    """``module → {package modules it imports}``, from the AST of every ``.py`` file (imports
+    inside functions and classes included; ``from pkg import name`` counts as importing the
+    sub-module ``pkg.name`` when one exists, else ``pkg``)."""
+    mods = {}
+    for p in package_dir.rglob("*.py"):
+        parts = list(p.relative_to(package_dir.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        mods[".".join(parts)] = p
+
+    def owner(name):
+        while name not in mods and "." in name:
+            name = name.rsplit(".", 1)[0]
+        return name if name in mods else None
+
+    graph = {m: set() for m in mods}
+    for mod, path in mods.items():
+        here = mod.split(".") if path.name == "__init__.py" else mod.split(".")[:-1]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            targets = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = here[: len(here) - node.level + 1] if node.level else []
+                target = ".".join(base + ([node.module] if node.module else []))
+                targets = [
+                    f"{target}.{a.name}" if f"{target}.{a.name}" in mods else target
+                    for a in node.names
+                ]
+            for t in targets:
+                if t.split(".")[0] == package and (o := owner(t)) and o != mod:
+                    graph[mod].add(o)
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan, iterative)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, children = work[-1]
+            for w in children:
+                if w not in index:
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    if len(comp) > 1:
+                        out.append(sorted(comp))
+    return out
+
+
+def test_the_cycle_finder_finds_a_function_level_cycle(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("from . import a\n")
+    (pkg / "a.py").write_text("import numpy\nfrom .sub import b\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "b.py").write_text("def f():\n    from ..a import g\n")
+    (pkg / "c.py").write_text("from pkg.sub import b\n")
+    graph = import_graph(pkg, "pkg")
+    assert graph["pkg.a"] == {"pkg.sub.b"} and graph["pkg.c"] == {"pkg.sub.b"}
+    assert cycles(graph) == [["pkg.a", "pkg.sub.b"]]
+
+
+def test_the_package_has_no_import_cycle():
+    found = cycles(import_graph(ROOT / "tensor_cosdi", "tensor_cosdi"))
+    assert found == [], "import cycles: " + "; ".join(" ↔ ".join(c) for c in found)

@@ -198,7 +198,7 @@ def save_bundle(
     >>> b.system.measurement_shape, b.metadata, b.info["kind"]
     ((4, 6), {'exposure_ms': 20}, 'measurement')
     """
-    from .. import __version__
+    from .._version import __version__
 
     p = Path(path)
     if p.suffix.lower() not in (".npz",) + H5_SUFFIXES:

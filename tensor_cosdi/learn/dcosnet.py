@@ -403,11 +403,3 @@ class DCoSNet:
         if dtype.kind != "f":
             dtype = np.float32
         return B.tensor_like(cube.astype(dtype, copy=False), measurement)
-
-
-def __getattr__(name):  # the training half lives in dcosnet_train (file size); re-exported here
-    if name in ("DCoSNetConfig", "train_dcosnet", "TRAINABLE_SYSTEMS", "LOSSES"):
-        from . import dcosnet_train
-
-        return getattr(dcosnet_train, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -4,16 +4,29 @@ Every imager in :mod:`tensor_cosdi.systems` is a composition of these
 primitives; each has an exact adjoint and an explicit sparse matrix for tests.
 """
 
-from ._base import TensorOperator, unvec, validate_shape, vec, vec_index
+from .algebra import (
+    Adjoint,
+    Composition,
+    Identity,
+    OperatorSum,
+    Scaled,
+    Stack,
+    TensorOperator,
+    unvec,
+    validate_shape,
+    vec,
+    vec_index,
+    weighted_sum,
+)
 from .blur import Blur
 from .codes import Code
-from .combinators import Adjoint, Composition, Identity, OperatorSum, Scaled, Stack, weighted_sum
+from .gram import Pattern, StructureError, check_structure, probe_structure
 from .integrate import Replicate, SumAxis
 from .layout import LAYOUTS, LightFieldLayout, Pad, Transpose
 from .modes import ModeProduct
 from .routing import Routing
 from .shear import Shear, parse_shifts, shear_bands, unshear_bands
-from .woodbury import Diagonal, PixelBlocks, RowBanded, conjugate_gradient
+from .woodbury import Diagonal, FoldedBanded, PixelBlocks, RowBanded, conjugate_gradient
 
 __all__ = [
     "TensorOperator",
@@ -40,6 +53,11 @@ __all__ = [
     "Diagonal",
     "PixelBlocks",
     "RowBanded",
+    "FoldedBanded",
+    "Pattern",
+    "StructureError",
+    "check_structure",
+    "probe_structure",
     "conjugate_gradient",
     "Routing",
     "vec",

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
-from ._base import TensorOperator, _normalize_axis, validate_shape, vec_index
+from .algebra import TensorOperator, _normalize_axis, validate_shape, vec_index
 
 __all__ = ["Blur"]
 

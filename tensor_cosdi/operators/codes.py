@@ -6,7 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import _backend as B
-from ._base import Routing, TensorOperator, _normalize_axis, validate_shape, vec
+from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, vec
 
 __all__ = ["Code"]
 

@@ -8,8 +8,8 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
-from ._base import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
 from ._kernels import linear_step, moved, shear_sum_adjoint, shear_sum_forward
+from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
 from .codes import Code
 from .shear import Shear
 
@@ -99,7 +99,7 @@ class Replicate(TensorOperator):
         return SumAxis(self.output_shape, self.axis)
 
     def _gram_pattern(self):
-        from .woodbury import Pattern
+        from .gram import Pattern
 
         return Pattern("blocks", self.axis)
 

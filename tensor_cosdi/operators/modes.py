@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from tensorly import tenalg
 
 from .. import _backend as B
-from ._base import TensorOperator, _normalize_axis, validate_shape
+from .algebra import TensorOperator, _normalize_axis, validate_shape
 
 __all__ = ["ModeProduct"]
 
@@ -89,7 +89,7 @@ class ModeProduct(TensorOperator):
         return ModeProduct(self.output_shape, [M.T for M in self.matrices], self.modes)
 
     def _gram_pattern(self):
-        from .woodbury import Pattern
+        from .gram import Pattern
 
         if len(self.modes) == 1:
             return Pattern("blocks", self.modes[0])

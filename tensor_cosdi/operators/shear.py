@@ -9,7 +9,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
-from ._base import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
+from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
 
 __all__ = ["Shear", "parse_shifts", "shear_bands", "unshear_bands"]
 

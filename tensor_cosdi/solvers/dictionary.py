@@ -310,7 +310,7 @@ def dictionary_admm(
         raise ValueError(f"splitting must be 'gap' or 'admm', got {splitting!r}")
     check_positive("rho", rho)
     dictionary._check(tuple(system.cube_shape))
-    accelerate, eps, _ = gap_settings(measurement, accelerate, eps)
+    accelerate, eps, _ = gap_settings(system, measurement, accelerate, eps)
     prior = Denoiser(dictionary, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=True)
     return warm_started_gap(
         system, measurement, prior, warm=warm, warm_iter=warm_iter, accelerate=accelerate,

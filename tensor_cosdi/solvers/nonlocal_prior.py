@@ -249,7 +249,7 @@ def nonlocal_tucker(
         engine.check_int(name, v, low)
     from .pnp_gap import gap_settings, warm_started_gap
 
-    accelerate, eps, _ = gap_settings(measurement, accelerate, eps)
+    accelerate, eps, _ = gap_settings(system, measurement, accelerate, eps)
     g = measurement
     shape = system.cube_shape
     if min(shape[:2]) < patch:

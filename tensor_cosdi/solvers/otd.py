@@ -218,9 +218,11 @@ def tucker_admm(
         if lam != "auto":
             raise ValueError(f"lam must be a number > 0 or 'auto', got {lam!r}")
         from ..noise import auto_weight
+        from .snr import estimate_snr
 
         # 0.1 suits 30 dB and cleaner, 0.3 suits 20 dB (measured on real scenes, TSA mask)
-        lam = auto_weight(measurement, at_30db=0.1, at_20db=0.3)
+        snr = estimate_snr(system, measurement).snr_db
+        lam = auto_weight(measurement, at_30db=0.1, at_20db=0.3, snr=snr)
     lam = check_positive("lam", lam)
     tol = check_positive("tol", tol)
     if not (np.isfinite(beta) and beta >= 0):

@@ -33,12 +33,14 @@ def _check_pan_weight(pan_weight):
     return check_positive("pan_weight", pan_weight)
 
 
-def pan_weight_for(measurement, pan_weight) -> float:
-    """``pan_weight`` as a number: ``"auto"`` follows :data:`PAN_WEIGHTS`."""
+def pan_weight_for(system, measurement, pan_weight) -> float:
+    """``pan_weight`` as a number: ``"auto"`` follows :data:`PAN_WEIGHTS` against the
+    measurement's estimated SNR (:func:`~tensor_cosdi.solvers.snr.estimate_snr`)."""
     if _check_pan_weight(pan_weight) == "auto":
-        from ..noise import estimate_snr_db, snr_schedule
+        from ..noise import snr_schedule
+        from .snr import estimate_snr
 
-        return snr_schedule(estimate_snr_db(measurement), PAN_WEIGHTS)
+        return snr_schedule(estimate_snr(system, measurement).snr_db, PAN_WEIGHTS)
     return float(pan_weight)
 
 
@@ -76,7 +78,7 @@ def panchromatic_estimate(
         measurement,
         n_atoms=pan_atoms,
         max_iter=pan_iter,
-        tv_weight=pan_weight_for(measurement, pan_weight),
+        tv_weight=pan_weight_for(system, measurement, pan_weight),
         tv_steps=pan_tv_steps,
         progress=progress,
     )

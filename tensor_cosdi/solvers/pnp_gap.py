@@ -75,8 +75,9 @@ ACCELERATE_ABOVE_DB = 38.0
 EPS = {30.0: 0.1, 20.0: 0.3}
 
 
-def gap_settings(measurement, accelerate, eps, *, need_snr: bool = False):
-    """``(accelerate, eps, snr)`` with ``"auto"`` values resolved from the estimated SNR.
+def gap_settings(system, measurement, accelerate, eps, *, need_snr: bool = False):
+    """``(accelerate, eps, snr)`` with ``"auto"`` values resolved from the estimated SNR
+    (:func:`~tensor_cosdi.solvers.snr.estimate_snr`).
 
     ``accelerate="auto"``: only above :data:`ACCELERATE_ABOVE_DB`;
     ``eps="auto"``: 1e-6 with acceleration, else :data:`EPS`.  ``snr`` is
@@ -87,9 +88,9 @@ def gap_settings(measurement, accelerate, eps, *, need_snr: bool = False):
             raise ValueError(f"{name} must be 'auto' or a value, got {v!r}")
     snr = None
     if need_snr or accelerate == "auto" or eps == "auto":
-        from ..noise import estimate_snr_db
+        from .snr import estimate_snr
 
-        snr = estimate_snr_db(measurement)
+        snr = estimate_snr(system, measurement).snr_db
     if accelerate == "auto":
         accelerate = bool(snr >= ACCELERATE_ABOVE_DB)
     elif not isinstance(accelerate, bool):
@@ -195,7 +196,9 @@ def pnp_gap(
     if not isinstance(nonneg, (bool, np.bool_)):
         raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     chosen = accelerate != "auto"
-    accelerate, eps, snr = gap_settings(measurement, accelerate, eps, need_snr=sigma_end == "auto")
+    accelerate, eps, snr = gap_settings(
+        system, measurement, accelerate, eps, need_snr=sigma_end == "auto"
+    )
     if splitting == "auto":
         splitting = "gap" if accelerate or chosen else "admm"
     admm = splitting == "admm"

@@ -22,10 +22,9 @@ a seeded instance.  :data:`REGISTRY` names them all (``"sd_cassi"``,
 ``"dd_cassi"``, ``"dual_camera_cassi"``, ``"cassi_vsi"``, ``"cassdi_dfa"``,
 ``"c3slfi"``, ``"lytro_cassi"``, ``"cs2li"``, ``"mu_cosdi"``); each class also carries its
 bundle state, frame order, depth channel and seeded problem
-(:mod:`~tensor_cosdi.systems._roles`).
+(see :class:`System`).
 """
 
-from .._registry import Registry
 from ._base import System
 from ._roles import Problem
 from .c3slfi import C3SLFI
@@ -35,33 +34,8 @@ from .cassi_vsi import CASSIVSI
 from .cs2li import CS2LI, fringe_cube
 from .lytro_cassi import LytroCASSI
 from .mu_cosdi import MODALITIES, MuCoSDI
+from .registry import REGISTRY, SystemRegistry
 
-
-class SystemRegistry(Registry):
-    """:class:`~tensor_cosdi._registry.Registry` of system classes, keyed by their ``name``."""
-
-    def register_class(self, cls, *, replace: bool = False, builtin: bool = False) -> None:
-        """Register a :class:`System` subclass under its ``name`` class attribute."""
-        if not (isinstance(cls, type) and issubclass(cls, System)) or not cls.name:
-            raise ValueError(
-                f"a registered system must be a System subclass with a non-empty name, got {cls!r}"
-            )
-        self.register(cls.name, cls, replace=replace, builtin=builtin)
-
-    def name_of_class(self, class_name: str) -> str:
-        """The registry name of a class name (older bundles store the class name only)."""
-        for name, cls in self.items():
-            if cls.__name__ == class_name:
-                return name
-        raise ValueError(
-            f"unknown system class {class_name!r}; registered: "
-            f"{[c.__name__ for c in self.values()]}"
-        )
-
-
-REGISTRY = SystemRegistry("system")
-"""``name → System subclass``, read-only: every imager the library knows (``register_class`` adds
-yours)."""
 for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, LytroCASSI, CS2LI,
              MuCoSDI):
     REGISTRY.register_class(_cls, builtin=True)
@@ -69,6 +43,7 @@ del _cls
 
 __all__ = [
     "REGISTRY",
+    "SystemRegistry",
     "Problem",
     "System",
     "SDCASSI",

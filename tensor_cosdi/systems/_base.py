@@ -12,6 +12,7 @@ from .. import _backend as B
 from ..noise import add_noise
 from ..operators import Code, SumAxis, TensorOperator, parse_shifts
 from ._roles import SystemRoles
+from .registry import REGISTRY
 
 __all__ = ["System"]
 
@@ -369,3 +370,6 @@ def dual_disperser_matrix(code: np.ndarray, shifts, ny: int, repeats: int) -> sp
         diags.append(sp.diags(w.reshape(-1, order="F")))
     A = sp.hstack(diags)
     return sp.kron(sp.identity(repeats), A, format="csr") if repeats > 1 else A.tocsr()
+
+
+REGISTRY.base = System  # what the registry accepts (it imports no imager itself)

@@ -26,6 +26,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import _backend as B
+from .registry import REGISTRY
 
 __all__ = ["Problem", "SystemRoles", "stack_frames"]
 
@@ -140,8 +141,6 @@ class SystemRoles:
     def from_state(cls, state: dict):
         """Rebuild a system from :meth:`to_state` (called on ``System``, the registry picks the
         class)."""
-        from . import REGISTRY
-
         if not isinstance(state, dict) or "params" not in state or "arrays" not in state:
             raise ValueError(
                 "a system state is a dict with 'system', 'params' and 'arrays' (System.to_state())"
@@ -295,44 +294,9 @@ class SystemRoles:
 
 
 # ---- shared by several imagers ------------------------------------------------------------
-def fringe_phase(cube, n_steps: int):
-    """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums of a ``(Nx, Ny, Nλ,
-    Nt)`` cube.
-
-    ``K = n_steps`` when it divides ``Nt`` (frequency-major patterns), else
-    all ``Nt`` patterns as one sequence; ``None`` with fewer than 3 patterns.
-    """
-    from ..depth import wrapped_phase
-
-    z = np.asarray(B.to_numpy(cube), dtype=np.float64).sum(axis=2)
-    nt = z.shape[2]
-    K = n_steps if nt % n_steps == 0 and n_steps >= 3 else nt
-    if K < 3:
-        return None
-    return np.stack([wrapped_phase(z[..., i * K : (i + 1) * K]) for i in range(nt // K)], axis=-1)
-
-
 def views_disparity(light_field, max_disparity: float):
     """Centre-view disparity of a spectral light field ``(N1, N2, Nλ, U, V)`` (all bands)."""
     from ..depth import disparity_from_views
 
     lf = np.asarray(B.to_numpy(light_field))
     return disparity_from_views(np.moveaxis(lf, (3, 4), (0, 1)), max_disparity=max_disparity)
-
-
-def fringe_example(cls, scene, shape, wl, seed, shifts, n_steps):
-    """The CS2LI / Mu-CoSDI ``"sl"`` problem: one fringe frequency of ``n_steps`` phase steps."""
-    from .. import scenes
-    from .cs2li import fringe_cube
-
-    reflectance = scenes.scene_cube(scene, shape, wl)
-    sl = scenes.structured_light(shape, wl, rng=seed)
-    cube = np.asarray(fringe_cube(reflectance, sl.phase, n_steps=n_steps, amplitude=0.5))
-    system = cls.example(shape + (len(wl), n_steps), rng=seed, shifts=shifts, wavelengths=wl)
-    return (
-        system,
-        cube,
-        reflectance,
-        sl.height,
-        {"phase": sl.phase, "phase_per_height": sl.phase_per_height},
-    )

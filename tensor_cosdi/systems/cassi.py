@@ -226,7 +226,7 @@ class DualCameraCASSI(System):
     -----
     ``A Aᵀ`` couples every panchromatic pixel with the ``Nλ`` CASSI pixels its
     bands land on: banded along the columns once the two frames are folded
-    into them (:class:`~tensor_cosdi.operators._folded.FoldedBanded`), so
+    into them (:class:`~tensor_cosdi.operators.woodbury.FoldedBanded`), so
     ``solve_normal`` is a banded Cholesky per detector row.
 
     Examples

@@ -21,7 +21,6 @@ from ._base import (
     shifts_for,
     wavelengths_for,
 )
-from ._roles import fringe_example, fringe_phase
 
 __all__ = ["CS2LI", "fringe_cube"]
 
@@ -187,3 +186,38 @@ def fringe_cube(
         return F[:, :, :, None] * mod[:, :, None, :]
     F = reflectance
     return F[:, :, :, None] * B.tensor_like(mod[:, :, None, :], F)
+
+
+# ---- fringe helpers shared with Mu-CoSDI's structured-light modality ----------------------
+def fringe_phase(cube, n_steps: int):
+    """Wrapped fringe phase per frequency ``(Nx, Ny, Nt / K)`` of the band sums of a ``(Nx, Ny, Nλ,
+    Nt)`` cube.
+
+    ``K = n_steps`` when it divides ``Nt`` (frequency-major patterns), else
+    all ``Nt`` patterns as one sequence; ``None`` with fewer than 3 patterns.
+    """
+    from ..depth import wrapped_phase
+
+    z = np.asarray(B.to_numpy(cube), dtype=np.float64).sum(axis=2)
+    nt = z.shape[2]
+    K = n_steps if nt % n_steps == 0 and n_steps >= 3 else nt
+    if K < 3:
+        return None
+    return np.stack([wrapped_phase(z[..., i * K : (i + 1) * K]) for i in range(nt // K)], axis=-1)
+
+
+def fringe_example(cls, scene, shape, wl, seed, shifts, n_steps):
+    """The CS2LI / Mu-CoSDI ``"sl"`` problem: one fringe frequency of ``n_steps`` phase steps."""
+    from .. import scenes
+
+    reflectance = scenes.scene_cube(scene, shape, wl)
+    sl = scenes.structured_light(shape, wl, rng=seed)
+    cube = np.asarray(fringe_cube(reflectance, sl.phase, n_steps=n_steps, amplitude=0.5))
+    system = cls.example(shape + (len(wl), n_steps), rng=seed, shifts=shifts, wavelengths=wl)
+    return (
+        system,
+        cube,
+        reflectance,
+        sl.height,
+        {"phase": sl.phase, "phase_per_height": sl.phase_per_height},
+    )

@@ -96,7 +96,7 @@ class LytroCASSI(System):
     arm is a camera of its own, so :meth:`simulate` adds noise at the given
     SNR to each arm separately.  ``A Aᵀ`` couples every RGB pixel with the
     CASSI pixels its bands land on: banded along the columns once the frames
-    are folded into them (:class:`~tensor_cosdi.operators._folded.FoldedBanded`),
+    are folded into them (:class:`~tensor_cosdi.operators.woodbury.FoldedBanded`),
     a banded Cholesky per detector row.  It is ill-conditioned (κ ≈ 10⁸
     at 32 × 32 × 8): a CASSI column that sees one voxel repeats part of an
     RGB pixel.  GAP's ``(AAᵀ + εI)⁻¹`` with a small ``ε`` then amplifies

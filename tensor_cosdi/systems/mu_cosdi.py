@@ -18,7 +18,8 @@ from ._base import (
     shifts_for,
     wavelengths_for,
 )
-from ._roles import fringe_example, fringe_phase, views_disparity
+from ._roles import views_disparity
+from .cs2li import fringe_example, fringe_phase
 
 __all__ = ["MuCoSDI", "MODALITIES"]
 

@@ -11,6 +11,7 @@ from tensor_cosdi import _backend as B
 from tensor_cosdi.operators import (
     Code,
     Diagonal,
+    FoldedBanded,
     LightFieldLayout,
     Pad,
     PixelBlocks,
@@ -23,8 +24,7 @@ from tensor_cosdi.operators import (
     vec,
     weighted_sum,
 )
-from tensor_cosdi.operators._folded import FoldedBanded
-from tensor_cosdi.operators.woodbury import Pattern, StructureError, check_structure
+from tensor_cosdi.operators.gram import Pattern, StructureError, check_structure
 from tensor_cosdi.testing import registry
 
 MUS = [1e-4, 1e-2, 1.0, 1e2, 1e4]
@@ -237,7 +237,7 @@ def test_band_structure_on_wide_rows():
     assert tl.shape(op.solve_dual(g.standard_normal(op.output_shape), 1e-3)) == op.output_shape
 
 
-# ---- the runtime self-check of gram_dual (operators/woodbury.check_structure) ----------------
+# ---- the runtime self-check of gram_dual (operators/gram.check_structure) ----------------
 class _Misrouted(TensorOperator):
     """Wraps an operator and reports a wrong ``A Aᵀ`` pattern (a routing bug in a new primitive)."""
 

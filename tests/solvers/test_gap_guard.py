@@ -155,9 +155,14 @@ def test_pnp_gap_splits_by_the_estimated_snr(monkeypatch):
     run = lambda g, **kw: tc.reconstruct(  # noqa: E731
         p.system, g, "pnp_gap", denoiser="tv", warm="none", max_iter=2, **kw
     )
-    monkeypatch.setattr("tensor_cosdi.noise.estimate_snr_db", lambda g: ACCELERATE_ABOVE_DB + 5)
+    from tensor_cosdi.solvers.snr import SNREstimate
+
+    def reads(db):
+        return lambda system, g, **kw: SNREstimate(db, db, db)
+
+    monkeypatch.setattr("tensor_cosdi.solvers.snr.estimate_snr", reads(ACCELERATE_ABOVE_DB + 5))
     run(p.measurement)
-    monkeypatch.setattr("tensor_cosdi.noise.estimate_snr_db", lambda g: 25.0)
+    monkeypatch.setattr("tensor_cosdi.solvers.snr.estimate_snr", reads(25.0))
     run(p.measurement)
     run(p.measurement, splitting="gap")  # explicit GAP: plain GAP on noisy data
     run(p.measurement, accelerate=False)  # an explicit GAP setting picks GAP

@@ -13,8 +13,7 @@ import tensorly as tl
 from tensor_cosdi import _backend as B
 from tensor_cosdi import codes
 from tensor_cosdi.noise import snr_db
-from tensor_cosdi.operators import Diagonal, PixelBlocks, RowBanded, vec
-from tensor_cosdi.operators._folded import FoldedBanded
+from tensor_cosdi.operators import Diagonal, FoldedBanded, PixelBlocks, RowBanded, vec
 from tensor_cosdi.systems import (
     C3SLFI,
     CASSDIDFA,

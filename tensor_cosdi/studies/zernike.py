@@ -20,14 +20,14 @@ from functools import partial
 
 import numpy as np
 
-__all__ = ["zernike_design", "zernike_run"]
+__all__ = ["zernike_design", "zernike_run", "lens", "DEPTHS_MM"]
 
 #: Object distances (mm) of the depth planes and the lens of the DFA design studies.
 DEPTHS_MM = (800.0, 1000.0, 1300.0)
 
 
-def _lens():
-    from .optics import Lens
+def lens():
+    from ..optics import Lens
 
     return Lens(focal_mm=50, aperture_radius_mm=1.5, focus_mm=1000, pixel_um=6)
 
@@ -39,16 +39,16 @@ def zernike_run(
     """One cell of :func:`zernike_design`: CASSDI-DFA whose PSFs add ``aberration = (Noll index,
     waves RMS)`` to defocus (amplitude 0: pure defocus, "DFD"), cropped to ``psf_size``;
     ``sweep=True``: the focal-sweep model (every plane seen at every step)."""
-    from . import codes, optics, scenes
-    from .solvers import reconstruct
-    from .studies import Problem, score
-    from .systems import CASSDIDFA
-    from .systems._base import wavelengths_for
+    from .. import codes, optics, scenes
+    from ..solvers import reconstruct
+    from ..systems import CASSDIDFA
+    from ..systems._base import wavelengths_for
+    from .problems import Problem, score
 
     mode, amp = int(aberration[0]), float(aberration[1])
     if int(psf_size) > int(reference_size):
         raise ValueError(f"psf_size {psf_size} exceeds reference_size {reference_size}")
-    lens = _lens() if lens is None else lens
+    lens = lens() if lens is None else lens
     wl = wavelengths_for(None, n_bands)
     nz = len(depths_mm)
     planes = scenes.depth_planes(scenes.motorcycle(tuple(shape), [550.0])[1], nz)
@@ -137,7 +137,7 @@ def zernike_design(
     >>> [(r["mode"], r["amplitude"], r["psf_size"]) for r in recs]
     [(0, 0.0, 9), (6, 0.5, 9)]
     """
-    from .studies import sweep as run_grid
+    from .sweeping import sweep as run_grid
 
     modes = [int(m) for m in modes]
     if any(m < 2 for m in modes):

@@ -19,11 +19,12 @@ def colour_code_run(
     """One cell of :func:`colour_code_design`: SD-CASSI with a colour-coded aperture of
     ``n_filters`` filters and transmittance ``transmittance`` (``#f = 1``: a binary code),
     imaging ``scene``; returns PSNR / SSIM / SAM, the conditioning of ``A Aᵀ`` and seconds."""
-    from . import codes, scenes
-    from .solvers import reconstruct
-    from .studies import Problem, conditioning, score
-    from .systems import SDCASSI
-    from .systems._base import wavelengths_for
+    from .. import codes, scenes
+    from ..solvers import reconstruct
+    from ..systems import SDCASSI
+    from ..systems._base import wavelengths_for
+    from .condition import conditioning
+    from .problems import Problem, score
 
     wl = wavelengths_for(None, n_bands)
     cube = scenes.scene_cube(scene, tuple(shape), wl)
@@ -92,7 +93,7 @@ def colour_code_design(
     >>> [(r["n_filters"], r["transmittance"]) for r in recs]
     [(1, 0.5), (4, 0.5)]
     """
-    from .studies import sweep
+    from .sweeping import sweep
 
     filters = [int(f) for f in filters]
     if any(f < 1 or f > n_bands for f in filters):
@@ -116,8 +117,8 @@ def c3slfi_dictionary(shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), s
     (:data:`tensor_cosdi.datasets.TUNE_SCENES`), or without the research data
     on the photo scenes not in ``exclude`` — never on a scene it is scored on.
     """
-    from . import datasets
-    from .scenes import SCENES
+    from .. import datasets
+    from ..scenes import SCENES
 
     try:
         datasets.data_dir()
@@ -132,8 +133,8 @@ def c3slfi_dictionary(shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), s
 
 @lru_cache(maxsize=4)
 def _trained_dictionary(names, shape, views, n_bands, seed):
-    from .solvers.dictionary import train_dictionary
-    from .studies import make_problem
+    from ..solvers.dictionary import train_dictionary
+    from .problems import make_problem
 
     cubes = [
         make_problem("c3slfi", s, shape=tuple(shape), n_bands=n_bands, rng=seed, n_snapshots=2,
@@ -150,8 +151,8 @@ def c3slfi_table_run(
     """One cell of :func:`c3slfi_table`: C3SLFI with ``n_snapshots`` complementary colour-coded
     snapshots imaging ``scene``, reconstructed by ``method`` on the 3-D lenslet form
     (``form="3d"``) or the 5-D light field (``"5d"``); scored on the 3-D cube."""
-    from .solvers import reconstruct
-    from .studies import make_problem, score
+    from ..solvers import reconstruct
+    from .problems import make_problem, score
 
     if form not in ("3d", "5d"):
         raise ValueError(f"form must be '3d' or '5d', got {form!r}")
@@ -225,7 +226,7 @@ def c3slfi_table(
     >>> [(r["form"], round(r["ratio"], 3)) for r in recs]
     [('3d', 0.333), ('5d', 0.333)]
     """
-    from .studies import sweep
+    from .sweeping import sweep
 
     bad = [f for f in forms if f not in ("3d", "5d")]
     if bad:

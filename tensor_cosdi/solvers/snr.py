@@ -1,0 +1,97 @@
+"""How noisy is a measurement?  An SNR estimate that does not read a code's texture as noise.
+
+The measurement-only estimate (:func:`tensor_cosdi.noise.estimate_snr_db`,
+the median absolute deviation of the finest diagonal wavelet detail) sees
+every fine-scale structure of ``g`` as noise.  A coded aperture puts its
+pattern on the measurement at the finest scale, so a noiseless measurement
+through a random binary code reads as ≈ 14–22 dB on real scenes (TSA mask:
+28–41 dB).
+
+:func:`estimate_snr` also fits the measurement with a few plain GAP-TV
+iterations through the system and measures the same wavelet MAD on the
+residual ``g − A x̂``: ``A x̂`` carries the code's pattern, so the residual
+holds the noise plus what the smooth fit missed.  Both readings can only
+over-state the noise (each adds structure it cannot model), so the estimate
+is the larger SNR of the two.  On 256×256×28 real scenes (SD-CASSI, 2 px per
+band, 10 iterations), noiseless through a random code: 21.7 (cloth), 32.8
+(balloons), 39.4 dB (cd) against 14.2, 22.1 and – from the measurement
+alone; at a true 30 / 20 dB the residual reads 27.5–31.5 / 18.3–21.7 dB.
+The fit costs about 0.8 s at that size on one core; the estimate is cached
+for the last few (system, measurement) pairs, so the ``"auto"`` options of
+one reconstruction share it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from typing import NamedTuple
+
+import numpy as np
+
+from .. import _backend as B
+from ..noise import estimate_sigma, snr_db_from_sigma
+
+__all__ = ["SNREstimate", "estimate_snr", "FIT_ITER"]
+
+#: Plain GAP-TV iterations of the fit (TV weight 0.1, 5 Chambolle steps each).
+FIT_ITER = 10
+_CACHE: OrderedDict = OrderedDict()
+_CACHE_SIZE = 4
+
+
+class SNREstimate(NamedTuple):
+    """An SNR estimate in dB and its two readings (``inf`` for a noiseless-looking reading)."""
+
+    snr_db: float
+    from_measurement_db: float
+    from_residual_db: float
+
+
+def _fingerprint(g: np.ndarray) -> str:
+    return hashlib.blake2b(np.ascontiguousarray(g).tobytes(), digest_size=16).hexdigest()
+
+
+def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
+    """The measurement's SNR in dB, from the measurement and the fit residual (see the module).
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+        The system that took ``measurement``.
+    measurement : tensor of ``system.measurement_shape``
+    fit : bool
+        ``False`` skips the fit: the measurement-only reading.
+
+    Examples
+    --------
+    >>> import tensor_cosdi as tc
+    >>> p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(64, 64), n_bands=8, snr_db=20)
+    >>> est = estimate_snr(p.system, p.measurement)
+    >>> 17 < est.snr_db < 23
+    True
+    """
+    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    power = float(np.mean(g * g))
+    if power == 0.0:
+        raise ValueError("the measurement is all zero: there is no signal to reconstruct")
+    meas_db = snr_db_from_sigma(power, estimate_sigma(g))
+    if not fit:
+        return SNREstimate(meas_db, meas_db, float("nan"))
+    key = (id(system), g.shape, _fingerprint(g))
+    if key in _CACHE:
+        _CACHE.move_to_end(key)
+        return _CACHE[key][1]
+    from .gap_tv import gap_tv
+
+    x, _, _ = gap_tv(
+        system, measurement, max_iter=FIT_ITER, accelerate=False, tv_weight=0.1, tv_iter=5,
+        plane_support=False,
+    )  # fmt: skip
+    r = g - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
+    res_db = snr_db_from_sigma(power, estimate_sigma(r)) if np.isfinite(r).all() else -np.inf
+    est = SNREstimate(max(meas_db, res_db), meas_db, res_db)
+    _CACHE[key] = (system, est)  # the system is held so that its id is not reused
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return est

@@ -27,3 +27,14 @@ def test_ten_lines_need_no_shared_data(tmp_path, monkeypatch, capsys):
     assert psnr > 25.0, out  # OTD on the seeded colour checker at 30 dB
     assert scope["rgb"].shape == (256, 256, 3) and np.isfinite(scope["rgb"]).all()
     assert scope["p"].system.name == "cs2li"
+
+
+def test_readme_is_a_front_page_not_a_notebook():
+    text = README.read_text()
+    assert len(text.splitlines()) <= 250
+    docs = README.parent / "docs"
+    for page in ("install.md", "own_data.md", "benchmarks.md", "findings.md", "contributing.md"):
+        assert (docs / page).is_file(), page
+        assert f"docs/{page}" in text, f"the README does not link docs/{page}"
+    for history in ("stop 1", "stop 2", "this session", "in stop"):
+        assert history not in text.lower()

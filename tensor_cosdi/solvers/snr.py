@@ -78,14 +78,15 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
     meas_db = snr_db_from_sigma(power, estimate_sigma(g))
     if not fit:
         return SNREstimate(meas_db, meas_db, float("nan"))
-    key = (id(system), g.shape, _fingerprint(g))
+    key = (id(system), g.shape, _fingerprint(g))  # float32 and float64 copies differ: both fit
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key][1]
     from .gap_tv import gap_tv
 
+    g_fit = B.as_tensor(g, "float64")  # in float64 whatever the measurement's precision
     x, _, _ = gap_tv(
-        system, measurement, max_iter=FIT_ITER, accelerate=False, tv_weight=0.1, tv_iter=5,
+        system, g_fit, max_iter=FIT_ITER, accelerate=False, tv_weight=0.1, tv_iter=5,
         plane_support=False,
     )  # fmt: skip
     r = g - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)

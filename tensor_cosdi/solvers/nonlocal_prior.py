@@ -225,7 +225,7 @@ def nonlocal_tucker(
     :func:`~tensor_cosdi.solvers.pnp_gap.pnp_gap` (``"auto"`` from the
     estimated SNR: accelerated GAP on clean data, plain GAP with a larger
     ``ε`` on noisy data; at 30 dB on the tuning scenes balloons and clay
-    that is 27.28 dB against OTD's 26.96).  Experimental: see the README.
+    that is 27.28 dB against OTD's 26.96).  Experimental.
     """
     from . import engine
     from ._base import check_positive

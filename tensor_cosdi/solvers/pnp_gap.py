@@ -36,7 +36,7 @@ from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
 from .priors import Denoiser
 
-__all__ = ["pnp_gap", "pnp_fast"]
+__all__ = ["pnp_gap"]
 
 WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
@@ -313,71 +313,5 @@ register_method(
         "progress": False,
     },
     "plug-and-play GAP (clean) / ADMM (noisy) with an annealed denoiser (default: learned, torch)",
-    requires=("torch",),
-)
-
-
-def pnp_fast(
-    system,
-    measurement,
-    *,
-    denoiser="spectral_net",
-    sigma: float = 0.08,
-    sigma_end="auto",
-    max_iter: int = 20,
-    warm: str = "gap_tv",
-    warm_iter: int = 15,
-    accelerate="auto",
-    eps="auto",
-    splitting="auto",
-    rho="auto",
-    nonneg: bool = True,
-    tol: float = 1e-5,
-    guard=1.3,
-    progress: bool = False,
-):
-    """The fast learned path: :func:`pnp_gap` with few denoiser calls from a cheap start.
-
-    ``warm_iter`` GAP-TV iterations instead of OTD, then ``max_iter``
-    plug-and-play iterations with one denoiser call each (no self-ensemble).
-    Registered as ``"pnp_fast"``; every option means what it means in
-    :func:`pnp_gap`.
-
-    Examples
-    --------
-    >>> import tensor_cosdi as tc
-    >>> p = tc.studies.make_problem("sd_cassi", "coffee", shape=(32, 32), n_bands=8)
-    >>> res = tc.reconstruct(p.system, p.measurement, "pnp_fast", denoiser="tv", max_iter=3)
-    >>> res.cube.shape
-    (32, 32, 8)
-    """
-    return pnp_gap(
-        system, measurement, denoiser=denoiser, sigma=sigma, sigma_end=sigma_end,
-        max_iter=max_iter, warm=warm, warm_iter=warm_iter, accelerate=accelerate, eps=eps,
-        splitting=splitting, rho=rho, nonneg=nonneg, tol=tol, guard=guard, ensemble=1,
-        progress=progress,
-    )  # fmt: skip
-
-
-register_method(
-    "pnp_fast",
-    pnp_fast,
-    {
-        "denoiser": "spectral_net",
-        "sigma": 0.08,
-        "sigma_end": "auto",
-        "max_iter": 20,
-        "warm": "gap_tv",
-        "warm_iter": 15,
-        "accelerate": "auto",
-        "eps": "auto",
-        "splitting": "auto",
-        "rho": "auto",
-        "nonneg": True,
-        "tol": 1e-5,
-        "guard": 1.3,
-        "progress": False,
-    },
-    "the fast learned path: plug-and-play with few denoiser calls from a short GAP-TV start",
     requires=("torch",),
 )

@@ -234,7 +234,7 @@ def _tsa_crop(n=64):
 @needs_torch
 def test_shipped_weights_beat_least_squares_on_a_held_back_real_crop():
     """The CPU-budget weights (3000 steps) learned a real correction to the least-squares start:
-    30.77 dB vs LSQ 28.98 on this crop — and still lose to GAP-TV (35.11): see the README."""
+    30.77 dB vs LSQ 28.98 on this crop — and still lose to GAP-TV (35.11)."""
     cube = _real("real_and_fake_apples", (64, 64))
     system = tc.systems.SDCASSI(_tsa_crop(), n_bands=28, shifts=2)
     g = system.simulate(cube.astype(np.float64), snr_db=30, rng=0)

@@ -155,7 +155,7 @@ def test_c3slfi_otd_3d_beats_wdct_3d_by_2db_and_otd_5d():
 
     Measured (seed 0): OTD-3D 30.5 dB, WDCT-3D 28.1 dB, OTD-5D 29.4 dB.  On
     the chelsea and astronaut photos the OTD-3D margin over WDCT-3D is
-    smaller (1.4 and 1.0 dB), see the README's performance section.
+    smaller (1.4 and 1.0 dB).
     """
     p = studies.make_problem(
         "c3slfi", "colorchecker", shape=(64, 64), n_bands=16, snr_db=20.0, n_snapshots=4

@@ -122,12 +122,15 @@ def run_reconstruct(args) -> int:
     from .colour import reflectance
     from .io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
 
+    defaults = _method_defaults(args.method)  # an unknown method fails before any file is read
     out = Path(args.out)
-    if out.suffix != ".npz":
-        out = out.with_name(out.name + ".npz")
+    if out.suffix != ".npz":  # never a name other than the one asked for
+        raise ValueError(
+            f"--out {args.out}: a reconstruction bundle is an .npz file (e.g. {out.stem}.npz); "
+            "for a plain cube file use the direct path (--system/--mask/--measurement)"
+        )
     if out.exists() and not args.force:
         raise FileExistsError(f"{out} exists; pass --force to replace it")
-    defaults = _method_defaults(args.method)  # an unknown method fails before any file is read
     cal = load_bundle(args.calibration)
     if cal.system is None:
         raise ValueError(
@@ -385,8 +388,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileExistsError, FileNotFoundError, ImportError, LockedError) as exc:
-        print(f"tensor-cosdi {args.command}: error: {exc}", file=sys.stderr)
+    except (ValueError, KeyError, OSError, ImportError, LockedError) as exc:
+        # KeyError: a variable missing from a file (its message, not its quoted repr); OSError:
+        # a folder given as an output, a missing port, a full disk — one line, no traceback
+        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"tensor-cosdi {args.command}: error: {msg}", file=sys.stderr)
         return 2
 
 

@@ -175,3 +175,18 @@ def test_a_users_pair_of_files_in_any_format_gives_the_same_cube(fmt, tmp_path):
     got = load_bundle(tmp_path / "cube.h5").cube
     want = tc.reconstruct(tc.systems.SDCASSI(mask, n_bands=6, shifts=1), meas, "lsq").cube
     np.testing.assert_allclose(got, np.asarray(want, np.float32), rtol=1e-4, atol=1e-5)
+
+
+def test_a_missing_variable_or_a_folder_as_output_is_one_line_not_a_traceback(files, capsys):
+    d, _ = files
+    args = _args(d)
+    i = args.index("--measurement") + 1
+    args[i] = str(d / "meas.mat") + ":meas_real"  # the file holds "meas"
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "meas_real" in err and "Traceback" not in err
+    assert not err.split("error: ", 1)[1].startswith("'"), err  # the message, not a quoted repr
+    (d / "folder.h5").mkdir()
+    assert cli.main(_args(d, "folder.h5", "--force")) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "folder.h5" in err, err

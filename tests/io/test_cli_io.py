@@ -137,7 +137,7 @@ def test_reconstruct_command(tmp_path, capsys):
                 "--dark",
                 str(folder / "dark.tif"),
                 "--out",
-                str(tmp_path / "z"),
+                str(tmp_path / "z.npz"),
                 "--quiet",
             ]
         )
@@ -152,9 +152,15 @@ def test_reconstruct_command(tmp_path, capsys):
                 "--dark",
                 str(tmp_path / "capture.tif"),
                 "--out",
-                str(tmp_path / "y"),
+                str(tmp_path / "y.npz"),
             ]
         )
         == 2
     )
     assert "not above the dark frame" in capsys.readouterr().err
+    # the bundle is written under the name given, or not at all
+    tif_out = tmp_path / "x.tif"
+    assert main(args[:6] + [str(tif_out)] + args[7:]) == 2
+    err = capsys.readouterr().err
+    assert "x.tif" in err and ".npz" in err and len(err.strip().splitlines()) == 1
+    assert not tif_out.exists() and not (tmp_path / "x.tif.npz").exists()

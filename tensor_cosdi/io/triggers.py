@@ -182,6 +182,10 @@ class AcquisitionPlan:
             raise ValueError(f"{p}: not an acquisition plan ({type(e).__name__}: {e})") from e
 
 
+#: The longest reply line :class:`SerialDevice` accepts (bytes before the newline).
+MAX_REPLY_BYTES = 4096
+
+
 class SerialDevice:
     """The host side of the line protocol on a pyserial port.
 
@@ -214,6 +218,7 @@ class SerialDevice:
         except serial.SerialException as e:
             raise DeviceError(f"cannot open serial port {port!r}: {e}") from e
         self.log: list[str] = []  # every line sent and received, for diagnostics
+        self._pending = bytearray()  # bytes received after the last complete line
 
     def close(self):
         try:
@@ -228,17 +233,40 @@ class SerialDevice:
         self.close()
 
     def _readline(self, deadline):
-        buf = b""
-        while time.monotonic() < deadline:
+        """The next reply line, or ``None`` at ``deadline``, whatever the device sends.
+
+        Reads only the bytes already waiting (``in_waiting``), so no read blocks
+        past the deadline on a port without a timeout of its own, and holds at
+        most :data:`MAX_REPLY_BYTES` of a line: a device streaming bytes without
+        a newline is an error, not an ever-growing buffer.
+        """
+        buf = self._pending
+        while True:
+            cut = buf.find(b"\n")
+            if cut >= 0:
+                line, self._pending = bytes(buf[:cut]), buf[cut + 1 :]
+                return line.decode("ascii", errors="replace").strip()
+            if len(buf) > MAX_REPLY_BYTES:
+                self._pending = bytearray()
+                raise DeviceError(
+                    f"the device sent {len(buf)} bytes without a newline (a reply is one line of "
+                    f"at most {MAX_REPLY_BYTES} bytes); check the baud rate and the firmware"
+                )
+            if time.monotonic() >= deadline:
+                self._pending = buf
+                return None
             try:
-                chunk = self.port.readline()
+                waiting = getattr(self.port, "in_waiting", None)
+                if waiting is None:  # a port object without in_waiting: its own timeout bounds
+                    chunk = self.port.readline(MAX_REPLY_BYTES + 1)
+                elif waiting:
+                    chunk = self.port.read(min(int(waiting), MAX_REPLY_BYTES + 1))
+                else:
+                    time.sleep(min(0.002, max(deadline - time.monotonic(), 0.0)))
+                    chunk = b""
             except _port_errors() as e:
                 raise DeviceError(f"serial port lost while waiting for a reply: {e}") from e
-            if chunk:
-                buf += chunk
-                if buf.endswith(b"\n"):
-                    return buf.decode("ascii", errors="replace").strip()
-        return None
+            buf += chunk
 
     def command(self, line: str) -> str:
         """Send one command and return the device's ``OK`` line; raise :class:`DeviceError`
@@ -250,6 +278,7 @@ class SerialDevice:
         for attempt in range(self.retries + 1):
             try:
                 self.port.reset_input_buffer()
+                self._pending = bytearray()
                 self.port.write((line + "\n").encode("ascii"))
                 self.port.flush()
             except _port_errors() as e:

@@ -69,7 +69,7 @@ def test_normal_plan_logs_every_frame(tmp_path, device):
 
 
 def test_late_answer_then_retry_succeeds(tmp_path, device):
-    dev = device(late_once={"DMD 1": 0.4})
+    dev = device(late_once={"DMD 1": 0.3})  # answers inside the second attempt's window
     with SerialDevice(dev.port, timeout=0.2, retries=2) as host:
         Acquisition(
             AcquisitionPlan.snapshots(3), host, tmp_path / "log.jsonl", Camera(tmp_path)
@@ -280,3 +280,40 @@ def test_a_second_acquisition_on_the_same_log_refuses_and_a_stale_lock_is_taken(
     with SerialDevice(device().port, timeout=0.5) as host:
         assert len(Acquisition(plan, host, log, Camera(tmp_path)).run()) == 2
     assert not (tmp_path / "log.jsonl.lock").exists()
+
+
+class _StreamingPort:
+    """A port that answers every read with bytes and never a newline (and has no timeout)."""
+
+    in_waiting = 64
+
+    def __init__(self):
+        self.sent = b""
+
+    def reset_input_buffer(self):
+        pass
+
+    def write(self, data):
+        self.sent += data
+
+    def flush(self):
+        pass
+
+    def read(self, n):
+        return b"x" * n
+
+    def close(self):
+        pass
+
+
+def test_a_device_streaming_without_newlines_is_an_error_in_bounded_time_and_bytes():
+    import time
+
+    from tensor_cosdi.io.triggers import MAX_REPLY_BYTES, DeviceError
+
+    host = SerialDevice(_StreamingPort(), timeout=5.0, retries=3)
+    t0 = time.monotonic()
+    with pytest.raises(DeviceError, match="without a newline"):
+        host.command("DMD 0")
+    assert time.monotonic() - t0 < 1.0  # the byte cap ends it long before the 5 s timeout
+    assert MAX_REPLY_BYTES <= 65536  # the buffer never held more than this

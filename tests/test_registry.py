@@ -29,23 +29,20 @@ NEEDS_PSFS = {"split_tv"}
 #: Methods that need a learned patch dictionary of (Nx, Ny, C) cubes: trained here on another
 #: scene of the same system; 4-D cubes get a clear error.
 NEEDS_DICTIONARY = {"dl"}
-#: (method, system) pairs measured *not* to beat LSQ at 32×32×8, 30 dB, chelsea, seed 0 — the
-#: thesis'
-#: fixed-basis WDCT baseline gains nothing over LSQ at this size (PSNR dB, WDCT vs LSQ):
-#: SD-CASSI 10.4 vs 11.4, CS2LI 11.2 vs 12.1, CASSDI-DFA 14.3 vs 15.0, dual camera 19.3 vs 20.2.
-#: These must still stay within 1.5 dB of LSQ.
+#: (method, system) pairs measured *not* to beat LSQ at 32×32×8, 30 dB, chelsea, seed 0; they must
+#: still stay within 1.5 dB of LSQ.  (WDCT was here on four systems while its wavelet had 1 level
+#: at 32 px; with the periodised-depth default it beats LSQ everywhere, PSNR dB WDCT vs LSQ:
+#: SD-CASSI 20.30 vs 11.43, CS2LI 19.99 vs 12.14, CASSDI-DFA 15.36 vs 14.98, dual camera 26.34
+#: vs 20.15.)
 NOT_BETTER = {
-    ("wdct", "sd_cassi"),
-    ("wdct", "cs2li"),
-    ("wdct", "cassdi_dfa"),
-    ("wdct", "dual_camera_cassi"),
     ("twist", "lytro_cassi"),  # 23.46 vs 23.55
 }
 #: Lytro-CASSI's A Aᵀ is ill-conditioned (κ ≈ 8e7 here): accelerated GAP with ε = 1e-6 fits the
-#: noise along its weak directions (GAP-TV −6.8 dB, DL from its GAP-TV start 8.7 dB; LSQ 23.6) and
-#: WDCT reaches 21.0 dB.  Measured, not hidden: test_gap_overfits_noise_on_lytro_cassi and
-#: test_admm_reconstructs_lytro_cassi below.
-ILL_CONDITIONED = {("gap_tv", "lytro_cassi"), ("dl", "lytro_cassi"), ("wdct", "lytro_cassi")}
+#: noise along its weak directions (GAP-TV −6.8 dB, DL from its GAP-TV start 8.7 dB; LSQ 23.6).
+#: (WDCT, an ADMM, reached only 21.0 dB with a 1-level wavelet; with the periodised-depth default
+#: it gives 26.4 dB and is held to beating LSQ like the others.)  Measured, not hidden:
+#: test_gap_overfits_noise_on_lytro_cassi and test_admm_reconstructs_lytro_cassi below.
+ILL_CONDITIONED = {("gap_tv", "lytro_cassi"), ("dl", "lytro_cassi")}
 
 
 def _problem(name, scene="chelsea"):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from tensor_cosdi import optics, studies
-from tensor_cosdi.studies.zernike import DEPTHS_MM, lens, zernike_run
+from tensor_cosdi.studies.zernike import DEPTHS_MM, default_lens, zernike_run
 
 SMALL = dict(scene="colorchecker", shape=(16, 16), n_bands=4, reference_size=41, max_iter=3)
 
@@ -17,7 +17,7 @@ def test_energy_is_the_share_of_the_reference_psf_inside_the_crop():
     assert crops == sorted(crops) and crops[0] < 0.2 < crops[-1] < 1.0, crops
     # the least share over bands and planes, computed independently
     wl = np.linspace(450, 650, 4)
-    ref = optics.psf_stack(wl, DEPTHS_MM, lens=lens(), zernike={6: 0.9}, size=41)
+    ref = optics.psf_stack(wl, DEPTHS_MM, lens=default_lens(), zernike={6: 0.9}, size=41)
     want = ref[16:25, 16:25].sum(axis=(0, 1)).min()
     assert zernike_run((6, 0.9), 9, **SMALL)["energy"] == pytest.approx(want, rel=1e-9)
 

@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from tensor_cosdi import datasets, optics, plot, studies
-from tensor_cosdi.studies.zernike import DEPTHS_MM, lens
+from tensor_cosdi.studies.zernike import DEPTHS_MM, default_lens
 
 scene, note = datasets.scene_or("cave.face", "colorchecker")  # real spectra where present
 if note:
@@ -30,8 +30,8 @@ if note:
 fig, axes = plt.subplots(2, 3, figsize=(7, 4.6))
 for row, size in enumerate((9, 41)):
     for col, zern in enumerate([None, {6: 0.25}, {6: 0.9}]):
-        h = optics.psf(550, DEPTHS_MM[0], lens=lens(), zernike=zern, size=size)
-        big = optics.psf(550, DEPTHS_MM[0], lens=lens(), zernike=zern, size=81)
+        h = optics.psf(550, DEPTHS_MM[0], lens=default_lens(), zernike=zern, size=size)
+        big = optics.psf(550, DEPTHS_MM[0], lens=default_lens(), zernike=zern, size=81)
         share = big[40 - size // 2 : 41 + size // 2, 40 - size // 2 : 41 + size // 2].sum()
         axes[row, col].imshow(h, cmap="magma")
         name = "defocus" if zern is None else f"Z6 {zern[6]} wave"

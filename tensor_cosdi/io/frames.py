@@ -339,8 +339,8 @@ def load_frames(
 def write_frames(
     frames, folder, *, prefix: str = "frame_", suffix: str = ".tif", overwrite: bool = False
 ) -> list[Path]:
-    """Write a ``(H, W, N)`` stack as numbered files ``prefix000suffix …`` (the reverse of
-    :func:`load_frames`).
+    """Write a ``(H, W, N)`` stack, or a list / tuple of ``(H, W)`` frames, as numbered files
+    ``prefix000suffix …`` (the reverse of :func:`load_frames`).
 
     ``.tif`` keeps the array's dtype (float32/64, uint16 …) exactly; ``.npy``
     likewise; ``.png`` needs integer pixels.  Existing files are an error
@@ -348,7 +348,15 @@ def write_frames(
     Atomic as a set: every frame is written and fsynced under a temporary name
     before any is renamed into place.
     """
-    a = np.asarray(frames)
+    if isinstance(frames, (list, tuple)):  # a sequence of frames, not an (N, H, W) array
+        if not frames:
+            raise ValueError("no frames given")
+        shapes = {np.shape(f) for f in frames}
+        if len(shapes) != 1 or len(next(iter(shapes))) != 2:
+            raise ValueError(f"a list of frames must hold 2-D frames of one shape, got {shapes}")
+        a = np.stack([np.asarray(f) for f in frames], axis=-1)
+    else:
+        a = np.asarray(frames)
     if a.ndim == 2:
         a = a[..., None]
     if a.ndim != 3:

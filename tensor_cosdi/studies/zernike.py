@@ -20,13 +20,13 @@ from functools import partial
 
 import numpy as np
 
-__all__ = ["zernike_design", "zernike_run", "lens", "DEPTHS_MM"]
+__all__ = ["zernike_design", "zernike_run", "default_lens", "DEPTHS_MM"]
 
 #: Object distances (mm) of the depth planes and the lens of the DFA design studies.
 DEPTHS_MM = (800.0, 1000.0, 1300.0)
 
 
-def lens():
+def default_lens():
     from ..optics import Lens
 
     return Lens(focal_mm=50, aperture_radius_mm=1.5, focus_mm=1000, pixel_um=6)
@@ -48,7 +48,7 @@ def zernike_run(
     mode, amp = int(aberration[0]), float(aberration[1])
     if int(psf_size) > int(reference_size):
         raise ValueError(f"psf_size {psf_size} exceeds reference_size {reference_size}")
-    lens = lens() if lens is None else lens
+    lens = default_lens() if lens is None else lens
     wl = wavelengths_for(None, n_bands)
     nz = len(depths_mm)
     planes = scenes.depth_planes(scenes.motorcycle(tuple(shape), [550.0])[1], nz)

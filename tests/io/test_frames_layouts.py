@@ -167,6 +167,19 @@ def test_write_then_load_frames_is_exact(tmp_path, suffix):
         io.write_frames(frames, tmp_path / "cap", suffix=suffix)
 
 
+def test_a_list_of_frames_is_written_frame_by_frame(tmp_path):
+    rng = np.random.default_rng(1)
+    frames = [rng.random((5, 7)).astype(np.float32) for _ in range(3)]
+    paths = io.write_frames(frames, tmp_path / "list", suffix=".npy")
+    assert len(paths) == 3  # three frames, not one file per column
+    back = io.load_frames(tmp_path / "list")
+    assert back.shape == (5, 7, 3) and np.array_equal(back, np.stack(frames, -1))
+    for bad, match in (([], "no frames"), ([frames[0], frames[0][:2]], "one shape"),
+                       ([np.zeros((2, 2, 2))], "2-D frames")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            io.write_frames(bad, tmp_path / "bad", suffix=".npy")
+
+
 def test_layout_errors():
     sd = tc.systems.SDCASSI.example((8, 8, 4))
     with pytest.raises(ValueError, match="SDCASSI: expected 1 frame\\(s\\) of \\(8, 11\\)"):

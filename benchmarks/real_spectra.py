@@ -163,7 +163,7 @@ def _cv_markdown(method, grid, folds, results, args):
         + "; ".join(f"fold {k}: {', '.join(f)}" for k, f in enumerate(folds))
         + ".  Each fold is scored with the candidate best on the other three.",
         "",
-        "| code | SNR | chosen per fold | held-out PSNR dB, mean ± spread | chosen on all 28 |"
+        f"| code | SNR | chosen per fold | held-out PSNR dB, mean ± spread | chosen on all {n} |"
         " report PSNR dB | plain GAP-TV, report | lead dB |",
         "|---|---|---|---|---|---|---|---|",
     ]

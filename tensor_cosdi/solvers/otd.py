@@ -192,12 +192,10 @@ def tucker_admm(
         Sparsity weight: the soft threshold is ``lam·c/(mu + beta)`` in the
         cube's units, ``c`` the RMS of the starting cube (ℓ1 weight
         ``lam·s·c`` in ``½‖A x − g‖² + λ‖Θ‖₁``).  Noisier data want more;
-        ``"auto"`` estimates the measurement's SNR
-        (:func:`tensor_cosdi.noise.estimate_snr_db`) and takes 0.1 at 30 dB
-        and cleaner, 0.3 at 20 dB, log-linear in between and beyond.  Not the
-        default yet: with smooth real-valued masks (TSA) the estimate is
-        within 15 % of the true noise, but a random *binary* code's texture
-        reads as noise (a noise-free 48×48 measurement estimated at 21.5 dB).
+        ``"auto"`` follows the measurement's estimated SNR
+        (:func:`tensor_cosdi.solvers.snr.estimate_snr`) through
+        :data:`LAM_SCHEDULE` (log-linear between its anchors, constant
+        beyond).
     weights : array of ``system.cube_shape``, optional
         Per-coefficient ℓ1 weights (``λ‖w ∘ Θ‖₁``), e.g. larger on atoms
         known to carry noise.
@@ -217,12 +215,10 @@ def tucker_admm(
     if isinstance(lam, str):
         if lam != "auto":
             raise ValueError(f"lam must be a number > 0 or 'auto', got {lam!r}")
-        from ..noise import auto_weight
+        from ..noise import snr_schedule
         from .snr import estimate_snr
 
-        # 0.1 suits 30 dB and cleaner, 0.3 suits 20 dB (measured on real scenes, TSA mask)
-        snr = estimate_snr(system, measurement).snr_db
-        lam = auto_weight(measurement, at_30db=0.1, at_20db=0.3, snr=snr)
+        lam = snr_schedule(estimate_snr(system, measurement).snr_db, LAM_SCHEDULE)
     lam = check_positive("lam", lam)
     tol = check_positive("tol", tol)
     if not (np.isfinite(beta) and beta >= 0):
@@ -255,6 +251,12 @@ def tucker_admm(
     )
 
 
+#: ``lam="auto"`` (OTD's default): the ℓ1 weight against the estimated SNR (dB).  Chosen by 4-fold
+#: cross-validation over 16 tuning scenes (256×256×28 SD-CASSI, TSA mask and a random binary code;
+#: ``benchmarks/results/cv_otd.md``): every fold, both codes, picked 0.03 noiseless, 0.1 at 30 dB
+#: and 0.3 at 20 dB out of {0.03, 0.1, 0.3}.
+LAM_SCHEDULE = {40.0: 0.03, 30.0: 0.1, 20.0: 0.3}
+
 _COMMON = {
     "max_iter": 60,
     "lam": 0.1,
@@ -279,6 +281,7 @@ def online_tucker_admm(
     pan_weight="auto",
     pan_tv_steps=10,
     spatial_block=None,
+    lam="auto",
     **options,
 ):
     """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as
@@ -294,7 +297,8 @@ def online_tucker_admm(
     corrects an inexact ``Z`` (on 64×64×16 scenes at 30 dB it gained 0.3 to
     2.3 dB on SD-CASSI, CASSI-VSI, CS2LI and CASSDI-DFA).  ``max_iter``,
     ``mu``, ``lam``, ``beta``, ``tol``, ``progress``: see
-    :func:`tucker_admm` (``max_iter="auto"``: :data:`OTD_MAX_ITER`, 45 after
+    :func:`tucker_admm` (``lam="auto"``, the default: :data:`LAM_SCHEDULE`;
+    ``max_iter="auto"``: :data:`OTD_MAX_ITER`, 45 after
     a first-stage estimate, 60 where ``Z`` is exact and ADMM does all the
     work); ``pan_*``: see :func:`panchromatic_estimate`;
     ``spatial_block``: see :func:`initial_bases`.  For C3SLFI, "OTD-3D" is
@@ -343,6 +347,7 @@ def online_tucker_admm(
         update_modes=update,
         update_every=update_every,
         max_iter=max_iter,
+        lam=lam,
         desc="OTD stage 2: ADMM",
         **options,
     )
@@ -371,6 +376,7 @@ register_method(
     {
         **_COMMON,
         "max_iter": "auto",
+        "lam": "auto",
         "mu": 0.2,
         "update_every": 10,
         "spatial": "panchromatic",

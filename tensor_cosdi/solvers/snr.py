@@ -4,21 +4,20 @@ The measurement-only estimate (:func:`tensor_cosdi.noise.estimate_snr_db`,
 the median absolute deviation of the finest diagonal wavelet detail) sees
 every fine-scale structure of ``g`` as noise.  A coded aperture puts its
 pattern on the measurement at the finest scale, so a noiseless measurement
-through a random binary code reads as ≈ 14–22 dB on real scenes (TSA mask:
-28–41 dB).
+through a random binary code reads as a noisy one.
 
-:func:`estimate_snr` also fits the measurement with a few plain GAP-TV
-iterations through the system and measures the same wavelet MAD on the
-residual ``g − A x̂``: ``A x̂`` carries the code's pattern, so the residual
-holds the noise plus what the smooth fit missed.  Both readings can only
+:func:`estimate_snr` also fits the measurement with :data:`FIT_ITER` plain
+GAP-TV iterations through the system and measures the same wavelet MAD on
+the residual ``g − A x̂``: ``A x̂`` carries the code's pattern, so the residual
+holds the noise plus what the smooth fit missed.  Both readings mostly
 over-state the noise (each adds structure it cannot model), so the estimate
-is the larger SNR of the two.  On 256×256×28 real scenes (SD-CASSI, 2 px per
-band, 10 iterations), noiseless through a random code: 21.7 (cloth), 32.8
-(balloons), 39.4 dB (cd) against 14.2, 22.1 and – from the measurement
-alone; at a true 30 / 20 dB the residual reads 27.5–31.5 / 18.3–21.7 dB.
-The fit costs about 0.8 s at that size on one core; the estimate is cached
-for the last few (system, measurement) pairs, so the ``"auto"`` options of
-one reconstruction share it.
+is the larger SNR of the two; on dual-camera CASSI and Lytro-CASSI the fit
+reads noisy measurements as cleaner than they are.  ``benchmarks/results/snr_estimate.md`` shows
+both readings on every system (noiseless through a random code, 64×64: SD-CASSI
+28.3 dB from the measurement, 37.9 with the fit; CASSI-VSI 16.1 → 38.3;
+C3SLFI 12.5 → 48.0), and where the fit still reads texture as noise (CS2LI's
+fringes).  The estimate is cached for the last few (system, measurement)
+pairs, so the ``"auto"`` options of one reconstruction share one fit.
 """
 
 from __future__ import annotations

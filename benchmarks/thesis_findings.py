@@ -40,7 +40,7 @@ photos.
 
 Every study's cells go to one local Dask cluster of ``--workers`` single-threaded
 processes (``--workers 1``: serially, no Dask); the whole default run took 15.5 min on
-2 cores (stop 20).  ``--quick`` (32×32×8, one scene; Table 1 at 64×64, 20 dB) is a
+2 cores.  ``--quick`` (32×32×8, one scene; Table 1 at 64×64, 20 dB) is a
 smoke run of about a minute.
 
 Writes ``thesis_findings.md`` / ``.json``; asserts nothing.
@@ -170,7 +170,7 @@ def vsi_study(args, log, client=None):
 
 def dfa_study(args, log, client=None):
     """Which Zernike aberration encodes depth (Sec. 4.3), with PSFs cropped to 9 pixels (what
-    this study used until stop 17: 9 % of Z6's light at 0.9 wave) and to 41 (≥ 96 %)."""
+    this study used before: 9 % of Z6's light at 0.9 wave) and to 41 (≥ 96 %)."""
     names = _scene_names()
     recs = []
     for scene in names:

@@ -26,7 +26,7 @@ warm-started conjugate-gradient iterations (inexact ADMM); (2) step 3 adds
 ``αR HR f ≠ 0``); here ``gR``, ``gT`` are set to the arm estimates the text
 describes (Eq. 45, "g = gT + gR").
 
-What limits it (stop 17; real CAVE tuning scenes balloons, clay, feathers,
+What limits it (real CAVE tuning scenes balloons, clay, feathers,
 64×64×16, 30 dB, random code): at αT = 0.7 A-VSI reaches 18.01 dB, WDCT
 (the same Symlet-8 ⊗ DCT basis, no ``z``) 19.35 and OTD 32.41 — the fixed
 basis costs the 13 dB, not the algorithm.  Not the iterations (200

@@ -12,7 +12,7 @@ robust peak) over the iterations, started from OTD.  The splitting,
 acceleration, ``ε``, ``ρ``, ``sigma_end`` and the iteration count follow
 the measurement's estimated SNR unless given.
 
-Why ADMM on noisy data (stop 16, 8 tuning scenes, 30 dB, OTD start 26.88 dB,
+Why ADMM on noisy data (8 tuning scenes, 30 dB, OTD start 26.88 dB,
 the learned denoiser): plain GAP with ``ε = 0.1`` reached 27.39 dB in 20
 iterations and no more with more; ADMM reached 28.02 dB in 20 and 29.63 dB
 in 80 iterations (``ρ`` 0.15, ``σ`` 0.1 → 0.04).  ADMM needs the
@@ -45,7 +45,7 @@ WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 SIGMA_END = {40.0: 0.015, 30.0: 0.03, 20.0: 0.08}
 #: ``max_iter="auto"``: iterations with and without acceleration.  Accelerated (clean data)
 #: keeps gaining to 100 (see :data:`SIGMA_END`); plain GAP at 30 dB does not (balloons 27.25 dB
-#: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start (stop 15), 20 do what 40 did
+#: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start, 20 do what 40 did
 #: (8 tuning scenes at 30 dB: 27.35 dB in 7.1 s against 27.34 dB in 9.5 s; σ_end 0.05: 27.15,
 #: 0.08: 26.82; OTD alone 26.88).
 MAX_ITER = {True: 100, False: 20}

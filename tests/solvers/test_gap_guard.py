@@ -101,7 +101,7 @@ def test_pnp_gap_ensemble_runs_the_denoiser_n_times():
     assert len(calls) == 3 * 8 + 4 * 8
 
 
-# ---- plug-and-play ADMM on noisy data, non-negative denoiser output (stop 16) ----------------
+# ---- plug-and-play ADMM on noisy data, non-negative denoiser output ----------------------------
 def test_denoiser_prior_projects_onto_nonnegative_values_when_asked():
     x = np.random.default_rng(2).standard_normal((6, 5, 3))
     shift = lambda v, s: v - 0.5  # noqa: E731  (a biased "denoiser" with negative output)

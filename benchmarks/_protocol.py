@@ -136,6 +136,17 @@ def provenance_lines(prov: dict) -> str:
     )
 
 
+def write_results(path, lines) -> str:
+    """Write ``lines`` and the run's provenance to the results file ``path``; print and return
+    the text."""
+    text = "\n".join(lines) + "\n\n" + provenance_lines(provenance()) + "\n"
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    print(text)
+    return text
+
+
 def candidates(grid: dict) -> list[dict]:
     """Every combination of a ``{option: [values]}`` grid, in a fixed order."""
     if not grid:

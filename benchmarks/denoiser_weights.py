@@ -29,10 +29,9 @@ from _protocol import (  # noqa: E402
     RESULTS,
     load_mask,
     problem,
-    provenance,
-    provenance_lines,
     score,
     snr_label,
+    write_results,
 )
 
 import tensor_cosdi as tc  # noqa: E402
@@ -94,11 +93,7 @@ def main(argv=None):
     )
     verdict = "replaces" if better else "does not replace"
     lines += ["", f"Verdict: the candidate {verdict} the reference ({diffs})."]
-    text = "\n".join(lines) + "\n\n" + provenance_lines(provenance()) + "\n"
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
-    print(text)
+    write_results(args.out, lines)
 
 
 if __name__ == "__main__":

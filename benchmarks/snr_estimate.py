@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import RESULTS, provenance, provenance_lines  # noqa: E402
+from _protocol import RESULTS, write_results  # noqa: E402
 
 import tensor_cosdi as tc  # noqa: E402
 from tensor_cosdi.solvers.snr import estimate_snr  # noqa: E402
@@ -62,11 +62,7 @@ def main(argv=None):
                 f"{verdict(snr, e.snr_db)} |"
             )
             print(lines[-1], flush=True)
-    text = "\n".join(lines) + "\n\n" + provenance_lines(provenance()) + "\n"
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
-    print(text)
+    write_results(args.out, lines)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
+from .._units import check_wavelengths_nm
 from ..noise import add_noise
 from ..operators import Code, SumAxis, TensorOperator, parse_shifts
 from ._roles import SystemRoles
@@ -60,8 +61,7 @@ def wavelengths_for(wavelengths, n_bands: int) -> np.ndarray:
         w = np.array(B.to_numpy(wavelengths), dtype=np.float64).reshape(-1)
         if w.size != n_bands:
             raise ValueError(f"expected {n_bands} wavelengths (one per band), got {w.size}")
-        if not np.isfinite(w).all() or (w <= 0).any():
-            raise ValueError(f"wavelengths must be finite and > 0 nm, got {w.tolist()}")
+        w = np.array(check_wavelengths_nm(w), dtype=np.float64)  # nanometres, or a unit error
         if (np.diff(w) <= 0).any():
             raise ValueError(f"wavelengths must be strictly increasing, got {w.tolist()}")
     w.setflags(write=False)

@@ -27,7 +27,8 @@ CASES = [
     (lambda: SDCASSI(ones((4, 5)), n_bands=2.5), "n_bands must be an integer"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, wavelengths=[500, 600]), "expected 3 wavelengths"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, wavelengths=[600, 500, 550]), "strictly increasing"),
-    (lambda: SDCASSI(ones((4, 5)), n_bands=2, wavelengths=[0, 500]), "> 0 nm"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=2, wavelengths=[0, 500]), "must be nanometres in 200"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=2, wavelengths=[0.5, 0.6]), "look like micrometres"),
     # shifts
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=[0, 2, 1]), "non-decreasing"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=[0, 1]), "expected 3 per-band shifts"),

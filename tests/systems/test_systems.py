@@ -10,6 +10,7 @@ import scipy.io
 import scipy.sparse as sp
 import tensorly as tl
 
+import tensor_cosdi as tc
 from tensor_cosdi import _backend as B
 from tensor_cosdi import codes
 from tensor_cosdi.noise import snr_db
@@ -419,3 +420,13 @@ def test_systems_pickle(factory):
     np.testing.assert_array_equal(copy.forward(F), system.forward(F))
     with pytest.raises(AttributeError):
         copy.operator = None
+
+
+@pytest.mark.parametrize("name", ["sd_cassi", "cassi_vsi", "c3slfi", "cs2li"])
+def test_micrometre_wavelengths_are_refused_at_the_door(name):
+    cls = tc.systems.REGISTRY[name]
+    good = cls.example(rng=0)
+    n = len(good.wavelengths)
+    with pytest.raises(ValueError, match="look like micrometres"):
+        cls.example(rng=0, wavelengths=np.asarray(good.wavelengths) / 1000.0)
+    assert len(cls.example(rng=0, wavelengths=good.wavelengths).wavelengths) == n

@@ -135,7 +135,7 @@ def snr_schedule(snr_db: float, anchors: dict) -> float:
 
 
 def auto_weight(
-    measurement, *, at_30db: float, at_20db: float, floor: float | None = None, snr=None
+    measurement, *, at_30db: float, at_20db: float, floor: float | None = None
 ) -> float:
     """A regularisation weight that follows the measurement's estimated SNR.
 
@@ -143,10 +143,9 @@ def auto_weight(
     below ``floor`` (default ``at_30db``): noisier data get more
     regularisation; clean data keep the 30 dB value (on real scenes the best
     noise-free weight depends on the scene more than on the noise, so it is
-    not extrapolated).  ``snr`` (dB) replaces the measurement-only estimate
-    (e.g. :func:`tensor_cosdi.solvers.snr.estimate_snr`'s).
+    not extrapolated).
     """
-    snr = estimate_snr_db(measurement) if snr is None else float(snr)
+    snr = estimate_snr_db(measurement)
     lo = at_30db if floor is None else floor
     if not np.isfinite(snr):
         return float(lo)

@@ -75,10 +75,10 @@ def tune_folds(k: int = 4, seed: int = 0) -> tuple[tuple[str, ...], ...]:
     """
     n = len(TUNE_SCENES)
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 2 <= k <= n:
-        raise ValueError(f"k must be an integer in [2, {len(TUNE_SCENES)}], got {k!r}")
+        raise ValueError(f"k must be an integer in [2, {n}], got {k!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    order = np.random.default_rng(int(seed)).permutation(len(TUNE_SCENES))
+    order = np.random.default_rng(int(seed)).permutation(n)
     return tuple(tuple(TUNE_SCENES[i] for i in sorted(order[j :: int(k)])) for j in range(int(k)))
 
 

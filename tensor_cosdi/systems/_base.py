@@ -61,7 +61,7 @@ def wavelengths_for(wavelengths, n_bands: int) -> np.ndarray:
         w = np.array(B.to_numpy(wavelengths), dtype=np.float64).reshape(-1)
         if w.size != n_bands:
             raise ValueError(f"expected {n_bands} wavelengths (one per band), got {w.size}")
-        w = np.array(check_wavelengths_nm(w), dtype=np.float64)  # nanometres, or a unit error
+        check_wavelengths_nm(w)  # nanometres, or an error naming the unit
         if (np.diff(w) <= 0).any():
             raise ValueError(f"wavelengths must be strictly increasing, got {w.tolist()}")
     w.setflags(write=False)

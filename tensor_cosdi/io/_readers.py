@@ -4,9 +4,25 @@ for a file its format library cannot parse.  Used by :mod:`tensor_cosdi.io.files
 
 from __future__ import annotations
 
+import struct
+import zlib
 from pathlib import Path
 
 import numpy as np
+
+#: Largest array a reader allocates unless told otherwise (``max_bytes``): 4 GiB.
+MAX_ARRAY_BYTES = 4 * 2**30
+#: What a stored array may carry beyond its data (an ``.npy`` header, MATLAB tags and name).
+HEADER_SLACK_BYTES = 1 << 16
+
+
+class Refused(ValueError):
+    """A file the readers parsed and refuse, with a message saying why (not a parse failure)."""
+
+
+class UnsafeFile(Refused):
+    """A file that would make a reader fetch data from elsewhere (another file, a device, a FIFO)
+    or inflate beyond ``max_bytes``: refused before anything is read."""
 
 
 def _require_h5py():
@@ -29,16 +45,22 @@ def _npy_header(f):
     return shape, dtype
 
 
-def _entries_npy(path):
+def _entries_npy(path, max_bytes=MAX_ARRAY_BYTES):
     with open(path, "rb") as f:
         shape, dtype = _npy_header(f)
     return {"array": (shape, dtype, lambda: np.load(path, allow_pickle=False))}
 
 
-def _entries_npz(path):
+def _entries_npz(path, max_bytes=MAX_ARRAY_BYTES):
     out = {}
     with np.load(path, allow_pickle=False) as z:
         names = list(z.files)
+        for info in z.zip.infolist():  # the size it inflates to, before anything inflates
+            if info.file_size > max_bytes + HEADER_SLACK_BYTES:
+                raise UnsafeFile(
+                    f"{path}: member {info.filename!r} inflates to {info.file_size} bytes, above "
+                    f"the {max_bytes}-byte limit (pass max_bytes= to allow it)"
+                )
     for name in names:
         with np.load(path, allow_pickle=False) as z, z.zip.open(name + ".npy") as f:
             shape, dtype = _npy_header(f)
@@ -57,13 +79,55 @@ def _is_v73(path) -> bool:
     return b"MATLAB 7.3" in head
 
 
-def _entries_mat(path):
+def _check_mat_inflation(path, max_bytes):
+    """Refuse a MATLAB v5 file with a compressed variable that inflates beyond ``max_bytes``:
+    SciPy inflates a whole variable before it looks at its declared shape.  Streamed, so the
+    check itself never holds more than a block."""
+    limit = max_bytes + HEADER_SLACK_BYTES
+    with open(path, "rb") as f:
+        head = f.read(128)
+        order = "<" if head[126:128] == b"IM" else ">"
+        while True:
+            tag = f.read(8)
+            if len(tag) < 8:
+                return
+            kind, nbytes = struct.unpack(order + "II", tag)
+            if kind >> 16:  # a small data element: its data sits in the tag
+                continue
+            if kind != 15:  # miCOMPRESSED
+                f.seek(nbytes + (-nbytes % 8), 1)
+                continue
+            inflater, total, left = zlib.decompressobj(), 0, nbytes
+            while left > 0 and not inflater.eof:
+                block = f.read(min(left, 1 << 16))
+                if not block:
+                    break
+                left -= len(block)
+                data = block
+                while data and not inflater.eof:
+                    total += len(inflater.decompress(data, 1 << 20))
+                    data = inflater.unconsumed_tail
+                    if total > limit:
+                        raise UnsafeFile(
+                            f"{path}: a compressed variable inflates to more than {max_bytes} "
+                            "bytes, above the limit (pass max_bytes= to allow it)"
+                        )
+            f.seek(left, 1)
+
+
+def _entries_mat(path, max_bytes=MAX_ARRAY_BYTES):
     if _is_v73(path):
-        return _entries_h5(path, matlab=True)
+        return _entries_h5(path, max_bytes, matlab=True)
     import scipy.io
 
+    _check_mat_inflation(path, max_bytes)
     out = {}
     for name, shape, cls in scipy.io.whosmat(path):
+        if cls == "sparse":
+            raise Refused(
+                f"{path}: {name!r} is a MATLAB sparse matrix; save it with full({name}) "
+                "to read it as an array"
+            )
         if cls in ("cell", "struct", "object", "function_handle", "opaque"):
             continue
         dtype = {
@@ -81,7 +145,47 @@ def _entries_mat(path):
     return out
 
 
-def _entries_h5(path, *, matlab=False):
+def check_h5_dataset(path, name, ds, max_bytes=MAX_ARRAY_BYTES):
+    """Refuse an HDF5 dataset whose data lives outside the file (external raw storage, a virtual
+    dataset) or whose chunks inflate beyond ``max_bytes``; ``ds`` is an open ``h5py.Dataset``."""
+    if ds.is_virtual:
+        raise UnsafeFile(
+            f"{path}: dataset {name!r} is a virtual dataset (its data comes from other files); "
+            "only data stored in the file itself is read"
+        )
+    if ds.id.get_create_plist().get_external_count() > 0:
+        raise UnsafeFile(
+            f"{path}: dataset {name!r} keeps its data in external raw files; "
+            "only data stored in the file itself is read"
+        )
+    if ds.chunks is not None:
+        chunk = int(np.prod(ds.chunks, dtype=np.int64)) * ds.dtype.itemsize
+        if chunk > max_bytes + HEADER_SLACK_BYTES:
+            raise UnsafeFile(
+                f"{path}: dataset {name!r} has {chunk}-byte chunks, above the {max_bytes}-byte "
+                "limit (pass max_bytes= to allow it)"
+            )
+
+
+def hard_linked(f, name: str, path) -> None:
+    """Refuse ``name`` in the open HDF5 file ``f`` unless every step of it is a hard link (a soft
+    or external link can point into another file)."""
+    h5py = _require_h5py()
+    parts = [p for p in str(name).split("/") if p]
+    node = f
+    for i, part in enumerate(parts):
+        link = node.get(part, getlink=True)
+        if link is None:
+            raise KeyError(f"{path}: no object {'/'.join(parts[: i + 1])!r}")
+        if not isinstance(link, h5py.HardLink):
+            raise UnsafeFile(
+                f"{path}: {'/'.join(parts[: i + 1])!r} is a {type(link).__name__} (it can point "
+                "into another file); only objects stored in the file itself are read"
+            )
+        node = node[part]
+
+
+def _entries_h5(path, max_bytes=MAX_ARRAY_BYTES, *, matlab=False):
     h5py = _require_h5py()
     out = {}
     with h5py.File(path, "r") as f:
@@ -91,12 +195,15 @@ def _entries_h5(path, *, matlab=False):
                 return
             if obj.dtype.kind not in "biuf":
                 return
+            check_h5_dataset(path, name, obj, max_bytes)
             if matlab and obj.attrs.get("MATLAB_class", b"") in (b"char", b"cell", b"struct"):
                 return
             shape = tuple(reversed(obj.shape)) if matlab else tuple(obj.shape)
 
             def load(name=name):
                 with h5py.File(path, "r") as g:
+                    hard_linked(g, name, path)
+                    check_h5_dataset(path, name, g[name], max_bytes)
                     a = g[name][()]
                 return np.ascontiguousarray(a.T) if matlab else a
 
@@ -127,17 +234,25 @@ class _TiffComplaints:
             raise ValueError(f"tifffile: {self.records[0].getMessage()}")
 
 
-def _entries_tiff(path):
+def _entries_tiff(path, max_bytes=MAX_ARRAY_BYTES):
     import tifffile
 
     with _TiffComplaints(), tifffile.TiffFile(path) as t:
+        n_pages = len(t.pages)
         series = t.series[0]
-        shape, dtype = tuple(series.shape), series.dtype
+        if len(t.series) != 1 or len(series.pages) != n_pages:
+            shapes = ", ".join(str(tuple(s.shape)) for s in t.series)
+            raise Refused(
+                f"{path}: {n_pages} pages in {len(t.series)} image series of shapes {shapes}; "
+                "expected one series (one page per band, all of one shape and type)"
+            )
+        shape, dtype, axes = tuple(series.shape), series.dtype, series.axes
 
     def load():
         with _TiffComplaints():
             return tifffile.imread(path)
 
+    load.axes = axes  # tifffile's axis codes: "YXS" is one RGB(A) page, "QYX"/"IYX" pages
     return {"array": (shape, dtype, load)}
 
 
@@ -159,12 +274,12 @@ def _unreadable(path, suffix, exc) -> ValueError:
     )
 
 
-def _entries(path: Path, suffix: str):
+def _entries(path: Path, suffix: str, max_bytes: int = MAX_ARRAY_BYTES):
     if not path.is_file():
         raise FileNotFoundError(f"file not found: {path}")
     try:
-        return _READERS[suffix][1](path)
-    except ImportError:
+        return _READERS[suffix][1](path, max_bytes)
+    except (ImportError, Refused):
         raise
     except Exception as exc:  # the format libraries raise a dozen kinds: one clear error
         raise _unreadable(path, suffix, exc) from exc
@@ -173,7 +288,7 @@ def _entries(path: Path, suffix: str):
 def _load(path, suffix, load):
     try:
         return load()
-    except ImportError:
+    except (ImportError, Refused):
         raise
     except Exception as exc:
         raise _unreadable(path, suffix, exc) from exc

@@ -57,7 +57,8 @@ __all__ = [
 ]
 
 FORMAT = "tensor_cosdi-bundle"
-FORMAT_VERSION = 1
+#: 2: the document carries ``document_sha256`` over itself (version 1 bundles still load).
+FORMAT_VERSION = 2
 
 
 def file_digest(path) -> dict:
@@ -246,6 +247,10 @@ def save_bundle(
     for k, v in store.items():
         if v.dtype == object:
             raise ValueError(f"array {k!r} has dtype object; bundles store numeric arrays only")
+    for name in ("measurement", "cube"):  # what load_bundle refuses is never written
+        a = store.get(name)
+        if a is not None and a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            raise ValueError(f"the {name} holds NaN or infinite values; bundles store finite ones")
     try:
         doc["metadata"] = json.loads(json.dumps(metadata or {}, allow_nan=False))
     except (TypeError, ValueError) as e:
@@ -262,6 +267,7 @@ def save_bundle(
     )
     doc["arrays"] = sorted(store)
     doc["sha256"] = _arrays_digest(store)
+    doc["document_sha256"] = _document_digest(doc)
     store["__bundle__"] = np.array(json.dumps(doc))
     if p.suffix.lower() in H5_SUFFIXES:
         store.pop("__bundle__")
@@ -279,6 +285,14 @@ def _arrays_digest(arrays: dict) -> str:
         h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
         h.update(a.tobytes())
     return h.hexdigest()
+
+
+def _document_digest(doc: dict) -> str:
+    """SHA-256 over the document (keys sorted, ``document_sha256`` itself left out): an edited
+    system description or metadata is noticed, as edited arrays are by ``sha256``."""
+    body = {k: v for k, v in doc.items() if k != "document_sha256"}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _h5_name(key: str) -> str:
@@ -304,6 +318,7 @@ def _write_h5(tmp, store, doc):
 
 
 def _read_h5(p: Path, max_bytes: int):
+    from ._readers import check_h5_dataset, hard_linked
     from .files import _check_size, _require_h5py
 
     h5py = _require_h5py()
@@ -318,8 +333,15 @@ def _read_h5(p: Path, max_bytes: int):
         data = {}
         for k in doc.get("arrays", []):
             name = _h5_name(k)
-            if name not in f or not isinstance(f[name], h5py.Dataset):
-                raise ValueError(f"{p}: the bundle lists {k!r} but the file has no dataset {name}")
+            try:
+                hard_linked(f, name, p)  # before anything resolves a link into another file
+            except KeyError:
+                raise ValueError(
+                    f"{p}: the bundle lists {k!r} but the file has no dataset {name}"
+                ) from None
+            if not isinstance(f[name], h5py.Dataset):
+                raise ValueError(f"{p}: the bundle lists {k!r} but {name} is not a dataset")
+            check_h5_dataset(p, name, f[name], max_bytes)
             _check_size(p, k, f[name].shape, f[name].dtype, max_bytes)
             data[k] = f[name][()]
     return data, doc
@@ -344,11 +366,15 @@ def bundle_document(path) -> dict | None:
 def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     """Read a bundle written by :func:`save_bundle` (arrays bit-identical, system rebuilt).
 
-    ``.npz`` or HDF5 (``.h5``/``.hdf5``); an HDF5 bundle's declared array
-    sizes are checked against ``max_bytes`` (default
-    :data:`tensor_cosdi.io.files.MAX_ARRAY_BYTES`) before reading.
+    ``.npz`` or HDF5 (``.h5``/``.hdf5``).  Array sizes (declared HDF5 shapes and
+    chunks, the size each ``.npz`` member inflates to) are checked against
+    ``max_bytes`` (default :data:`tensor_cosdi.io.files.MAX_ARRAY_BYTES`)
+    before reading; HDF5 data stored outside the file (external storage,
+    virtual datasets, links into other files) is refused.  The arrays and
+    the JSON document are each checked against their SHA-256: an edited
+    system description, like an edited array, is an error.
     """
-    from .files import MAX_ARRAY_BYTES
+    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile
 
     p = Path(path)
     if not p.is_file():
@@ -366,9 +392,18 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
                 f"({type(e).__name__}: {e})"
             ) from e
     else:
+        limit = MAX_ARRAY_BYTES if max_bytes is None else max_bytes
         try:
             with np.load(p, allow_pickle=False) as z:
+                for info in z.zip.infolist():  # the size each member inflates to, up front
+                    if info.file_size > limit + HEADER_SLACK_BYTES:
+                        raise UnsafeFile(
+                            f"{p}: member {info.filename!r} inflates to {info.file_size} bytes, "
+                            f"above the {limit}-byte limit (pass max_bytes= to allow it)"
+                        )
                 data = {k: z[k] for k in z.files}
+        except UnsafeFile:
+            raise
         except Exception as e:
             raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
         if "__bundle__" not in data:
@@ -385,6 +420,11 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
         raise ValueError(
             f"{p}: bundle format {doc['format_version']} is newer than this tensor_cosdi reads "
             f"({FORMAT_VERSION}); upgrade tensor_cosdi"
+        )
+    if doc.get("format_version", 0) >= 2 and doc.get("document_sha256") != _document_digest(doc):
+        raise ValueError(
+            f"{p}: the bundle's document does not match its SHA-256 — the file was corrupted or "
+            "edited (its system description or metadata changed)"
         )
     if "sha256" in doc and _arrays_digest(data) != doc["sha256"]:
         raise ValueError(

@@ -35,7 +35,12 @@ import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
 from ._atomic import atomic_write
-from ._readers import _entries, _load, _require_h5py  # noqa: F401 - frames/bundle/CLI use them
+from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
+    MAX_ARRAY_BYTES,
+    _entries,
+    _load,
+    _require_h5py,
+)
 
 __all__ = [
     "read_array",
@@ -50,8 +55,6 @@ __all__ = [
 
 #: Extensions :func:`read_array` / :func:`read_cube` / :func:`write_cube` know.
 CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".npy", ".npz", ".hdr", ".tif", ".tiff")
-#: Largest array a reader allocates unless told otherwise (``max_bytes``): 4 GiB.
-MAX_ARRAY_BYTES = 4 * 2**30
 #: Variable names taken as the band centres of a cube (case-insensitive).
 WAVELENGTH_KEYS = ("wavelengths", "wavelengths_nm", "wavelength", "wl", "lambda", "bands_nm")
 
@@ -121,7 +124,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
         return cube
     if suffix == ".npy" and key is not None:
         raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
-    entries = _entries(path, suffix)
+    entries = _entries(path, suffix, max_bytes)
     name = _pick(path, entries, key)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
@@ -171,21 +174,30 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
         return _read_envi(path, max_bytes)
     if suffix == ".npy" and key is not None:
         raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
-    entries = _entries(path, suffix)
+    entries = _entries(path, suffix, max_bytes)
     name = _pick(path, entries, key, want_ndim=3)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
+    if np.dtype(dtype).kind not in "biuf":
+        raise ValueError(f"{path}: {name!r} holds {np.dtype(dtype)} values; a cube is real")
     cube = np.asarray(_load(path, suffix, load))
     if suffix in (".tif", ".tiff") and cube.ndim == 3:
-        cube = np.moveaxis(cube, 0, -1)  # pages are bands
+        axes = getattr(load, "axes", "")
+        if axes.endswith("S") and cube.ndim == 3:
+            pass  # one colour page (rows, columns, samples): already a cube
+        elif axes.endswith("YX"):
+            cube = np.moveaxis(cube, 0, -1)  # pages are bands
+        else:
+            raise ValueError(
+                f"{path}: TIFF axes {axes!r}; expected pages of one band each or one colour page"
+            )
     if cube.ndim < 3:
         raise ValueError(f"{path}: {name!r} has shape {cube.shape}; a cube needs 3 axes or more")
     wl = None
-    for k, (wshape, _, wload) in entries.items():
+    for k, (_, _, wload) in entries.items():
         if k != name and k.lower().rsplit("/", 1)[-1] in WAVELENGTH_KEYS:
-            if int(np.prod(wshape)) == cube.shape[2]:
-                wl = _check_wavelengths(path, wload(), cube.shape[2])
-                break
+            wl = _check_wavelengths(path, wload(), cube.shape[2])
+            break
     if wl is None and suffix in (".tif", ".tiff"):
         wl = _tiff_wavelengths(path, cube.shape[2])
     return cube, wl

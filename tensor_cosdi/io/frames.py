@@ -54,7 +54,7 @@ def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
             props = iio.improps(p)
             entries = {"frame": (props.shape, props.dtype)}
         else:
-            found = _entries(p, ".tif" if suffix == ".tiff" else suffix)
+            found = _entries(p, ".tif" if suffix == ".tiff" else suffix, max_bytes)
             entries = {k: (v[0], v[1]) for k, v in found.items()}
     except (ValueError, KeyError):
         raise

@@ -40,9 +40,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..validate import integer
 from ._atomic import atomic_write
 from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
+
+#: Most frames one acquisition plan holds (a day of 1 Hz captures): more is refused up front.
+MAX_PLAN_FRAMES = 100_000
 
 __all__ = [
     "Step",
@@ -124,6 +128,7 @@ class AcquisitionPlan:
 
     @staticmethod
     def _frames(n, suffix):
+        n = integer("the number of frames in a plan", n, low=1, high=MAX_PLAN_FRAMES)
         width = max(3, len(str(n - 1)))
         return [f"frame_{i:0{width}d}{suffix}" for i in range(n)]
 

@@ -14,6 +14,12 @@ from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, v
 __all__ = ["Shear", "parse_shifts", "shear_bands", "unshear_bands"]
 
 
+#: Most bands and the largest total shift (px) :func:`parse_shifts` takes: beyond them the
+#: measurement alone would not fit in memory; refused before allocating.
+MAX_BANDS = 10_000
+MAX_SHIFT_PX = 65_536
+
+
 def parse_shifts(shifts, n_bands: int) -> np.ndarray:
     """Per-band shifts from a step (``2`` → ``0, 2, 4, …``) or a sequence.
 
@@ -23,6 +29,8 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
     """
     if isinstance(n_bands, bool) or not isinstance(n_bands, numbers.Integral) or n_bands < 1:
         raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
+    if n_bands > MAX_BANDS:
+        raise ValueError(f"n_bands must be ≤ {MAX_BANDS}, got {n_bands}")
     kinds = np.asarray(shifts).dtype.kind if not isinstance(shifts, (str, bytes)) else "U"
     if kinds not in "iuf" or isinstance(shifts, bool):  # "2" or True would be read as numbers
         raise ValueError(f"shifts must be a number or a sequence of numbers (px), got {shifts!r}")
@@ -44,6 +52,11 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
         raise ValueError(
             f"shifts must be non-decreasing, but band {bad + 1} has shift {s[bad + 1]:g} < "
             f"{s[bad]:g} of band {bad}"
+        )
+    if s.size and s[-1] > MAX_SHIFT_PX:
+        raise ValueError(
+            f"the largest shift is {s[-1]:g} px; at most {MAX_SHIFT_PX} px (the measurement "
+            "grows by it)"
         )
     if np.all(s == np.round(s)):
         return s.astype(np.int64)

@@ -11,6 +11,7 @@ import tensorly as tl
 
 from .. import _backend as B
 from .._registry import Registry
+from ..validate import number, option_types
 
 __all__ = [
     "Result",
@@ -166,6 +167,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
             f"unknown option(s) {unknown} for method {method!r}; valid options: "
             f"{sorted(entry.defaults)}"
         )
+    option_types(f"method {method!r}", options, entry.defaults)
     opts = {**entry.defaults, **options}
     g = system._check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
     peak, low = float(tl.max(tl.abs(g))), float(tl.min(g))
@@ -267,10 +269,5 @@ def relative_residual(system, cube, g) -> float:
 
 
 def check_positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    return v
+    """``value`` as a finite ``float > 0`` (:func:`tensor_cosdi.validate.number`)."""
+    return number(name, value, low=0, low_open=True)

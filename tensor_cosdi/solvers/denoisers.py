@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import _backend as B
 from .._registry import Registry
+from ..validate import integer, number
 
 __all__ = [
     "DENOISERS",
@@ -64,7 +65,8 @@ def tv(x, sigma: float, *, n_iter: int = 50):
     """
     from skimage.restoration import denoise_tv_chambolle
 
-    weight = float(sigma)
+    weight = number("tv: sigma", sigma, low=0, low_open=True)
+    n_iter = integer("tv: n_iter", n_iter, low=1)
     if B.on_accelerator(x):
         return _tv_on_device(x, weight, n_iter)
     flat, shape = _host(x)
@@ -162,9 +164,7 @@ class WarmTV:
         self.p = None
 
     def __call__(self, x, sigma: float):
-        w = float(sigma)
-        if not w > 0:
-            raise ValueError(f"WarmTV: sigma must be > 0, got {sigma!r}")
+        w = number("WarmTV: sigma", sigma, low=0, low_open=True)
         if B.on_accelerator(x):  # a CUDA tensor, say: stays on its device
             return self._on_device(x, w)
         flat, shape = _host(x)
@@ -238,7 +238,7 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
     flat, shape = _host(x)
     out = denoise_wavelet(
         flat,
-        sigma=float(sigma),
+        sigma=number("wavelet: sigma", sigma, low=0),
         wavelet=wavelet_name,
         mode=mode,
         channel_axis=2,

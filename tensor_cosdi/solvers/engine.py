@@ -36,7 +36,6 @@ so no option depends on the measurement's scale.
 
 from __future__ import annotations
 
-import numbers
 import warnings
 
 import numpy as np
@@ -44,16 +43,16 @@ import tensorly as tl
 
 from .. import _backend as B
 from ..systems._base import sensing_gain
+from ..validate import integer
 from ._base import History, relative_change
 
 __all__ = ["Loop", "admm", "gap", "fista", "twist", "least_norm", "lipschitz", "check_int"]
 
 
 def check_int(name, value, low):
-    """``value`` as an int ≥ ``low`` or a ``ValueError`` naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise ValueError(f"{name} must be an integer ≥ {low}, got {value!r}")
-    return int(value)
+    """``value`` as an int ≥ ``low`` or a ``ValueError`` naming ``name``
+    (:func:`tensor_cosdi.validate.integer`)."""
+    return integer(name, value, low=low)
 
 
 class Loop:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import scipy.sparse as sp
 import tensorly as tl
@@ -12,6 +10,8 @@ from .. import _backend as B
 from .._units import check_wavelengths_nm
 from ..noise import add_noise
 from ..operators import Code, SumAxis, TensorOperator, parse_shifts
+from ..operators.shear import MAX_BANDS
+from ..validate import integer
 from ._roles import SystemRoles
 from .registry import REGISTRY
 
@@ -39,9 +39,11 @@ def as_code(code, what: str, ndims) -> np.ndarray:
 
 
 def count(value, what: str, minimum: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise ValueError(f"{what} must be an integer ≥ {minimum}, got {value!r}")
-    return int(value)
+    """A count ≥ ``minimum`` (``n_bands`` also ≤
+    :data:`~tensor_cosdi.operators.shear.MAX_BANDS`, refused before anything that size is
+    allocated)."""
+    high = MAX_BANDS if what == "n_bands" else None
+    return integer(what, value, low=minimum, high=high)
 
 
 def shifts_for(shifts, n_bands: int) -> tuple[np.ndarray, int]:

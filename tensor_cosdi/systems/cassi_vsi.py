@@ -9,6 +9,7 @@ import scipy.sparse as sp
 
 from ..codes import random_binary
 from ..operators import Code, Pad, Shear, SumAxis, weighted_sum
+from ..validate import number
 from ._base import (
     System,
     as_code,
@@ -86,14 +87,7 @@ class CASSIVSI(System):
         self.code = as_code(code, "code", (2,))
         nl = count(n_bands, "n_bands")
         self.shifts, extra = shifts_for(shifts, nl)
-        try:
-            a = float(alpha_t)
-        except (TypeError, ValueError):
-            raise ValueError(f"alpha_t must be a number in [0, 1], got {alpha_t!r}") from None
-        if not 0.0 <= a <= 1.0:
-            raise ValueError(
-                f"alpha_t must be in [0, 1] (a fraction of the light), got {alpha_t!r}"
-            )
+        a = number("alpha_t", alpha_t, low=0, high=1)  # the fraction of the light dispersed
         self.alpha_t = a
         self.alpha_r = round(1.0 - a, 15)
         beta = 0 if beta is None else beta

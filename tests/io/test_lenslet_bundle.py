@@ -190,7 +190,9 @@ def test_load_bundle_verifies_checksum_shapes_and_values(tmp_path):
     with pytest.raises(ValueError, match="SHA-256"):
         load_bundle(forged("edit.npz", measurement=g * 2))
     doc = json.loads(str(data["__bundle__"]))
-    doc.pop("sha256")  # a bundle without the checksum is still checked for shape and values
+    # a format-1 bundle (no checksums) is still checked for shape and values
+    doc.pop("sha256"), doc.pop("document_sha256")
+    doc["format_version"] = 1
     with pytest.raises(ValueError, match="does not match the system's"):
         load_bundle(forged("shape.npz", measurement=g[:, :3], __bundle__=np.array(json.dumps(doc))))
     bad = g.copy()

@@ -221,7 +221,9 @@ def test_progress_bar_on_request(capsys):
     "options, message",
     [
         ({"lam": -1}, "lam must be a finite number > 0"),
-        ({"mu": "x"}, "mu must be a number > 0"),
+        ({"mu": "x"}, "option mu must be a finite number, got .x."),
+        ({"mu": True}, "option mu must be a finite number, got True"),
+        ({"progress": "yes"}, "option progress must be True or False"),
         ({"max_iter": 0}, "max_iter must be an integer ≥ 1"),
         ({"update_every": 1.5}, "update_every must be an integer ≥ 0"),
         ({"beta": -0.1}, "beta must be a finite number ≥ 0"),

@@ -37,9 +37,12 @@ CASES = [
     (lambda: CS2LI(ones((4, 3)), n_bands=3, n_patterns=2, shifts=[0, 1, 3]), "shifts do not fit"),
     (lambda: MuCoSDI(ones((4, 4)), n_bands=5, n_patterns=2), "shifts do not fit"),
     # CASSI-VSI
-    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=1.2), r"alpha_t must be in \[0, 1\]"),
-    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=-0.1), r"alpha_t must be in \[0, 1\]"),
-    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="much"), "alpha_t must be a number"),
+    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=1.2), "alpha_t must be .* ≥ 0 and ≤ 1"),
+    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t=-0.1), "alpha_t must be .* ≥ 0 and ≤ 1"),
+    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="much"), "alpha_t must be a finite number"),
+    (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="0.5"), "alpha_t must be a finite number"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=2**40), "n_bands must be an integer ≥ 1 and ≤ 10000"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=1e15), "largest shift is 2e\\+15 px"),
     (
         lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=3),
         r"beta must be an integer column offset in \[0, 2\]",

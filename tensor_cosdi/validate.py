@@ -1,0 +1,102 @@
+"""One validator for numeric and boolean options, used by methods, systems, denoisers and the CLI.
+
+Booleans and strings are not numbers (``tol=True``, ``alpha_t="0.5"`` are
+errors, not ``1.0`` and ``0.5``); numbers are finite unless a range says
+otherwise; a flag is ``True`` or ``False``, not ``"yes"`` or ``1``.  Every
+error is one line naming the option, what it got and what it expects.
+
+>>> from tensor_cosdi.validate import number, integer
+>>> number("sigma", 0.1, low=0, low_open=True)
+0.1
+>>> integer("max_iter", True, low=1)
+Traceback (most recent call last):
+...
+ValueError: max_iter must be an integer ≥ 1, got True
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+__all__ = ["number", "integer", "flag", "option_types"]
+
+
+def _range_text(low, high, low_open, high_open) -> str:
+    parts = []
+    if low is not None:
+        parts.append(f"{'>' if low_open else '≥'} {low:g}")
+    if high is not None:
+        parts.append(f"{'<' if high_open else '≤'} {high:g}")
+    return " and ".join(parts)
+
+
+def _is_real(value) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def number(name: str, value, *, low=None, high=None, low_open=False, high_open=False) -> float:
+    """``value`` as a finite ``float`` in the range, or a ``ValueError`` naming ``name``.
+
+    ``low``/``high`` bound it (``low_open``/``high_open``: strictly).  Accepts
+    Python and NumPy reals (0-d arrays too), never booleans or strings.
+    """
+    rng = _range_text(low, high, low_open, high_open)
+    want = "a finite number" + (f" {rng}" if rng else "")
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if not _is_real(value):
+        raise ValueError(f"{name} must be {want}, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be {want}, got {value!r}")
+    if low is not None and (v < low or (low_open and v == low)):
+        raise ValueError(f"{name} must be {want}, got {value!r}")
+    if high is not None and (v > high or (high_open and v == high)):
+        raise ValueError(f"{name} must be {want}, got {value!r}")
+    return v
+
+
+def integer(name: str, value, *, low=None, high=None) -> int:
+    """``value`` as an ``int`` in ``[low, high]``; booleans, floats and strings are errors."""
+    rng = _range_text(low, high, False, False)
+    want = "an integer" + (f" {rng}" if rng else "")
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+    if not ok or (low is not None and value < low) or (high is not None and value > high):
+        raise ValueError(f"{name} must be {want}, got {value!r}")
+    return int(value)
+
+
+def flag(name: str, value) -> bool:
+    """``value`` as a ``bool``: only ``True``/``False`` (NumPy's too), not ``1`` or ``"yes"``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def option_types(where: str, options: dict, defaults: dict) -> None:
+    """Check each option's *kind* against its default's: a number where the default is a number
+    (not a boolean, not a string, finite), a flag where it is a flag.
+
+    ``None`` is left to the method (some take it as "off"), as are options
+    whose default is ``None``, a string (``"auto"`` and the like) or a
+    container are left to the method, which knows their meaning.  ``where``
+    names the method or system in the message.
+    """
+    for key, value in options.items():
+        if key not in defaults or value is None:  # None: "off", where the method allows it
+            continue
+        default = defaults[key]
+        label = f"{where}: option {key}"
+        if isinstance(default, (bool, np.bool_)):
+            flag(label, value)
+        elif isinstance(default, numbers.Integral):
+            if isinstance(value, numbers.Integral) or not _is_real(value):
+                integer(label, value)
+            # a float where an int is the default: the method decides (e.g. a fractional count)
+        elif isinstance(default, numbers.Real):
+            number(label, value)

@@ -1,0 +1,74 @@
+"""The one validator for numeric options: booleans and strings are not numbers, numbers are
+finite, flags are True/False — at the method door, in systems, denoisers and plans."""
+
+import numpy as np
+import pytest
+
+import tensor_cosdi as tc
+from tensor_cosdi.io.triggers import AcquisitionPlan
+from tensor_cosdi.solvers import denoisers
+from tensor_cosdi.validate import flag, integer, number, option_types
+
+
+@pytest.mark.parametrize("bad", [True, np.bool_(False), "0.5", None, float("inf"), np.nan, 1j])
+def test_number_refuses_what_is_not_a_finite_real(bad):
+    with pytest.raises(ValueError, match="x must be a finite number"):
+        number("x", bad)
+
+
+def test_number_ranges_and_numpy_scalars():
+    assert number("x", np.float32(0.5), low=0, high=1) == 0.5
+    assert number("x", np.array(2)) == 2.0
+    with pytest.raises(ValueError, match="x must be a finite number > 0, got 0"):
+        number("x", 0, low=0, low_open=True)
+    with pytest.raises(ValueError, match="≤ 1, got 1.5"):
+        number("x", 1.5, high=1)
+
+
+def test_integer_and_flag():
+    assert integer("n", np.int64(3), low=1) == 3
+    for bad in (True, 2.0, "3", 0):
+        with pytest.raises(ValueError, match="n must be an integer ≥ 1"):
+            integer("n", bad, low=1)
+    assert flag("f", np.bool_(True)) is True
+    for bad in (1, "yes", None):
+        with pytest.raises(ValueError, match="f must be True or False"):
+            flag("f", bad)
+
+
+def test_option_types_follows_the_defaults():
+    defaults = {"tol": 1e-4, "max_iter": 10, "progress": False, "lam": "auto", "guard": 1.3}
+    option_types("m", {"tol": 1e-3, "max_iter": 5, "lam": 0.1, "guard": None}, defaults)
+    for bad, message in (
+        ({"tol": True}, "m: option tol must be a finite number, got True"),
+        ({"tol": float("inf")}, "option tol must be a finite number"),
+        ({"max_iter": "5"}, "option max_iter must be an integer"),
+        ({"progress": "yes"}, "option progress must be True or False"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            option_types("m", bad, defaults)
+
+
+def test_every_method_door_refuses_a_boolean_for_a_number():
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(8, 8), n_bands=4)
+    checked = 0
+    for name in tc.solvers.methods():
+        numeric = [
+            k for k, v in tc.solvers.METHODS[name].defaults.items()
+            if isinstance(v, float) and not isinstance(v, bool)
+        ]  # fmt: skip
+        if not numeric:
+            continue
+        with pytest.raises(ValueError, match=f"method '{name}': option {numeric[0]} must be"):
+            tc.reconstruct(p.system, p.measurement, name, **{numeric[0]: True})
+        checked += 1
+    assert checked >= 10
+
+
+def test_denoisers_and_plans_validate_too():
+    with pytest.raises(ValueError, match="tv: sigma must be a finite number > 0, got -1"):
+        denoisers.tv(np.ones((4, 4, 2)), -1)
+    with pytest.raises(ValueError, match="wavelet: sigma must be a finite number ≥ 0"):
+        denoisers.wavelet(np.ones((4, 4, 2)), float("nan"))
+    with pytest.raises(ValueError, match="frames in a plan must be an integer ≥ 1 and ≤ 100000"):
+        AcquisitionPlan.snapshots(10**8)

@@ -24,7 +24,7 @@ def read_log(path) -> tuple[dict | None, list[dict]]:
             obj = json.loads(line)
         except ValueError:
             raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
-        if "plan" in obj and header is None:
+        if "plan" in obj and "started" in obj and header is None:
             header = obj
         elif "step" in obj and "sha256" in obj:  # frame entries; events ("reacquire") skipped
             entries.append(obj)

@@ -40,7 +40,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..validate import integer
+from ..validate import integer, number
 from ._atomic import atomic_write
 from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
@@ -317,25 +317,62 @@ class FolderCamera:
 
     ``capture(step)`` waits up to ``timeout`` seconds for ``folder / step.frame``
     to appear with a size that has stopped changing, and returns its path.
+    Only a frame written after the trigger counts: :meth:`before_trigger`
+    (called by :class:`Acquisition` before it sends the step's commands)
+    notes what the folder holds under that name, and a file that is still
+    the same one (same inode, size and modification time) is not taken as the
+    new capture — a frame left from an earlier run times out with an error
+    saying so.  Symbolic links are refused: a frame is a regular file the
+    camera wrote.  Used alone, call ``before_trigger(step)`` yourself before
+    triggering; without it, a file already present when ``capture`` is
+    called counts as old.
     """
 
     def __init__(self, folder, *, timeout: float = 10.0, poll: float = 0.05):
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise FileNotFoundError(f"frame folder {self.folder} does not exist")
-        self.timeout, self.poll = float(timeout), float(poll)
+        self.timeout = number("timeout", timeout, low=0, low_open=True)
+        self.poll = number("poll", poll, low=0, low_open=True)
+        self._before: dict[str, tuple | None] = {}
+
+    def _identity(self, p: Path):
+        if p.is_symlink():
+            raise DeviceError(
+                f"frame {p} is a symbolic link; a frame must be a regular file the camera wrote"
+            )
+        try:
+            st = p.stat()
+        except FileNotFoundError:
+            return None
+        return (st.st_ino, st.st_dev, st.st_size, st.st_mtime_ns)
+
+    def before_trigger(self, step: Step) -> None:
+        """Note the file (if any) already named like ``step.frame``, before the trigger."""
+        self._before[step.frame] = self._identity(self.folder / step.frame)
 
     def __call__(self, step: Step) -> Path:
         p = self.folder / step.frame
+        if step.frame not in self._before:
+            self.before_trigger(step)
+        old = self._before.pop(step.frame)
         deadline = time.monotonic() + self.timeout
         last = -1
         while time.monotonic() < deadline:
-            if p.is_file():
-                size = p.stat().st_size
+            ident = self._identity(p)
+            if ident is not None and ident != old:
+                if not p.is_file():
+                    raise DeviceError(f"frame {p} is not a regular file")
+                size = ident[2]
                 if size > 0 and size == last:
                     return p
                 last = size
             time.sleep(self.poll)
+        if old is not None and self._identity(p) == old:
+            raise DeviceError(
+                f"frame {p} was already in the folder before the trigger and no new one was "
+                f"written within {self.timeout:g} s; move old frames away (an earlier run?)"
+            )
         raise DeviceError(f"frame {p} did not appear within {self.timeout:g} s after the trigger")
 
 
@@ -351,6 +388,12 @@ class Acquisition:
     capture : callable ``step -> path``
         Returns the frame file once the camera wrote it (e.g.
         :class:`FolderCamera`); called after the trigger's acknowledgement.
+        If it has a ``before_trigger(step)`` method, that is called before
+        the step's commands are sent (a folder camera notes what the folder
+        already holds, so an old file is never taken for the new frame).
+
+    Every log line names the plan's fingerprint: a log of another plan, or
+    one whose header line was removed, is an error, never taken over.
     """
 
     def __init__(self, plan: AcquisitionPlan, device: SerialDevice, log_path, capture):
@@ -367,6 +410,17 @@ class Acquisition:
                 f"{self.log_path} belongs to another acquisition plan (fingerprint "
                 f"{header['plan'][:12]}… ≠ {fp[:12]}…); use a new log file"
             )
+        if header is None and entries:
+            raise ValueError(
+                f"{self.log_path} holds {len(entries)} frame entries but no header line (edited "
+                "or damaged); it is not taken over — use a new log file"
+            )
+        for e in entries:
+            if e.get("plan", fp) != fp:
+                raise ValueError(
+                    f"{self.log_path}: the entry of step {e.get('step')} belongs to another plan "
+                    f"({str(e['plan'])[:12]}… ≠ {fp[:12]}…); use a new log file"
+                )
         if self.log_path.exists():  # drop an unfinished last line before appending
             text = self.log_path.read_text()
             keep = text[: text.rfind("\n") + 1] if "\n" in text else ""
@@ -414,12 +468,16 @@ class Acquisition:
         from .bundle import file_digest
 
         f, done = self._open_log()
+        fp = self.plan.fingerprint()
         written = []
         try:
             todo = [i for i in range(len(self.plan.steps)) if i not in done]
             for i in tqdm(todo, desc="acquire", disable=not progress):
                 step = self.plan.steps[i]
                 try:
+                    before = getattr(self.capture, "before_trigger", None)
+                    if before is not None:  # the camera notes the folder before the trigger
+                        before(step)
                     for c in step.commands:
                         self.device.command(c)
                     self.device.command(f"TRIG {i}")
@@ -431,6 +489,7 @@ class Acquisition:
                         f"{len(done) + len(written)} finished frame(s); run again to resume"
                     ) from e
                 entry = {
+                    "plan": fp,
                     "step": i,
                     "index": dict(step.index),
                     "frame": str(path),

@@ -317,3 +317,46 @@ def test_a_device_streaming_without_newlines_is_an_error_in_bounded_time_and_byt
         host.command("DMD 0")
     assert time.monotonic() - t0 < 1.0  # the byte cap ends it long before the 5 s timeout
     assert MAX_REPLY_BYTES <= 65536  # the buffer never held more than this
+
+
+def test_folder_camera_takes_only_frames_written_after_the_trigger(tmp_path):
+    from tensor_cosdi.io import FolderCamera
+
+    step = AcquisitionPlan.snapshots(1).steps[0]
+    old = tmp_path / step.frame
+    old.write_bytes(b"frame from an earlier run")
+    cam = FolderCamera(tmp_path, timeout=0.3, poll=0.02)
+    cam.before_trigger(step)
+    with pytest.raises(DeviceError, match="was already in the folder before the trigger"):
+        cam(step)
+    cam.before_trigger(step)
+    old.unlink()
+    old.write_bytes(b"the new capture, written after the trigger")
+    assert cam(step) == old
+    old.unlink()
+    os.symlink(tmp_path / "elsewhere.tif", old)
+    (tmp_path / "elsewhere.tif").write_bytes(b"x")
+    with pytest.raises(DeviceError, match="symbolic link"):
+        cam(step)
+
+
+def test_a_log_belongs_to_one_plan_even_without_its_header(tmp_path, device):
+    dev = device()
+    log = tmp_path / "log.jsonl"
+    cam = Camera(tmp_path)
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        Acquisition(AcquisitionPlan.snapshots(2), host, log, cam).run()
+    entries = [json.loads(line) for line in log.read_text().splitlines()]
+    assert all("plan" in e for e in entries)
+    log.write_text("".join(json.dumps(e) + "\n" for e in entries[1:]))  # header deleted
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        with pytest.raises(ValueError, match="2 frame entries but no header line"):
+            Acquisition(AcquisitionPlan.patterns(2), host, log, cam).run()
+        with pytest.raises(ValueError, match="no header line"):
+            Acquisition(AcquisitionPlan.snapshots(2), host, log, cam).run()
+    other = AcquisitionPlan.patterns(2).fingerprint()
+    entries[1]["plan"] = other  # one entry of another plan spliced in
+    log.write_text("".join(json.dumps(e) + "\n" for e in entries))
+    with SerialDevice(dev.port, timeout=0.5) as host:
+        with pytest.raises(ValueError, match="entry of step 0 belongs to another plan"):
+            Acquisition(AcquisitionPlan.snapshots(2), host, log, cam).run()

@@ -67,6 +67,13 @@ def _reconstruct_direct(args) -> int:
         if getattr(args, name) is None:
             raise ValueError(f"the direct path needs --{name}")
     out = Path(args.out)
+    if out.suffix.lower() not in (".npz", ".h5", ".hdf5"):  # never a name other than the one asked
+        raise ValueError(
+            f"--out {args.out}: a reconstruction bundle is an .h5 or .npz file "
+            f"(e.g. {out.stem}.h5)"
+        )
+    if out.is_dir():
+        raise IsADirectoryError(f"--out {args.out} is a folder; give a file name")
     if out.exists() and not args.force:
         raise FileExistsError(f"{out} exists; pass --force to replace it")
     defaults = _method_defaults(args.method)
@@ -92,7 +99,7 @@ def _reconstruct_direct(args) -> int:
     res = reconstruct(system, g, args.method, **options)
     seconds = time.perf_counter() - t0
     depth = res.depth
-    save_bundle(
+    out = save_bundle(
         out,
         system=system,
         measurement=g,

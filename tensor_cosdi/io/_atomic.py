@@ -35,6 +35,8 @@ def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = N
     p = Path(path)
     if not p.parent.is_dir():
         raise FileNotFoundError(f"output folder {p.parent} does not exist")
+    if p.is_dir():
+        raise IsADirectoryError(f"{p} is a folder; give the name of a file to write")
     if p.exists() and not overwrite:
         raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
     fd, tmp = tempfile.mkstemp(suffix=suffix or p.suffix, dir=p.parent, prefix=f".{p.name}.")
@@ -74,6 +76,8 @@ def atomic_write_many(items, *, overwrite: bool = False) -> list[Path]:
     for p, _ in items:
         if not p.parent.is_dir():
             raise FileNotFoundError(f"output folder {p.parent} does not exist")
+        if p.is_dir():
+            raise IsADirectoryError(f"{p} is a folder; give the name of a file to write")
         if p.exists() and not overwrite:
             raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
     temps = []

@@ -267,10 +267,20 @@ _READERS = {
 }
 
 
+def reason(exc: BaseException) -> str:
+    """``"Kind: message"`` of a format library's exception for an error message — except that
+    advice to unpickle (NumPy's ``allow_pickle``) is never passed on: pickled data can run code,
+    and a reader refuses it."""
+    text = str(exc)
+    if "pickle" in text.lower():
+        return "it holds pickled Python objects, which are never loaded (they can run code)"
+    return f"{type(exc).__name__}: {text}"
+
+
 def _unreadable(path, suffix, exc) -> ValueError:
     return ValueError(
         f"{path}: cannot read it as a {_READERS[suffix][0]} file — empty, truncated, corrupted "
-        f"or another format ({type(exc).__name__}: {exc})"
+        f"or another format ({reason(exc)})"
     )
 
 

@@ -350,16 +350,26 @@ def _read_h5(p: Path, max_bytes: int):
 def bundle_document(path) -> dict | None:
     """The JSON document of a bundle at ``path`` (``.npz`` or HDF5) without reading its arrays, or
     ``None`` when the file is not a bundle."""
-    p = Path(path)
-    if p.suffix.lower() in H5_SUFFIXES:
-        from .files import _require_h5py
+    from ._readers import reason
+    from .files import _require_h5py
 
-        with _require_h5py().File(p, "r") as f:
-            raw = f.attrs.get("tensor_cosdi_bundle")
-        return None if raw is None else json.loads(raw)
-    if p.suffix.lower() == ".npz":
-        with np.load(p, allow_pickle=False) as z:
-            return json.loads(str(z["__bundle__"])) if "__bundle__" in z.files else None
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"file not found: {p}")
+    try:
+        if p.suffix.lower() in H5_SUFFIXES:
+            with _require_h5py().File(p, "r") as f:
+                raw = f.attrs.get("tensor_cosdi_bundle")
+            return None if raw is None else json.loads(raw)
+        if p.suffix.lower() == ".npz":
+            with np.load(p, allow_pickle=False) as z:
+                return json.loads(str(z["__bundle__"])) if "__bundle__" in z.files else None
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
+    except ImportError:
+        raise
+    except Exception as e:  # zipfile, h5py and NumPy raise many kinds on a damaged file
+        raise ValueError(f"{p}: cannot read the file — truncated or corrupted ({reason(e)})") from e
     return None
 
 
@@ -374,7 +384,7 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     the JSON document are each checked against their SHA-256: an edited
     system description, like an edited array, is an error.
     """
-    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile
+    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile, reason
 
     p = Path(path)
     if not p.is_file():
@@ -389,7 +399,7 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
         except Exception as e:  # HDF5 raises OSError, KeyError, RuntimeError on a damaged file
             raise ValueError(
                 f"{p}: not a readable HDF5 bundle — truncated or corrupted "
-                f"({type(e).__name__}: {e})"
+                f"({reason(e)})"
             ) from e
     else:
         limit = MAX_ARRAY_BYTES if max_bytes is None else max_bytes
@@ -405,7 +415,7 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
         except UnsafeFile:
             raise
         except Exception as e:
-            raise ValueError(f"{p}: not a readable .npz bundle ({type(e).__name__}: {e})") from e
+            raise ValueError(f"{p}: not a readable .npz bundle ({reason(e)})") from e
         if "__bundle__" not in data:
             raise ValueError(
                 f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"

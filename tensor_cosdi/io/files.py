@@ -40,6 +40,7 @@ from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     _entries,
     _load,
     _require_h5py,
+    reason,
 )
 
 __all__ = [
@@ -145,13 +146,29 @@ def _read_envi(path: Path, max_bytes):
         raise ImportError(
             "reading ENVI files needs the spectral package: pip install 'tensor_cosdi[envi]'"
         ) from None
-    img = envi.open(str(path))
-    shape = (img.nrows, img.ncols, img.nbands)
-    _check_size(path, "cube", shape, img.dtype, max_bytes)
-    cube = np.asarray(img.load())
-    wl = img.metadata.get("wavelength")
+    if not path.is_file():
+        raise FileNotFoundError(f"file not found: {path}")
+    try:
+        img = envi.open(str(path))
+        shape = (int(img.nrows), int(img.ncols), int(img.nbands))
+        dtype = np.dtype(img.dtype)
+    except Exception as e:  # spectral raises its own kinds on a bad header
+        raise ValueError(f"{path}: not a readable ENVI header ({reason(e)})") from e
+    _check_size(path, "cube", shape, dtype, max_bytes)
+    data = Path(img.filename)
+    need = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize + int(img.offset)
+    if not data.is_file() or data.stat().st_size < need:  # a device, a FIFO, a short file
+        raise ValueError(
+            f"{path}: its data file {data} is not a regular file of at least {need} bytes "
+            f"(the header declares {shape} of {dtype})"
+        )
+    try:
+        cube = np.asarray(img.load())
+        wl = img.metadata.get("wavelength")
+        wl = None if wl is None else np.asarray([float(v) for v in wl])
+    except Exception as e:
+        raise ValueError(f"{path}: cannot read the ENVI cube ({reason(e)})") from e
     if wl is not None:
-        wl = np.asarray([float(v) for v in wl])
         units = str(img.metadata.get("wavelength units", "nm")).strip().lower()
         scale = {"nm": 1.0, "nanometers": 1.0, "um": 1e3, "µm": 1e3, "micrometers": 1e3,
                  "microns": 1e3, "mm": 1e6}.get(units)  # fmt: skip

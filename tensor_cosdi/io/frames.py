@@ -45,6 +45,7 @@ def _single_array(mapping: dict, path, key):
 
 def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
     """Refuse a file whose header declares more than ``max_bytes`` before reading its data."""
+    from ._readers import reason
     from .files import _check_size, _entries
 
     try:
@@ -59,7 +60,7 @@ def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
     except (ValueError, KeyError):
         raise
     except Exception as e:  # corrupt headers raise many different errors in the readers
-        raise ValueError(f"{p}: cannot read the file ({type(e).__name__}: {e})") from e
+        raise ValueError(f"{p}: cannot read the file ({reason(e)})") from e
     for name, (shape, dtype) in entries.items():
         _check_size(p, name, shape, dtype, max_bytes)
 
@@ -97,6 +98,7 @@ def read_frame(
         raise ValueError(
             f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}"
         )
+    from ._readers import reason
     from .files import MAX_ARRAY_BYTES
 
     _check_declared(p, suffix, MAX_ARRAY_BYTES if max_bytes is None else int(max_bytes))
@@ -119,7 +121,7 @@ def read_frame(
 
             a = scipy.io.loadmat(p)
     except Exception as e:  # truncated or corrupt files raise many different errors in the readers
-        raise ValueError(f"{p}: cannot read the file ({type(e).__name__}: {e})") from e
+        raise ValueError(f"{p}: cannot read the file ({reason(e)})") from e
     if isinstance(a, dict):
         a = _single_array(a, p, key)
     a = np.asarray(a)

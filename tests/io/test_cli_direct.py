@@ -190,3 +190,30 @@ def test_a_missing_variable_or_a_folder_as_output_is_one_line_not_a_traceback(fi
     assert cli.main(_args(d, "folder.h5", "--force")) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "folder.h5" in err, err
+
+
+def test_outputs_that_are_folders_or_unknown_files_are_one_line_errors(files, capsys):
+    d, _ = files
+    (d / "folder.h5").mkdir()
+    assert cli.main(_args(d, "folder.h5", "--force")) == 2
+    assert "folder.h5 is a folder; give a file name" in capsys.readouterr().err
+    assert cli.main(_args(d, "cube")) == 2
+    assert "a reconstruction bundle is an .h5 or .npz file (e.g. cube.h5)" in (
+        capsys.readouterr().err
+    )
+    assert not (d / "cube.npz").exists() and not (d / "cube").exists()
+
+
+def test_damaged_inputs_never_show_a_traceback_or_advise_unpickling(files, capsys):
+    d, _ = files
+    (d / "bad.hdr").write_text("ENVI\nsamples = 4\n")
+    (d / "corrupt.npz").write_bytes(b"PK\x03\x04 not a zip archive")
+    np.save(d / "pickled.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    args = _args(d)
+    args[args.index("--mask") + 1] = str(d / "bad.hdr")
+    assert cli.main(args) == 2
+    assert "not a readable ENVI header" in capsys.readouterr().err
+    for name in ("corrupt.npz", "pickled.npy"):
+        assert cli.main(["preview", str(d / name), "--out", str(d / "p.png")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "allow_pickle" not in err and "Traceback" not in err

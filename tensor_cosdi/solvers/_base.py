@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -104,10 +105,30 @@ METHODS = Registry("method")
 :func:`register_method`)."""
 
 
+def signature_defaults(func: Callable) -> dict:
+    """``{option: default}`` of ``func(system, measurement, *, option=default, …)``, read from its
+    signature: the one place a method's defaults are written."""
+    params = list(inspect.signature(func).parameters.values())
+    if len(params) < 2 or params[1].kind not in (params[1].POSITIONAL_ONLY,
+                                                 params[1].POSITIONAL_OR_KEYWORD):  # fmt: skip
+        raise ValueError(f"a method takes (system, measurement, **options); got {func!r}")
+    out = {}
+    for p in params[2:]:
+        if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
+            raise ValueError(
+                f"{getattr(func, '__name__', func)}: a method's options are named one by one "
+                f"(no *{p.name}); or pass defaults= to register_method"
+            )
+        if p.default is p.empty:
+            raise ValueError(f"{getattr(func, '__name__', func)}: option {p.name} has no default")
+        out[p.name] = p.default
+    return out
+
+
 def register_method(
     name: str,
     func: Callable,
-    defaults: dict,
+    defaults: dict | None = None,
     summary: str = "",
     *,
     replace: bool = False,
@@ -115,12 +136,17 @@ def register_method(
 ) -> None:
     """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
 
-    ``defaults`` lists every option the method accepts with its default;
-    anything else passed to :func:`reconstruct` is an error.  A name that is
-    taken needs ``replace=True``; the library's own methods cannot be replaced.
+    ``defaults`` lists every option the method accepts with its default
+    (``None``: read from ``func``'s signature, :func:`signature_defaults` — how
+    every method of the library is registered, so that a default is written
+    once); anything else passed to :func:`reconstruct` is an error.  A name
+    that is taken needs ``replace=True``; the library's own methods cannot be
+    replaced.
     """
     if not callable(func):
         raise ValueError(f"a method must be callable, got {func!r}")
+    if defaults is None:
+        defaults = signature_defaults(func)
     builtin = getattr(func, "__module__", "").startswith("tensor_cosdi.")
     METHODS.register(
         name,

@@ -190,18 +190,5 @@ def avsi(
 register_method(
     "avsi",
     avsi,
-    {
-        "max_iter": 60,
-        "sigma1": 0.2,
-        "sigma2": 0.2,
-        "sigma3": 0.02,
-        "tau_f": 0.1,
-        "tau_z": 0.05,
-        "inner_iter": 8,
-        "tol": 1e-4,
-        "wavelet_name": "sym8",
-        "wavelet_level": "auto",
-        "progress": False,
-    },
-    "A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",
+    summary="A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",
 )

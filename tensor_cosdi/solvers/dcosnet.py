@@ -50,7 +50,6 @@ def dcosnet(system, measurement, *, weights=None, device=None):
 register_method(
     "dcosnet",
     dcosnet,
-    {"weights": None, "device": None},
-    "D-CoSNet: unfolded ADMM with the Woodbury x-step and a U-Net (thesis §7; torch)",
+    summary="D-CoSNet: unfolded ADMM with the Woodbury x-step and a U-Net (thesis §7; torch)",
     requires=("torch",),
 )

@@ -160,6 +160,6 @@ def multiresolution_dfa(
 register_method(
     "dfa",
     multiresolution_dfa,
-    {"max_iter": 60, "tv_weight": 0.05, "tol": 1e-4, "progress": False},
-    "multiresolution CASSDI-DFA (thesis Alg. 2-4): grayscale, focal stack, spectral; depth map",
+    summary="multiresolution CASSDI-DFA (thesis Alg. 2-4): grayscale, focal stack, spectral; "
+    "depth map",
 )

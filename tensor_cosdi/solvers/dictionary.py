@@ -325,12 +325,7 @@ def _register():
     register_method(
         "dl",
         dictionary_admm,
-        {
-            "dictionary": None, "sigma": 0.05, "sigma_end": 0.01, "max_iter": 30,
-            "warm": "gap_tv", "warm_iter": 20, "accelerate": "auto", "eps": "auto",
-            "splitting": "gap", "rho": 0.15, "tol": 1e-5, "progress": False,
-        },  # fmt: skip
-        "GAP with a K-SVD patch dictionary learned on other scenes (thesis' DL baseline)",
+        summary="GAP with a K-SVD patch dictionary learned on other scenes (thesis' DL baseline)",
     )
 
 

@@ -120,15 +120,5 @@ def gap_tv_operator(
 register_method(
     "gap_tv",
     gap_tv,
-    {
-        "max_iter": 80,
-        "tv_weight": 0.3,
-        "accelerate": True,
-        "tol": 1e-4,
-        "eps": 1e-6,
-        "tv_iter": 10,
-        "plane_support": "auto",
-        "progress": False,
-    },
-    "generalised alternating projection with a TV denoiser",
+    summary="generalised alternating projection with a TV denoiser",
 )

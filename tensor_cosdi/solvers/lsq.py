@@ -36,4 +36,4 @@ def regularised_lsq(system, measurement, *, mu: float = 1e-2):
     return cube, history, True
 
 
-register_method("lsq", regularised_lsq, {"mu": 1e-2}, "regularised least squares, closed form")
+register_method("lsq", regularised_lsq, summary="regularised least squares, closed form")

@@ -102,12 +102,7 @@ def _register():
     register_method(
         "lytro",
         lytro_cassi,
-        {
-            "dictionary": None, "n_patches": 10_000, "n_iter": 10, "rho": 0.15, "sigma": 0.05,
-            "sigma_end": 0.01, "max_iter": 30, "warm": "otd", "tol": 1e-5, "rng": 0,
-            "progress": False,
-        },  # fmt: skip
-        "Lytro-CASSI baseline: ADMM with an RGB-arm K-SVD ⊗ spectral DCT dictionary",
+        summary="Lytro-CASSI baseline: ADMM with an RGB-arm K-SVD ⊗ spectral DCT dictionary",
     )
 
 

@@ -308,24 +308,7 @@ def _register():
     register_method(
         "otd_nl",
         nonlocal_tucker,
-        {
-            "max_iter": 30,
-            "sigma": 0.02,
-            "sigma_end": 0.005,
-            "c": 2.0,
-            "rank": 8,
-            "patch": 6,
-            "stride": 4,
-            "window": 10,
-            "group": 16,
-            "regroup_every": 5,
-            "warm": "otd",
-            "accelerate": "auto",
-            "eps": "auto",
-            "tol": 1e-5,
-            "progress": False,
-        },
-        "GAP with a non-local Tucker prior (spectral subspace + low-rank patch groups)",
+        summary="GAP with a non-local Tucker prior (spectral subspace + low-rank patch groups)",
     )
 
 

@@ -257,17 +257,6 @@ def tucker_admm(
 #: and 0.3 at 20 dB out of {0.03, 0.1, 0.3}.
 LAM_SCHEDULE = {40.0: 0.03, 30.0: 0.1, 20.0: 0.3}
 
-_COMMON = {
-    "max_iter": 60,
-    "lam": 0.1,
-    "beta": 0.0,
-    "tol": 1e-4,
-    "weights": None,
-    "plane_support": "auto",
-    "progress": False,
-}
-
-
 def online_tucker_admm(
     system,
     measurement,
@@ -282,7 +271,12 @@ def online_tucker_admm(
     pan_tv_steps=10,
     spatial_block=None,
     lam="auto",
-    **options,
+    mu: float = 0.2,
+    beta: float = 0.0,
+    tol: float = 1e-4,
+    weights=None,
+    plane_support="auto",
+    progress: bool = False,
 ):
     """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as
     ``"otd"``.
@@ -333,7 +327,7 @@ def online_tucker_admm(
         pan_weight=pan_weight,
         pan_tv_steps=pan_tv_steps,
         spatial_block=spatial_block,
-        progress=bool(options.get("progress", False)),
+        progress=bool(progress),
     )
     if max_iter == "auto":
         max_iter = OTD_MAX_ITER[start is not None]
@@ -348,54 +342,52 @@ def online_tucker_admm(
         update_every=update_every,
         max_iter=max_iter,
         lam=lam,
+        mu=mu,
+        beta=beta,
+        tol=tol,
+        weights=weights,
+        plane_support=plane_support,
+        progress=progress,
         desc="OTD stage 2: ADMM",
-        **options,
     )
 
 
 def wdct_admm(
-    system, measurement, *, wavelet_name: str = "sym8", wavelet_level="auto", **options
+    system,
+    measurement,
+    *,
+    wavelet_name: str = "sym8",
+    wavelet_level="auto",
+    max_iter: int = 60,
+    mu: float = 0.05,
+    lam: float | str = 0.1,
+    beta: float = 0.0,
+    tol: float = 1e-4,
+    weights=None,
+    plane_support=False,
+    progress: bool = False,
 ):
     """WDCT-ADMM: the same ADMM with the fixed basis Symlet-8 ⊗ Symlet-8 ⊗ DCT (thesis baseline).
 
     Registered as ``"wdct"``; every mode beyond the two spatial ones is DCT.  ``wavelet_level``
     is the spatial wavelet's depth (:func:`tensor_cosdi.bases.wavelet`; default as deep as the
-    periodised transform allows).
+    periodised transform allows); the other options as :func:`tucker_admm`.  ``plane_support``
+    is off: the fixed-basis baseline's CASSDI-DFA estimate is too poor to pick planes from
+    (−0.5 to −0.7 dB).
     """
     bases, _ = initial_bases(
         system, measurement, spatial="wavelet", wavelet_name=wavelet_name,
         wavelet_level=wavelet_level,
     )  # fmt: skip
-    options.setdefault("plane_support", False)
-    return tucker_admm(system, measurement, bases, desc="WDCT", **options)
+    return tucker_admm(
+        system, measurement, bases, max_iter=max_iter, mu=mu, lam=lam, beta=beta, tol=tol,
+        weights=weights, plane_support=plane_support, progress=progress, desc="WDCT",
+    )  # fmt: skip
 
 
 register_method(
-    "otd",
-    online_tucker_admm,
-    {
-        **_COMMON,
-        "max_iter": "auto",
-        "lam": "auto",
-        "mu": 0.2,
-        "update_every": 10,
-        "spatial": "panchromatic",
-        "update_spatial": True,
-        "pan_iter": 90,
-        "pan_atoms": 3,
-        "pan_weight": "auto",
-        "pan_tv_steps": 10,
-        "spatial_block": None,
-    },
-    "online Tucker dictionary ADMM (thesis Alg. 5, every system)",
+    "otd", online_tucker_admm, summary="online Tucker dictionary ADMM (thesis Alg. 5, every system)"
 )
 register_method(
-    "wdct",
-    wdct_admm,
-    # the fixed-basis baseline's DFA estimate is too poor to pick planes from (−0.5 to −0.7 dB)
-    {
-        **_COMMON, "mu": 0.05, "wavelet_name": "sym8", "wavelet_level": "auto",
-        "plane_support": False,
-    },  # fmt: skip
-    "ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis",
+    "wdct", wdct_admm, summary="ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis"
 )

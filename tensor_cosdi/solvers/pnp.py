@@ -255,15 +255,5 @@ def pnp_admm(
 register_method(
     "pnp_admm",
     pnp_admm,
-    {
-        "denoiser": "tv",
-        "rho": 0.1,
-        "sigma": 0.05,
-        "max_iter": 40,
-        "tie_weight": 0.5,
-        "tol": 1e-4,
-        "n_steps": 4,
-        "progress": False,
-    },
-    "hierarchical plug-and-play ADMM (thesis Alg. 6) for CS2LI / Mu-CoSDI",
+    summary="hierarchical plug-and-play ADMM (thesis Alg. 6) for CS2LI / Mu-CoSDI",
 )

@@ -295,23 +295,7 @@ def _joined(first, second):
 register_method(
     "pnp_gap",
     pnp_gap,
-    {
-        "denoiser": "spectral_net",
-        "sigma": 0.1,
-        "sigma_end": "auto",
-        "max_iter": "auto",
-        "warm": "otd",
-        "warm_iter": 80,
-        "accelerate": "auto",
-        "eps": "auto",
-        "splitting": "auto",
-        "rho": "auto",
-        "nonneg": True,
-        "guard": 1.3,
-        "ensemble": "auto",
-        "tol": 1e-5,
-        "progress": False,
-    },
-    "plug-and-play GAP (clean) / ADMM (noisy) with an annealed denoiser (default: learned, torch)",
+    summary="plug-and-play GAP (clean) / ADMM (noisy) with an annealed denoiser "
+    "(default: learned, torch)",
     requires=("torch",),
 )

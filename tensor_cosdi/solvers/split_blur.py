@@ -154,14 +154,6 @@ def split_tv(
 register_method(
     "split_tv",
     split_tv,
-    {
-        "max_iter": 80,
-        "tv_weight": 0.05,
-        "rho1": 0.05,
-        "rho2": 0.05,
-        "tv_steps": 10,
-        "tol": 1e-5,
-        "progress": False,
-    },
-    "ADMM-TV for CASSDI-DFA with PSFs, the blur split off: every step closed form (SPEC §4)",
+    summary="ADMM-TV for CASSDI-DFA with PSFs, the blur split off: every step closed form "
+    "(SPEC §4)",
 )

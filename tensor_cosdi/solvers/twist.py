@@ -58,14 +58,5 @@ def twist_tv(
 register_method(
     "twist",
     twist_tv,
-    {
-        "max_iter": 80,
-        "tv_weight": 0.005,
-        "lam1": 1e-4,
-        "monotone": True,
-        "tol": 1e-4,
-        "tv_iter": 10,
-        "progress": False,
-    },
-    "two-step iterative shrinkage/thresholding with a TV regulariser (TwIST)",
+    summary="two-step iterative shrinkage/thresholding with a TV regulariser (TwIST)",
 )

@@ -12,12 +12,48 @@ from ._cli_util import _method_defaults, run_metadata
 
 
 def _wavelength_range(text: str, n: int) -> np.ndarray:
-    """``"START:STOP"`` (nm) → ``n`` evenly spaced band centres."""
-    try:
-        lo, hi = (float(v) for v in text.split(":"))
-    except ValueError:
-        raise ValueError(f"--wavelengths must be START:STOP in nm, got {text!r}") from None
-    return np.linspace(lo, hi, n)
+    """``--wavelengths`` → ``n`` band centres in nm, checked.
+
+    ``START:STOP`` (evenly spaced), a comma-separated list of ``n`` values,
+    ``kaist`` (the 28 KAIST band centres, :data:`tensor_cosdi.datasets.KAIST_WAVELENGTHS`)
+    or a text / ``.npy`` file of ``n`` values.
+    """
+    from ._units import check_wavelengths_nm
+
+    text = str(text).strip()
+    what = (
+        "--wavelengths must be START:STOP (nm), a comma-separated list, 'kaist' or a file of "
+        f"values; got {text!r}"
+    )
+    if text.lower() == "kaist":
+        from .datasets import KAIST_WAVELENGTHS
+
+        wl = np.asarray(KAIST_WAVELENGTHS, dtype=np.float64)
+    elif ":" in text and "," not in text and not Path(text).is_file():
+        try:
+            lo, hi = (float(v) for v in text.split(":"))
+        except ValueError:
+            raise ValueError(what) from None
+        wl = np.linspace(lo, hi, n)
+    elif "," in text:
+        try:
+            wl = np.array([float(v) for v in text.split(",") if v.strip()])
+        except ValueError:
+            raise ValueError(what) from None
+    elif Path(text).is_file():
+        p = Path(text)
+        try:
+            wl = np.load(p, allow_pickle=False) if p.suffix == ".npy" else np.loadtxt(
+                p, delimiter="," if p.suffix == ".csv" else None
+            )  # fmt: skip
+        except Exception as e:
+            raise ValueError(f"--wavelengths {text}: not a file of numbers ({e})") from None
+        wl = np.asarray(wl, dtype=np.float64).reshape(-1)
+    else:
+        raise ValueError(what)
+    if wl.size != n:
+        raise ValueError(f"--wavelengths gives {wl.size} band centres for {n} bands")
+    return check_wavelengths_nm(wl, "--wavelengths")
 
 
 def _system_from_args(args, code):
@@ -137,7 +173,9 @@ def _cube_and_wavelengths(spec, wavelengths):
     if wavelengths:
         wl = _wavelength_range(wavelengths, cube.shape[2])
     if wl is None:
-        raise ValueError(f"{p} holds no wavelengths; pass --wavelengths START:STOP (nm)")
+        raise ValueError(
+            f"{p} holds no wavelengths; pass --wavelengths START:STOP, a list or a file (nm)"
+        )
     return p, cube, np.asarray(wl, dtype=np.float64)
 
 

@@ -275,13 +275,20 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "frames", nargs="*", help="frame files or a folder, in the system's frame order"
     )
-    rec.add_argument("--system", help="direct path: a name of systems.REGISTRY (e.g. sd_cassi)")
+    from .solvers import methods
+    from .systems import REGISTRY
+
+    rec.add_argument(
+        "--system", help=f"direct path: the imager, one of {', '.join(REGISTRY.names())}"
+    )
     rec.add_argument("--mask", help="direct path: coded aperture file[:variable]")
     rec.add_argument("--measurement", help="direct path: measurement file[:variable]")
     rec.add_argument("--bands", type=_positive_int, help="direct path: number of bands")
     rec.add_argument("--shift", type=float, help="direct path: dispersion in pixels per band")
     rec.add_argument(
-        "--wavelengths", help="direct path: START:STOP in nm (band centres, evenly spaced)"
+        "--wavelengths",
+        help="direct path: band centres in nm: START:STOP (evenly spaced), a comma-separated "
+        "list, 'kaist' (the 28 KAIST bands) or a text/.npy file with one per band",
     )
     rec.add_argument(
         "--system-option",
@@ -292,7 +299,10 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--out", required=True, help="bundle to write: .h5 (HDF5) or .npz (bundle path: .npz)"
     )
-    rec.add_argument("--method", default="otd", help="reconstruction method (default otd)")
+    rec.add_argument(
+        "--method", default="otd",
+        help=f"reconstruction method (default otd): {', '.join(methods())}",
+    )  # fmt: skip
     rec.add_argument(
         "--option", action="append", type=_option_value, help="method option key=value (repeat)"
     )
@@ -325,7 +335,10 @@ def build_parser() -> argparse.ArgumentParser:
     pv.add_argument(
         "--points", nargs="*", default=[], metavar="ROW,COL", help="pixels whose spectra to plot"
     )
-    pv.add_argument("--wavelengths", help="START:STOP in nm when the file holds none")
+    pv.add_argument(
+        "--wavelengths",
+        help="band centres in nm when the file holds none: START:STOP, a list, 'kaist' or a file",
+    )
     pv.add_argument("--force", action="store_true", help="overwrite an existing PNG")
     pv.set_defaults(func=run_preview)
 

@@ -217,3 +217,25 @@ def test_damaged_inputs_never_show_a_traceback_or_advise_unpickling(files, capsy
         assert cli.main(["preview", str(d / name), "--out", str(d / "p.png")]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and "allow_pickle" not in err and "Traceback" not in err
+
+
+def test_wavelengths_as_a_list_a_name_or_a_file(files, tmp_path):
+    from tensor_cosdi import datasets
+    from tensor_cosdi._cli_files import _wavelength_range
+
+    np.testing.assert_allclose(_wavelength_range("kaist", 28), datasets.KAIST_WAVELENGTHS)
+    np.testing.assert_allclose(_wavelength_range("450, 500,550", 3), [450, 500, 550])
+    np.savetxt(tmp_path / "wl.txt", [460.0, 520.0])
+    np.testing.assert_allclose(_wavelength_range(str(tmp_path / "wl.txt"), 2), [460, 520])
+    with pytest.raises(ValueError, match="gives 28 band centres for 8 bands"):
+        _wavelength_range("kaist", 8)
+    with pytest.raises(ValueError, match="micrometres"):
+        _wavelength_range("0.45:0.65", 8)
+    with pytest.raises(ValueError, match="START:STOP"):
+        _wavelength_range("blue", 8)
+    d, _ = files
+    args = _args(d, "kaist.h5")
+    args[args.index("--wavelengths") + 1] = ",".join(str(450 + 25 * i) for i in range(8))
+    assert cli.main(args) == 0
+    wl = load_bundle(d / "kaist.h5").system.wavelengths
+    np.testing.assert_allclose(wl, 450 + 25 * np.arange(8))

@@ -245,8 +245,29 @@ def run_info(args) -> int:
         print(f"  bundle: {doc.get('kind')}, created {doc.get('created')}, {doc.get('software')}")
         if system:
             print(f"  system: {system.get('class')} {system.get('params')}")
+            try:
+                from .io import load_bundle
+
+                built = load_bundle(path).system
+            except (ValueError, KeyError, OSError) as e:
+                print(f"  system: cannot be rebuilt ({e})")
+                built = None
+            if built is not None:
+                wl = np.asarray(built.wavelengths)
+                print(
+                    f"  wavelengths: {wl.size} bands, {wl[0]:g}–{wl[-1]:g} nm "
+                    f"({', '.join(f'{v:g}' for v in wl)})"
+                )
+                shifts = getattr(built, "shifts", None)
+                if shifts is not None:
+                    sh = np.asarray(shifts).reshape(-1)
+                    print(f"  shifts: {', '.join(f'{v:g}' for v in sh)} px (per band)")
+                print(
+                    f"  cube {tuple(built.cube_shape)} → measurement "
+                    f"{tuple(built.measurement_shape)}"
+                )
         for src in doc.get("provenance", []):
             print(f"  source: {src.get('path')} sha256 {src.get('sha256')}")
-        if doc.get("metadata"):
-            print(f"  metadata: {json.dumps(doc['metadata'])[:400]}")
+        for key, value in (doc.get("metadata") or {}).items():  # whole, one line per key
+            print(f"  metadata.{key}: {json.dumps(value)}")
     return 0

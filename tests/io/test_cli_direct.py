@@ -90,7 +90,9 @@ def test_info_lists_arrays_and_bundle_provenance(files, capsys):
     assert cli.main(["info", str(d / "cube.h5")]) == 0
     out = capsys.readouterr().out
     assert "cube: (32, 32, 8) float32" in out and "system: SDCASSI" in out
-    assert "sha256" in out and "wavelengths" in out
+    assert "sha256" in out and "wavelengths: 8 bands, 450–650 nm" in out
+    assert "shifts: 0, 1, 2, 3, 4, 5, 6, 7 px" in out
+    assert f'metadata.mask: "{d / "mask.mat"}"' in out  # a long path whole, never cut
 
 
 def test_a_256x256x28_reconstruction_file_is_at_most_12_mb(tmp_path):

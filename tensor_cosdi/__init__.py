@@ -21,6 +21,7 @@ from . import (
     studies,
     systems,
     testing,
+    validate,
 )
 from ._version import __version__
 from .operators import TensorOperator
@@ -47,5 +48,6 @@ __all__ = [
     "reconstruct_tiled",
     "Result",
     "solvers",
+    "validate",
     "__version__",
 ]

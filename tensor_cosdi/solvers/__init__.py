@@ -9,7 +9,15 @@ squares (``"lsq"``).
 """
 
 from . import denoisers, engine, priors
-from ._base import METHODS, Method, Result, methods, reconstruct, register_method
+from ._base import (
+    METHODS,
+    Method,
+    Result,
+    methods,
+    reconstruct,
+    register_method,
+    signature_defaults,
+)
 from .avsi import avsi
 from .dcosnet import dcosnet
 from .dfa import multiresolution_dfa
@@ -31,6 +39,7 @@ __all__ = [
     "reconstruct_tiled",
     "methods",
     "register_method",
+    "signature_defaults",
     "METHODS",
     "Method",
     "engine",

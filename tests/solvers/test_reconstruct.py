@@ -189,3 +189,13 @@ def test_a_user_method_registers_from_its_signature():
         tc.solvers.register_method("user_bad", lambda s, g, b: None)
     with pytest.raises(ValueError, match="options are named one by one"):
         tc.solvers.register_method("user_bad", lambda s, g, **o: None)
+
+
+def test_a_float16_measurement_is_promoted_to_float32():
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, rng=0)
+    g = np.asarray(p.measurement)
+    r32 = tc.reconstruct(p.system, g.astype(np.float32), "gap_tv")
+    r16 = tc.reconstruct(p.system, g.astype(np.float16), "gap_tv")
+    assert r16.cube.dtype == np.float32
+    psnr = [tc.studies.score(p, r.cube)["psnr"] for r in (r32, r16)]
+    assert abs(psnr[0] - psnr[1]) < 0.2, psnr  # only the input's rounding differs

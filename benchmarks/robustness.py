@@ -40,6 +40,7 @@ import json
 import os
 import select
 import signal
+import sys
 import tempfile
 import time
 from collections import Counter, defaultdict
@@ -55,6 +56,9 @@ from tensor_cosdi.bases import KroneckerBasis
 from tensor_cosdi.io import _atomic, load_bundle, read_frame, save_bundle, write_frames
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
 from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _protocol import write_results  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CLEAR = (ValueError, TypeError, KeyError, OSError)
@@ -546,6 +550,210 @@ def harness_cases():
         Case("harness", "clear error after them", lambda: int("x"), ("invalid",)),
     ]
 
+def hostile_file_cases(folder: Path):
+    """Files built to read data from elsewhere or to inflate past ``max_bytes``, and files whose
+    content is not what it looks like."""
+    import struct
+    import zlib
+
+    import h5py
+    import scipy.io
+    import scipy.sparse
+    import tifffile
+
+    out = []
+    secret = folder / "secret.bin"
+    np.full(64, 7.0).tofile(secret)
+    ext = folder / "external.h5"
+    with h5py.File(ext, "w") as f:
+        f.create_dataset("cube", shape=(4, 4, 4), dtype="f8", external=[(str(secret), 0, 512)])
+    src = folder / "vds_source.h5"
+    with h5py.File(src, "w") as f:
+        f["data"] = np.ones((4, 4, 4))
+    layout = h5py.VirtualLayout(shape=(4, 4, 4), dtype="f8")
+    layout[:] = h5py.VirtualSource(str(src), "data", shape=(4, 4, 4))
+    vds = folder / "virtual.h5"
+    with h5py.File(vds, "w") as f:
+        f.create_virtual_dataset("cube", layout, fillvalue=0)
+    vds_missing = folder / "virtual_missing.h5"
+    layout2 = h5py.VirtualLayout(shape=(4, 4, 4), dtype="f8")
+    layout2[:] = h5py.VirtualSource(str(folder / "gone.h5"), "data", shape=(4, 4, 4))
+    with h5py.File(vds_missing, "w") as f:
+        f.create_virtual_dataset("cube", layout2, fillvalue=0)
+    link = folder / "extlink.h5"
+    with h5py.File(link, "w") as f:
+        f["cube"] = h5py.ExternalLink(str(src), "/data")
+    chunky = folder / "chunk_bomb.h5"
+    with h5py.File(chunky, "w") as f:
+        ds = f.create_dataset("cube", shape=(2, 2, 2), maxshape=(None,) * 3, chunks=(128,) * 3,
+                              dtype="f8", compression="gzip")  # fmt: skip
+        ds[...] = 1.0
+    npz_bomb = folder / "bomb.npz"
+    np.savez_compressed(npz_bomb, cube=np.zeros((256, 256, 8)))
+    mat_bomb = folder / "bomb.mat"
+    scipy.io.savemat(mat_bomb, {"cube": np.zeros((128, 128, 16))}, do_compression=True)
+    mat_padded = folder / "padded.mat"
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
+    data = zlib.compress(b"\0" * (8 << 20), 9)
+    mat_padded.write_bytes(head + struct.pack("<II", 15, len(data)) + data)
+    sparse = folder / "sparse.mat"
+    scipy.io.savemat(sparse, {"mask": scipy.sparse.eye(4, format="csc")})
+    complex_npz = folder / "complex.npz"
+    np.savez(complex_npz, cube=np.ones((4, 4, 3), complex))
+    wl_npz = folder / "wl_count.npz"
+    np.savez(wl_npz, cube=np.ones((4, 4, 4)), wavelengths=[450.0, 500.0, 550.0])
+    mixed = folder / "mixed.tif"
+    with tifffile.TiffWriter(mixed) as w:
+        for shape in ((8, 8), (8, 8), (4, 4), (8, 8)):
+            w.write(np.ones(shape, np.float32), metadata=None)
+    rgb = folder / "rgb.tif"
+    rgb_data = np.random.default_rng(0).integers(0, 255, (12, 16, 3), dtype=np.uint8)
+    tifffile.imwrite(rgb, rgb_data, photometric="rgb")
+    fifo = folder / "fifo.npy"
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(fifo)
+    dev = folder / "zero.npy"
+    if os.path.exists("/dev/zero"):
+        os.symlink("/dev/zero", dev)
+    mib = 1 << 20
+    for name, call, words in [
+        ("HDF5 external raw storage", lambda: read_cube(ext), ("external",)),
+        ("HDF5 virtual dataset", lambda: read_cube(vds), ("virtual",)),
+        ("HDF5 virtual dataset, source missing", lambda: read_array(vds_missing), ("virtual",)),
+        ("HDF5 external link by key", lambda: read_array(link, "cube"), ("no array", "cube")),
+        ("HDF5 chunks past max_bytes", lambda: read_cube(chunky, max_bytes=mib), ("chunks",)),
+        (".npz member inflating past max_bytes", lambda: read_cube(npz_bomb, max_bytes=mib),
+         ("inflates",)),
+        ("MATLAB variable inflating past max_bytes", lambda: read_cube(mat_bomb, max_bytes=mib),
+         ("inflates",)),
+        ("MATLAB element padded to 8 MiB", lambda: read_array(mat_padded, max_bytes=mib),
+         ("inflates",)),
+        ("MATLAB sparse matrix", lambda: read_array(sparse), ("sparse",)),
+        ("complex cube", lambda: read_cube(complex_npz), ("complex",)),
+        ("3 wavelengths for 4 bands", lambda: read_cube(wl_npz), ("wavelengths",)),
+        ("TIFF pages of two shapes", lambda: read_cube(mixed), ("series", "pages")),
+        ("a FIFO named .npy", lambda: read_array(fifo), ("file",)),
+        ("a link to /dev/zero named .npy", lambda: read_array(dev), ("file",)),
+    ]:  # fmt: skip
+        out.append(Case("io.hostile", name, call, words))
+    out.append(
+        Case("io.hostile", "RGB TIFF as a (rows, columns, 3) cube",
+             lambda: bool(np.array_equal(read_cube(rgb)[0], rgb_data)), expect="same")
+    )  # fmt: skip
+    # bundles: an edited document, a NaN that must never be written
+    import json
+
+    sd = tc.systems.SDCASSI((np.arange(36).reshape(6, 6) % 2).astype(float), n_bands=3)
+    for suffix in (".npz", ".h5"):
+        path = save_bundle(folder / f"doc{suffix}", system=sd,
+                           measurement=np.ones(sd.measurement_shape))  # fmt: skip
+        if suffix == ".npz":
+            with np.load(path) as z:
+                d = {k: z[k] for k in z.files}
+            doc = json.loads(str(d["__bundle__"]))
+            doc["system"]["shifts"] = 2
+            d["__bundle__"] = np.array(json.dumps(doc))
+            path.unlink()
+            np.savez(path, **d)
+        else:
+            with h5py.File(path, "r+") as f:
+                doc = json.loads(f.attrs["tensor_cosdi_bundle"])
+                doc["metadata"] = {"exposure_ms": 1}
+                f.attrs["tensor_cosdi_bundle"] = json.dumps(doc)
+        out.append(Case("io.hostile", f"bundle {suffix} with an edited document",
+                        lambda p=path: load_bundle(p), ("sha-256", "document")))  # fmt: skip
+    nan_g = np.ones(sd.measurement_shape)
+    nan_g[0, 0] = np.nan
+    out.append(Case("io.hostile", "save_bundle NaN measurement",
+                    lambda: save_bundle(folder / "nan.npz", system=sd, measurement=nan_g),
+                    ("nan",)))  # fmt: skip
+    return out
+
+
+def option_cases():
+    """Every method's numeric and boolean options given a boolean, a string or inf, and sizes
+    that would allocate without bound."""
+    from tensor_cosdi.io.triggers import AcquisitionPlan
+    from tensor_cosdi.solvers import METHODS, denoisers
+
+    out = []
+    p = studies.make_problem("sd_cassi", "colorchecker", **SMALL)
+    g, system = np.asarray(p.measurement, dtype=np.float64), p.system
+    for method in tc.reconstruct.methods():
+        for opt, default in METHODS[method].defaults.items():
+            if isinstance(default, bool):
+                bad = ["yes", 1]
+            elif isinstance(default, (int, float)):
+                bad = [True, "0.5", float("inf")]
+            else:
+                continue
+            for v in bad:
+                out.append(Case("options", f"{method} {opt}={v!r}",
+                                lambda m=method, o=opt, v=v: tc.reconstruct(system, g, m, **{o: v}),
+                                (opt,)))  # fmt: skip
+    code = np.ones((8, 8))
+    for name, call, words in [
+        ("SDCASSI n_bands=2**40", lambda: tc.systems.SDCASSI(code, n_bands=2**40), ("n_bands",)),
+        ("SDCASSI shifts=1e15", lambda: tc.systems.SDCASSI(code, n_bands=3, shifts=1e15),
+         ("shift",)),
+        ("CASSIVSI alpha_t='0.5'", lambda: tc.systems.CASSIVSI(code, n_bands=3, alpha_t="0.5"),
+         ("alpha_t",)),
+        ("AcquisitionPlan.snapshots(10**8)", lambda: AcquisitionPlan.snapshots(10**8),
+         ("frames",)),
+        ("AcquisitionPlan.patterns(True)", lambda: AcquisitionPlan.patterns(True), ("frames",)),
+        ("denoisers.tv sigma=-1", lambda: denoisers.tv(np.ones((4, 4, 2)), -1), ("sigma",)),
+        ("denoisers.wavelet sigma=nan", lambda: denoisers.wavelet(np.ones((4, 4, 2)), np.nan),
+         ("sigma",)),
+    ]:  # fmt: skip
+        out.append(Case("options", name, call, words))
+    out.append(
+        Case("reconstruct", "float16 measurement promoted",
+             lambda: tc.reconstruct(system, g.astype(np.float16), "lsq").cube.dtype
+             == np.float32, expect="same")
+    )  # fmt: skip
+    return out
+
+
+def lab_cases(folder: Path):
+    """The lab adapter: a frame already in the folder, a symbolic link for a frame, a frame log
+    whose header was removed."""
+    from tensor_cosdi.io import FolderCamera
+    from tensor_cosdi.io.triggers import Acquisition, AcquisitionPlan
+
+    out = []
+    lab = folder / "lab"
+    lab.mkdir()
+    step = AcquisitionPlan.snapshots(1).steps[0]
+    (lab / step.frame).write_bytes(b"an old frame")
+    cam = FolderCamera(lab, timeout=0.3, poll=0.02)
+
+    def old_frame():
+        cam.before_trigger(step)
+        return cam(step)
+
+    out.append(Case("io.lab", "FolderCamera: a frame left from an earlier run", old_frame,
+                    ("already",)))  # fmt: skip
+    linked = folder / "lab2"
+    linked.mkdir()
+    (folder / "elsewhere.tif").write_bytes(b"x")
+    os.symlink(folder / "elsewhere.tif", linked / step.frame)
+    out.append(Case("io.lab", "FolderCamera: a symbolic link as the frame",
+                    lambda: FolderCamera(linked, timeout=0.3)(step), ("symbolic",)))  # fmt: skip
+    log = folder / "headless.jsonl"
+    plan = AcquisitionPlan.snapshots(2)
+    log.write_text("".join(
+        json.dumps({"plan": plan.fingerprint(), "step": i, "index": {"k": i},
+                    "frame": str(folder / "elsewhere.tif"), "sha256": "0" * 64}) + "\n"
+        for i in range(2)
+    ))  # fmt: skip
+
+    def headless():
+        return Acquisition(AcquisitionPlan.patterns(2), None, log, lambda s: None).run()
+
+    out.append(Case("io.lab", "a frame log without its header line", headless, ("header",)))
+    return out
+
+
 
 def catalogue(folder: Path, n_flips: int = 150):
     return (
@@ -555,6 +763,9 @@ def catalogue(folder: Path, n_flips: int = 150):
         + bundle_cases(folder, n_flips)
         + fault_cases(folder)
         + misc_cases(folder)
+        + hostile_file_cases(folder)
+        + option_cases()
+        + lab_cases(folder)
     )
 
 
@@ -603,11 +814,10 @@ def main(argv=None):
         f"{n} cases in {time.perf_counter() - t0:.0f} s; clear {share:.1f} % "
         f"(targets: 0 silent, 0 hangs, 0 crashes, ≥ 95 % clear).\n\n" + "\n".join(lines) + "\n"
     )
-    print(text)
-    if not (args.only or args.selftest):
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "robustness.md").write_text(text)
+    if args.only or args.selftest:
+        print(text)
+    else:  # prints it too, with the run's provenance
+        write_results(Path(args.out) / "robustness.md", ["# Robustness catalogue\n", text])
 
 
 if __name__ == "__main__":

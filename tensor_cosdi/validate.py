@@ -95,8 +95,8 @@ def option_types(where: str, options: dict, defaults: dict) -> None:
         if isinstance(default, (bool, np.bool_)):
             flag(label, value)
         elif isinstance(default, numbers.Integral):
-            if isinstance(value, numbers.Integral) or not _is_real(value):
-                integer(label, value)
-            # a float where an int is the default: the method decides (e.g. a fractional count)
+            if isinstance(value, (bool, np.bool_, str, bytes, numbers.Real)):
+                integer(label, value)  # a count: not a float, a flag or a string
+            # another object (a random Generator for a seed, say) is the method's to judge
         elif isinstance(default, numbers.Real):
             number(label, value)

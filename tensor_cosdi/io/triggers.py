@@ -75,9 +75,9 @@ def _port_errors():
     return tuple(errs)
 
 
-class DeviceError(RuntimeError):
-    """The trigger device did not do what was asked (timeout after retries, ERR reply, lost
-    port)."""
+class DeviceError(OSError):
+    """The trigger device or the camera did not do what was asked (timeout after retries, ERR
+    reply, lost port, no new frame): an ``OSError``, as the device I/O it reports."""
 
 
 @dataclass(frozen=True)

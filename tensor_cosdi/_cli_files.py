@@ -186,7 +186,7 @@ def run_preview(args) -> int:
     import matplotlib.pyplot as plt
 
     from . import plot
-    from .io._atomic import atomic_write
+    from .io import atomic_write
 
     path, cube, wl = _cube_and_wavelengths(args.file, args.wavelengths)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_preview.png")

@@ -145,7 +145,7 @@ def run_demo(args) -> int:
     from tqdm import tqdm
 
     from .colour import to_srgb
-    from .io._atomic import atomic_write
+    from .io import atomic_write
     from .studies import compare, make_problem, score_depth, spectral_view
 
     if args.size % 4:

@@ -84,8 +84,7 @@ def test_vsi_arms_against_explicit_matrices():
     arms' energies; the dynamic-range error is the mean over pixels both arms light."""
     from tensor_cosdi import scenes
     from tensor_cosdi.codes import random_binary
-    from tensor_cosdi.systems import CASSIVSI
-    from tensor_cosdi.systems._base import wavelengths_for
+    from tensor_cosdi.systems import CASSIVSI, wavelengths_for
 
     (r,) = studies.vsi_arms(("colorchecker",), (0.6,), shape=(6, 7), n_bands=3, snr_db=25.0)
     wl = wavelengths_for(None, 3)

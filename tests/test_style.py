@@ -115,3 +115,36 @@ def test_the_cycle_finder_finds_a_function_level_cycle(tmp_path):
 def test_the_package_has_no_import_cycle():
     found = cycles(import_graph(ROOT / "tensor_cosdi", "tensor_cosdi"))
     assert found == [], "import cycles: " + "; ".join(" ↔ ".join(c) for c in found)
+
+
+def private_imports(graph: dict[str, set[str]], package: str) -> list[str]:
+    """``"importer → module"`` for every import of an underscore module that belongs to another
+    sub-package (``pkg.sub._mod`` from outside ``pkg.sub``).  Underscore modules at the package
+    root (``pkg._backend``) are the package's shared internals."""
+    bad = []
+    for mod, targets in graph.items():
+        for t in targets:
+            parts = t.split(".")
+            private = [i for i, p in enumerate(parts) if p.startswith("_") and i >= 2]
+            if private:
+                owner = ".".join(parts[: private[0]])
+                if not (mod == owner or mod.startswith(owner + ".")):
+                    bad.append(f"{mod} → {t}")
+    return sorted(bad)
+
+
+def test_the_private_import_finder_finds_one(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "other").mkdir()
+    for d in (pkg, pkg / "sub", pkg / "other"):
+        (d / "__init__.py").write_text("")
+    (pkg / "sub" / "_inner.py").write_text("X = 1\n")
+    (pkg / "sub" / "a.py").write_text("from ._inner import X\n")  # its own: fine
+    (pkg / "other" / "b.py").write_text("def f():\n    from ..sub._inner import X\n")
+    assert private_imports(import_graph(pkg, "pkg"), "pkg") == ["pkg.other.b → pkg.sub._inner"]
+
+
+def test_no_sub_package_imports_another_ones_private_module():
+    found = private_imports(import_graph(ROOT / "tensor_cosdi", "tensor_cosdi"), "tensor_cosdi")
+    assert found == [], "private modules imported from outside: " + "; ".join(found)

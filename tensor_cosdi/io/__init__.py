@@ -18,6 +18,7 @@ provenance.
   acquisition plans sent to a trigger device over a serial port, with a resumable frame log.
 """
 
+from ._atomic import atomic_write
 from .bundle import Bundle, file_digest, load_bundle, save_bundle, system_from_state, system_state
 from .calibration import code_from_monochromator, shifts_from_line_frames
 from .files import read_array, read_cube, split_key, write_cube
@@ -44,6 +45,7 @@ from .triggers import (
 )
 
 __all__ = [
+    "atomic_write",
     "read_cube",
     "read_array",
     "write_cube",

@@ -12,6 +12,7 @@ from .algebra import (
     Scaled,
     Stack,
     TensorOperator,
+    sensing_gain,
     unvec,
     validate_shape,
     vec,
@@ -30,6 +31,7 @@ from .woodbury import Diagonal, FoldedBanded, PixelBlocks, RowBanded, conjugate_
 
 __all__ = [
     "TensorOperator",
+    "sensing_gain",
     "Composition",
     "OperatorSum",
     "Scaled",

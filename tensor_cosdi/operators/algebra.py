@@ -32,6 +32,14 @@ __all__ = [
     "vec",
     "unvec",
     "vec_index",
+    "sensing_gain",
+    "Identity",
+    "Adjoint",
+    "Scaled",
+    "Composition",
+    "OperatorSum",
+    "Stack",
+    "weighted_sum",
 ]
 
 
@@ -235,6 +243,10 @@ class TensorOperator:
             raise ValueError("cannot divide an operator by zero")
         return Scaled(1.0 / alpha, self)
 
+    def sensing_gain(self, like=None) -> float:
+        """``‖A 1‖² / ‖1‖²``, the mean squared gain (:func:`sensing_gain`)."""
+        return sensing_gain(self, like)
+
     # ---- structure --------------------------------------------------------------
     def _routing(self) -> Routing | None:
         """Index map when every input entry reaches few outputs, else ``None``."""
@@ -384,8 +396,21 @@ def _check_mu(mu) -> float:
     return val
 
 
+def sensing_gain(operator: "TensorOperator", like=None) -> float:
+    """``‖A 1‖² / ‖1‖²``: the mean squared gain of ``A``, which makes Tikhonov weights and ``ε``
+    scale-free (:meth:`TensorOperator.sensing_gain`).
+
+    ``like`` fixes backend, dtype and device of the probe (default: float64 NumPy).
+    """
+    probe = np.ones(operator.input_shape)
+    ones = probe if like is None else B.tensor_like(probe, like)
+    s = float(tl.norm(operator._forward(ones))) ** 2 / float(np.prod(operator.input_shape))
+    if s == 0.0:
+        raise ValueError("the system measures nothing (A 1 = 0): every code element is closed")
+    return s
+
+
 # ------------------------------------------------------------ combinators
-__all__ = ["Identity", "Adjoint", "Scaled", "Composition", "OperatorSum", "Stack", "weighted_sum"]
 
 
 class Identity(TensorOperator):

@@ -48,9 +48,8 @@ import numpy as np
 import tensorly as tl
 
 from .. import bases as _bases
-from ..operators import Replicate
+from ..operators import Replicate, sensing_gain
 from ..operators.woodbury import conjugate_gradient
-from ..systems._base import sensing_gain
 from . import engine
 from ._base import check_positive, register_method, relative_change, relative_residual
 from .priors import rms, soft

@@ -134,7 +134,7 @@ class PatchDictionary:
 
     def save(self, path, *, overwrite: bool = False) -> Path:
         """Write the dictionary as ``.npz`` (refuses to replace a file unless ``overwrite``)."""
-        from ..io._atomic import atomic_write
+        from ..io import atomic_write
 
         meta = np.array([self.patch, self.channels, self.stride, self.max_nonzero])
 

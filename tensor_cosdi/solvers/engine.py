@@ -30,7 +30,7 @@ engine's penalty (``λ = lam · RMS(start) · s`` for ADMM with ``ρ = mu · s``
 a TV or denoiser weight ``w`` a denoising strength of ``w · P₉₉.₉|start|``
 (the 99.9th percentile, :func:`~priors.robust_peak` — not the maximum, which
 one noisy pixel of the start sets); penalties (``ρ``, ``ε``) are relative to the sensing gain
-``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`),
+``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.operators.sensing_gain`),
 so no option depends on the measurement's scale.
 """
 
@@ -42,7 +42,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..systems._base import sensing_gain
+from ..operators import sensing_gain
 from ..validate import integer
 from ._base import History, relative_change
 

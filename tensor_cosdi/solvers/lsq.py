@@ -6,7 +6,7 @@ import time
 
 import tensorly as tl
 
-from ..systems._base import sensing_gain
+from ..operators import sensing_gain
 from ._base import check_positive, register_method, relative_residual
 
 __all__ = ["regularised_lsq"]
@@ -15,7 +15,7 @@ __all__ = ["regularised_lsq"]
 def regularised_lsq(system, measurement, *, mu: float = 1e-2):
     """``F = argmin ‖G − A F‖² + μ s ‖F‖² = (AᵀA + μ s I)⁻¹ Aᵀ G`` (SPEC §4, §5 baseline).
 
-    ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.systems._base.sensing_gain`), so ``mu`` is relative.
+    ``s = ‖A 1‖² / ‖1‖²`` (:func:`~tensor_cosdi.operators.sensing_gain`), so ``mu`` is relative.
     One closed-form
     solve where ``A Aᵀ`` has structure (diagonal, per-pixel blocks, banded
     rows), conjugate gradients otherwise.  Registered as method ``"lsq"``.

@@ -27,8 +27,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..operators import Code, Replicate
-from ..systems._base import sensing_gain
+from ..operators import Code, Replicate, sensing_gain
 from . import engine
 from ._base import History, check_positive, register_method, relative_residual
 from .denoisers import resolve

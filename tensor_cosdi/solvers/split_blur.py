@@ -29,7 +29,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..systems._base import sensing_gain
+from ..operators import sensing_gain
 from . import engine
 from ._base import check_positive, register_method, relative_change, relative_residual
 from .denoisers import WarmTV

@@ -165,8 +165,7 @@ def vsi_arms(
     from .. import scenes as sc
     from ..codes import random_binary
     from ..noise import add_noise
-    from ..systems import CASSIVSI
-    from ..systems._base import wavelengths_for
+    from ..systems import CASSIVSI, wavelengths_for
 
     alphas = [float(a) for a in alphas]
     bad = [a for a in alphas if not 0.0 <= a <= 1.0]

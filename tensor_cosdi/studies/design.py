@@ -21,8 +21,7 @@ def colour_code_run(
     imaging ``scene``; returns PSNR / SSIM / SAM, the conditioning of ``A Aᵀ`` and seconds."""
     from .. import codes, scenes
     from ..solvers import reconstruct
-    from ..systems import SDCASSI
-    from ..systems._base import wavelengths_for
+    from ..systems import SDCASSI, wavelengths_for
     from .condition import conditioning
     from .problems import Problem, score
 

@@ -84,7 +84,7 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
 def write_csv(records, path, *, overwrite: bool = False) -> Path:
     """Write :func:`sweep` records as CSV (columns: the union of keys, in first-seen order),
     atomically; an existing file only with ``overwrite=True``."""
-    from ..io._atomic import atomic_write
+    from ..io import atomic_write
 
     records = list(records)
     if not records:

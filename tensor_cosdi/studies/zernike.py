@@ -41,8 +41,7 @@ def zernike_run(
     ``sweep=True``: the focal-sweep model (every plane seen at every step)."""
     from .. import codes, optics, scenes
     from ..solvers import reconstruct
-    from ..systems import CASSDIDFA
-    from ..systems._base import wavelengths_for
+    from ..systems import CASSDIDFA, wavelengths_for
     from .problems import Problem, score
 
     mode, amp = int(aberration[0]), float(aberration[1])

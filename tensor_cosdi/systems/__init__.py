@@ -25,7 +25,7 @@ bundle state, frame order, depth channel and seeded problem
 (see :class:`System`).
 """
 
-from ._base import System
+from ._base import System, wavelengths_for
 from ._roles import Problem
 from .c3slfi import C3SLFI
 from .cassdi_dfa import CASSDIDFA
@@ -42,6 +42,7 @@ for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, Lyt
 del _cls
 
 __all__ = [
+    "wavelengths_for",
     "REGISTRY",
     "SystemRegistry",
     "Problem",

@@ -9,7 +9,7 @@ import tensorly as tl
 from .. import _backend as B
 from .._units import check_wavelengths_nm
 from ..noise import add_noise
-from ..operators import Code, SumAxis, TensorOperator, parse_shifts
+from ..operators import Code, SumAxis, TensorOperator, parse_shifts, sensing_gain
 from ..operators.shear import MAX_BANDS
 from ..validate import integer
 from ._roles import SystemRoles
@@ -75,18 +75,6 @@ def fractional_weights(shifts: np.ndarray):
     s = np.asarray(shifts, dtype=np.float64)
     lo = np.floor(s).astype(np.int64)
     return lo, s - lo
-
-
-def sensing_gain(operator: TensorOperator, like) -> float:
-    """``‖A 1‖² / ‖1‖²``: the mean squared gain of ``A``, which makes Tikhonov weights scale-free.
-
-    ``like`` fixes backend, dtype and device of the probe.
-    """
-    ones = B.tensor_like(np.ones(operator.input_shape), like)
-    s = float(tl.norm(operator._forward(ones))) ** 2 / float(np.prod(operator.input_shape))
-    if s == 0.0:
-        raise ValueError("the system measures nothing (A 1 = 0): every code element is closed")
-    return s
 
 
 # ---- the base class ---------------------------------------------------------------

@@ -30,9 +30,9 @@ algorithms).
    tuning scenes, ``method="dl"``) and the Lytro-CASSI baseline (``systems.LytroCASSI``,
    ``method="lytro"``) against OTD-3D and WDCT-3D.
 
-Studies 1, 2 and 4 run on the report split's real CAVE scenes where the
-research data are (the photos otherwise); CS2LI builds its fringe scenes from
-photos.
+Studies 1, 2 and 4 run on the report split's real CAVE scenes (without the research
+data the script stops, unless ``--allow-photos``); CS2LI builds its fringe scenes
+from photos.
 
     python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--quick]
         [--seeds 0,1,2] [--studies vsi_design,vsi,dfa,sweep,cs2li,table1,table1_dl]
@@ -88,12 +88,21 @@ def _scores(truth, est):
 QUICK = False
 
 
+ALLOW_PHOTOS = False
+
+
 def _scene_names():
-    """The report split's real CAVE scenes where the research data are, else the photos."""
+    """The report split's real CAVE scenes; without the research data an error, unless
+    ``--allow-photos`` (then the photos, and the results file says so in its header)."""
     try:
         tc.datasets.data_dir()
         names = [f"cave.{s}" for s in tc.datasets.REPORT_SCENES]
-    except FileNotFoundError:
+    except FileNotFoundError as exc:
+        if not ALLOW_PHOTOS:
+            raise SystemExit(
+                f"the studies run on the real report scenes, and none were found ({exc}); "
+                "pass --allow-photos to run on photo-derived scenes instead"
+            ) from None
         names = list(SCENES)
     return names[:1] if QUICK else names
 
@@ -476,6 +485,10 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true", help="32×32×8, one scene: a smoke run")
     ap.add_argument(
+        "--allow-photos", action="store_true",
+        help="without the research data, run on photo-derived scenes (else an error)",
+    )  # fmt: skip
+    ap.add_argument(
         "--workers", type=int, default=2,
         help="Dask worker processes (one thread each) sharing every study's cells; 1 runs "
         "serially here without Dask",
@@ -487,8 +500,9 @@ def main(argv=None):
         args.seeds = tuple(int(v) for v in args.seeds.split(","))
     except ValueError:
         ap.error(f"--seeds must be integers separated by commas, got {args.seeds!r}")
+    global QUICK, ALLOW_PHOTOS
+    ALLOW_PHOTOS = args.allow_photos
     if args.quick:
-        global QUICK
         QUICK, args.size, args.bands = True, 32, 8
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

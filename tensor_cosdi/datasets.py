@@ -84,10 +84,18 @@ def tune_folds(k: int = 4, seed: int = 0) -> tuple[tuple[str, ...], ...]:
 
 def _roots() -> list[Path]:
     """Where the project's research data may be: ``$TENSOR_COSDI_DATA``, then ``../shared/data``
-    next to a source checkout (a plain install has neither unless the variable is set)."""
+    next to the source checkout this module was imported from, then ``shared/data`` in the
+    current folder or one of its three nearest parents (an installed package run from inside
+    its checkout: ``site-packages`` has no data beside it)."""
     env = os.environ.get("TENSOR_COSDI_DATA")
-    shared = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    return ([Path(env)] if env else []) + [shared]
+    roots = [Path(env)] if env else []
+    roots.append(Path(__file__).resolve().parents[1] / ".." / "shared" / "data")
+    try:
+        here = Path.cwd().resolve()
+    except OSError:  # the current folder was removed
+        return roots
+    roots += [d / "shared" / "data" for d in (here, *here.parents[:3])]
+    return roots
 
 
 def data_dir(path=None) -> Path:
@@ -95,8 +103,9 @@ def data_dir(path=None) -> Path:
 
     ``path`` if given, else ``$TENSOR_COSDI_DATA/hsi_train`` (or
     ``$TENSOR_COSDI_DATA`` itself when it holds the scenes), else
-    ``../shared/data/hsi_train`` next to a source checkout.  Raises
-    ``FileNotFoundError`` saying where it looked.
+    ``../shared/data/hsi_train`` next to a source checkout or near the
+    current folder (:func:`_roots`).  Raises ``FileNotFoundError`` saying
+    where it looked.
     """
     if path is not None:
         candidates = [Path(path)]

@@ -107,3 +107,21 @@ def test_data_file_finds_research_files_and_says_where_it_looked(monkeypatch, tm
     assert datasets.data_file("masks/m.mat") == tmp_path / "masks" / "m.mat"
     with pytest.raises(FileNotFoundError, match=r"masks/nope\.mat.*looked in .*TENSOR_COSDI_DATA"):
         datasets.data_file("masks/nope.mat")
+
+
+def test_an_installed_package_finds_the_data_from_its_checkout(tmp_path, monkeypatch):
+    from tensor_cosdi import datasets
+
+    site = tmp_path / "venv" / "lib" / "site-packages" / "tensor_cosdi" / "datasets.py"
+    checkout = tmp_path / "work" / "repo"
+    scenes = tmp_path / "work" / "shared" / "data" / "hsi_train"
+    for d in (site.parent, checkout, scenes):
+        d.mkdir(parents=True)
+    np.savez(scenes / "toy.npz", cube=np.zeros((2, 2, 3)))
+    monkeypatch.delenv("TENSOR_COSDI_DATA", raising=False)
+    monkeypatch.setattr(datasets, "__file__", str(site))
+    monkeypatch.chdir(checkout)
+    assert datasets.data_dir() == scenes
+    monkeypatch.chdir(tmp_path / "venv")  # far from any data: a clear error naming where
+    with pytest.raises(FileNotFoundError, match="TENSOR_COSDI_DATA"):
+        datasets.data_dir()

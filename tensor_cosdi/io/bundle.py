@@ -35,6 +35,7 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import logging
 import platform
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -274,6 +275,7 @@ def save_bundle(
         atomic_write(p, lambda tmp: _write_h5(tmp, store, doc), overwrite=overwrite)
     else:
         atomic_write(p, lambda tmp: np.savez(tmp, **store), overwrite=overwrite, suffix=".npz")
+    logging.getLogger(__name__).info("bundle %s written (%s)", p, doc["kind"])
     return p
 
 

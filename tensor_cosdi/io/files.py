@@ -29,6 +29,7 @@ and never replace an existing file without ``overwrite=True``.
 from __future__ import annotations
 
 import json
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +54,8 @@ __all__ = [
     "WAVELENGTH_KEYS",
     "WAVELENGTH_RANGE_NM",
 ]
+
+log = logging.getLogger(__name__)
 
 #: Extensions :func:`read_array` / :func:`read_cube` / :func:`write_cube` know.
 CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".npy", ".npz", ".hdr", ".tif", ".tiff")
@@ -129,6 +132,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
     name = _pick(path, entries, key)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
+    log.debug("reading %s:%s %s %s", path, name, tuple(shape), np.dtype(dtype))
     return _load(path, suffix, load)
 
 
@@ -197,6 +201,7 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
     _check_size(path, name, shape, dtype, max_bytes)
     if np.dtype(dtype).kind not in "biuf":
         raise ValueError(f"{path}: {name!r} holds {np.dtype(dtype)} values; a cube is real")
+    log.debug("reading cube %s:%s %s %s", path, name, tuple(shape), np.dtype(dtype))
     cube = np.asarray(_load(path, suffix, load))
     if suffix in (".tif", ".tiff") and cube.ndim == 3:
         axes = getattr(load, "axes", "")

@@ -34,6 +34,7 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import logging
 import math
 import os
 import time
@@ -44,6 +45,8 @@ from ..validate import integer, number
 from ._atomic import atomic_write
 from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
+
+log = logging.getLogger(__name__)
 
 #: Most frames one acquisition plan holds (a day of 1 Hz captures): more is refused up front.
 MAX_PLAN_FRAMES = 100_000
@@ -498,6 +501,7 @@ class Acquisition:
                 }
                 self._write(f, entry)
                 written.append(entry)
+                log.info("step %d %s: frame %s", i, dict(step.index), path)
         finally:
             f.close()
         return written

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import logging
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -99,6 +100,8 @@ class Method:
     def __call__(self, system, measurement, **options):
         return reconstruct(system, measurement, self.name, **options)
 
+
+log = logging.getLogger(__name__)
 
 METHODS = Registry("method")
 """``name → Method``: every method :func:`reconstruct` accepts (read-only; add with
@@ -243,6 +246,11 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     if isinstance(history, dict) and "objective" in history:
         history["objective"] = [v * peak * peak for v in history["objective"]]
     depth = out[3] if len(out) > 3 else None
+    log.info(
+        "%s on %s %s: %.2f s, %d iterations, converged %s",
+        method, type(system).__name__, tuple(system.cube_shape), seconds,
+        len(history.get("residual", [])) if isinstance(history, dict) else 0, bool(converged),
+    )  # fmt: skip
     return Result(
         cube,
         history,

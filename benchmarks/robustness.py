@@ -152,7 +152,13 @@ def _measurement_variants(g):
 
 
 #: the thesis' per-system algorithms
-ONLY_FOR = {"avsi": ("cassi_vsi",), "dfa": ("cassdi_dfa",), "pnp_admm": ("cs2li", "mu_cosdi")}
+ONLY_FOR = {
+    "avsi": ("cassi_vsi",), "dfa": ("cassdi_dfa",), "pnp_admm": ("cs2li", "mu_cosdi"),
+    "lytro": ("lytro_cassi",), "split_tv": (),  # CASSDI-DFA with PSFs: not among these problems
+}  # fmt: skip
+#: methods whose first requirement is an argument without a default: every call without it must
+#: name it, whatever else is wrong
+NEEDS = {"dl": "dictionary"}
 
 
 def reconstruct_cases():
@@ -181,7 +187,8 @@ def reconstruct_cases():
                 def call(m=method, o=opt, v=v, s=system, g=g):
                     return tc.reconstruct(s, g, m, **{o: v})
 
-                out.append(Case("reconstruct", f"{sname} {method} {opt}={v!r}", call, (opt,)))
+                words = (opt, NEEDS[method]) if method in NEEDS else (opt,)
+                out.append(Case("reconstruct", f"{sname} {method} {opt}={v!r}", call, words))
         out.append(
             Case("reconstruct", f"{sname} unknown method",
                  lambda s=system, g=g: tc.reconstruct(s, g, "x"), ("method",))

@@ -152,10 +152,8 @@ def _measurement_variants(g):
 
 
 #: the thesis' per-system algorithms
-ONLY_FOR = {
-    "avsi": ("cassi_vsi",), "dfa": ("cassdi_dfa",), "pnp_admm": ("cs2li", "mu_cosdi"),
-    "lytro": ("lytro_cassi",), "split_tv": (),  # CASSDI-DFA with PSFs: not among these problems
-}  # fmt: skip
+ONLY_FOR = {n: m.systems for n, m in tc.solvers.METHODS.items() if m.systems}
+ONLY_FOR["split_tv"] = ()  # CASSDI-DFA with PSFs: not among these problems
 #: methods whose first requirement is an argument without a default: every call without it must
 #: name it, whatever else is wrong
 NEEDS = {"dl": "dictionary"}

@@ -299,10 +299,15 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--out", required=True, help="bundle to write: .h5 (HDF5) or .npz (bundle path: .npz)"
     )
+    from .solvers import METHODS
+
+    listed = ", ".join(
+        f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n
+        for n in methods()
+    )
     rec.add_argument(
-        "--method", default="otd",
-        help=f"reconstruction method (default otd): {', '.join(methods())}",
-    )  # fmt: skip
+        "--method", default="otd", help=f"reconstruction method (default otd): {listed}"
+    )
     rec.add_argument(
         "--option", action="append", type=_option_value, help="method option key=value (repeat)"
     )

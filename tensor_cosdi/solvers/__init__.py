@@ -16,6 +16,7 @@ from ._base import (
     methods,
     reconstruct,
     register_method,
+    require_system,
     signature_defaults,
 )
 from .avsi import avsi
@@ -39,6 +40,7 @@ __all__ = [
     "reconstruct_tiled",
     "methods",
     "register_method",
+    "require_system",
     "signature_defaults",
     "METHODS",
     "Method",

@@ -83,6 +83,10 @@ class Method:
 
     ``requires`` names the optional modules its *defaults* need (``("torch",)``
     for the learned prior); :attr:`available` says whether they import.
+    ``systems`` names the imagers (:data:`tensor_cosdi.systems.REGISTRY` names)
+    it reconstructs, empty for every one; ``needs`` maps an option that must
+    be given (its default is ``None``) to what it is.  :func:`reconstruct`,
+    the CLI's help, the docs and the registry tests read these.
     """
 
     func: Callable
@@ -90,6 +94,12 @@ class Method:
     summary: str = ""
     name: str = ""
     requires: tuple = ()
+    systems: tuple = ()
+    needs: dict = field(default_factory=dict)
+
+    def applies_to(self, system_name: str) -> bool:
+        """Whether this method reconstructs the imager registered as ``system_name``."""
+        return not self.systems or system_name in self.systems
 
     @property
     def available(self) -> bool:
@@ -136,6 +146,8 @@ def register_method(
     *,
     replace: bool = False,
     requires: tuple = (),
+    systems: tuple = (),
+    needs: dict | None = None,
 ) -> None:
     """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
 
@@ -144,7 +156,7 @@ def register_method(
     every method of the library is registered, so that a default is written
     once); anything else passed to :func:`reconstruct` is an error.  A name
     that is taken needs ``replace=True``; the library's own methods cannot be
-    replaced.
+    replaced.  ``systems`` and ``needs``: see :class:`Method`.
     """
     if not callable(func):
         raise ValueError(f"a method must be callable, got {func!r}")
@@ -153,15 +165,34 @@ def register_method(
     builtin = getattr(func, "__module__", "").startswith("tensor_cosdi.")
     METHODS.register(
         name,
-        Method(func, dict(defaults), summary, name, tuple(requires)),
+        Method(
+            func, dict(defaults), summary, name, tuple(requires), tuple(systems),
+            dict(needs or {}),
+        ),  # fmt: skip
         replace=replace,
         builtin=builtin,
     )
 
 
-def methods() -> tuple[str, ...]:
-    """Names of the registered reconstruction methods."""
-    return METHODS.names()
+def methods(system=None) -> tuple[str, ...]:
+    """Names of the registered reconstruction methods (those for ``system``, a system or its
+    registry name, when given)."""
+    if system is None:
+        return METHODS.names()
+    name = system if isinstance(system, str) else getattr(system, "name", "")
+    return tuple(n for n in METHODS.names() if METHODS[n].applies_to(name))
+
+
+def require_system(method: str, system) -> None:
+    """``ValueError`` unless ``method`` reconstructs ``system`` (its registered ``systems``),
+    naming the methods that do."""
+    entry = METHODS[method]
+    name = getattr(system, "name", None) or type(system).__name__
+    if not entry.applies_to(name):
+        raise ValueError(
+            f"method {method!r} reconstructs {' and '.join(entry.systems)} systems, got "
+            f"{type(system).__name__}; methods for {name}: {', '.join(methods(name))}"
+        )
 
 
 #: Measurement dtypes promoted to float32 by :func:`reconstruct` (the cube comes back float32).
@@ -208,6 +239,10 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
             f"unknown option(s) {unknown} for method {method!r}; valid options: "
             f"{sorted(entry.defaults)}"
         )
+    require_system(method, system)
+    for opt, what in entry.needs.items():
+        if options.get(opt) is None:
+            raise ValueError(f"method {method!r} needs {opt}=: {what}")
     option_types(f"method {method!r}", options, entry.defaults)
     opts = {**entry.defaults, **options}
     g = system._check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf

@@ -51,7 +51,13 @@ from .. import bases as _bases
 from ..operators import Replicate, sensing_gain
 from ..operators.woodbury import conjugate_gradient
 from . import engine
-from ._base import check_positive, register_method, relative_change, relative_residual
+from ._base import (
+    check_positive,
+    register_method,
+    relative_change,
+    relative_residual,
+    require_system,
+)
 from .priors import rms, soft
 
 _check_int = engine.check_int
@@ -103,11 +109,7 @@ def avsi(
     >>> res.cube.shape
     (32, 32, 8)
     """
-    if getattr(system, "name", None) != "cassi_vsi":
-        raise ValueError(
-            f"avsi reconstructs CASSIVSI systems (Alg. 1), got {type(system).__name__}; "
-            "use 'otd', 'wdct', 'gap_tv' or 'lsq' for other systems"
-        )
+    require_system("avsi", system)
     s1, s2, s3 = (
         check_positive(n, v)
         for n, v in (("sigma1", sigma1), ("sigma2", sigma2), ("sigma3", sigma3))
@@ -190,4 +192,5 @@ register_method(
     "avsi",
     avsi,
     summary="A-VSI (thesis Alg. 1): joint cube + grayscale ADMM for CASSI-VSI",
+    systems=("cassi_vsi",),
 )

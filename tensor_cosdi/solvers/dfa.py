@@ -34,7 +34,13 @@ import tensorly as tl
 from .. import _backend as B
 from ..operators import Code, Replicate
 from . import engine
-from ._base import History, check_positive, register_method, relative_residual
+from ._base import (
+    History,
+    check_positive,
+    register_method,
+    relative_residual,
+    require_system,
+)
 from .priors import TV
 
 _check_int = engine.check_int
@@ -105,10 +111,7 @@ def multiresolution_dfa(
     >>> res.cube.shape, res.depth.shape
     ((32, 32, 8, 3), (32, 32))
     """
-    if getattr(system, "name", None) != "cassdi_dfa":
-        raise ValueError(
-            f"dfa reconstructs CASSDIDFA systems (Alg. 2-4), got {type(system).__name__}"
-        )
+    require_system("dfa", system)
     tv_weight, tol = (check_positive(n, v) for n, v in (("tv_weight", tv_weight), ("tol", tol)))
     max_iter = _check_int("max_iter", max_iter, 1)
     g = measurement
@@ -162,4 +165,5 @@ register_method(
     multiresolution_dfa,
     summary="multiresolution CASSDI-DFA (thesis Alg. 2-4): grayscale, focal stack, spectral; "
     "depth map",
+    systems=("cassdi_dfa",),
 )

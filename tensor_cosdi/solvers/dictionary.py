@@ -326,6 +326,10 @@ def _register():
         "dl",
         dictionary_admm,
         summary="GAP with a K-SVD patch dictionary learned on other scenes (thesis' DL baseline)",
+        needs={
+            "dictionary": "a PatchDictionary trained on other scenes "
+            "(tensor_cosdi.solvers.dictionary.train_dictionary) or the path of a saved one"
+        },
     )
 
 

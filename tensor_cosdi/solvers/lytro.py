@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
+from ._base import require_system
 from .dictionary import PatchDictionary, dictionary_admm, train_dictionary
 
 __all__ = ["lytro_dictionary", "lytro_cassi"]
@@ -82,10 +83,7 @@ def lytro_cassi(
     iterations.  ``rho``, ``sigma``, ``sigma_end``, ``max_iter``, ``warm``,
     ``tol`` are those of the ``"dl"`` method (:func:`~.dictionary.dictionary_admm`).
     """
-    if getattr(system, "name", None) != "lytro_cassi":
-        raise ValueError(
-            f"lytro reconstructs the Lytro-CASSI system only, got {type(system).__name__}"
-        )
+    require_system("lytro", system)
     if dictionary is None:
         dictionary = lytro_dictionary(
             system, measurement, n_patches=n_patches, n_iter=n_iter, rng=rng
@@ -103,6 +101,7 @@ def _register():
         "lytro",
         lytro_cassi,
         summary="Lytro-CASSI baseline: ADMM with an RGB-arm K-SVD ⊗ spectral DCT dictionary",
+        systems=("lytro_cassi",),
     )
 
 

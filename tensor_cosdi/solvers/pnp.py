@@ -29,7 +29,13 @@ import tensorly as tl
 from .. import _backend as B
 from ..operators import Code, Replicate, sensing_gain
 from . import engine
-from ._base import History, check_positive, register_method, relative_residual
+from ._base import (
+    History,
+    check_positive,
+    register_method,
+    relative_residual,
+    require_system,
+)
 from .denoisers import resolve
 from .priors import Denoiser
 
@@ -213,10 +219,7 @@ def pnp_admm(
     >>> res.cube.shape, res.depth.shape
     ((32, 32, 8, 4), (32, 32, 1))
     """
-    if getattr(system, "name", None) not in ("cs2li", "mu_cosdi"):
-        raise ValueError(
-            f"pnp_admm reconstructs CS2LI and MuCoSDI systems (Alg. 6), got {type(system).__name__}"
-        )
+    require_system("pnp_admm", system)
     (
         check_positive("rho", rho),
         check_positive("sigma", sigma),
@@ -255,4 +258,5 @@ register_method(
     "pnp_admm",
     pnp_admm,
     summary="hierarchical plug-and-play ADMM (thesis Alg. 6) for CS2LI / Mu-CoSDI",
+    systems=("cs2li", "mu_cosdi"),
 )

@@ -31,7 +31,13 @@ import tensorly as tl
 from .. import _backend as B
 from ..operators import sensing_gain
 from . import engine
-from ._base import check_positive, register_method, relative_change, relative_residual
+from ._base import (
+    check_positive,
+    register_method,
+    relative_change,
+    relative_residual,
+    require_system,
+)
 from .denoisers import WarmTV
 from .priors import robust_peak
 
@@ -92,7 +98,8 @@ def split_tv(
     """
     from ..systems import CASSDIDFA
 
-    if getattr(system, "name", None) != "cassdi_dfa" or system.psfs is None or system.sweep:
+    require_system("split_tv", system)
+    if system.psfs is None or system.sweep:
         raise ValueError(
             "split_tv reconstructs a CASSDIDFA with 4-D PSFs (band, plane); without PSFs use "
             f"'gap_tv' or 'otd' (closed form already), got {type(system).__name__}"
@@ -156,4 +163,5 @@ register_method(
     split_tv,
     summary="ADMM-TV for CASSDI-DFA with PSFs, the blur split off: every step closed form "
     "(SPEC §4)",
+    systems=("cassdi_dfa",),
 )

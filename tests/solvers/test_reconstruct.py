@@ -199,3 +199,19 @@ def test_a_float16_measurement_is_promoted_to_float32():
     assert r16.cube.dtype == np.float32
     psnr = [tc.studies.score(p, r.cube)["psnr"] for r in (r32, r16)]
     assert abs(psnr[0] - psnr[1]) < 0.2, psnr  # only the input's rounding differs
+
+
+def test_method_metadata_says_which_systems_and_what_is_needed():
+    vsi = tc.studies.make_problem("cassi_vsi", "chelsea", shape=(16, 16), n_bands=4)
+    sd = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+    assert "avsi" in tc.solvers.methods(vsi.system) and "avsi" not in tc.solvers.methods("sd_cassi")
+    assert tc.solvers.METHODS["avsi"].systems == ("cassi_vsi",)
+    for call in (
+        lambda: tc.reconstruct(sd.system, sd.measurement, "avsi"),
+        lambda: tc.solvers.avsi(sd.system, sd.measurement),  # called directly: the same check
+    ):
+        with pytest.raises(ValueError, match="'avsi' reconstructs cassi_vsi systems, got SDCASSI; "
+                           "methods for sd_cassi: .*otd"):  # fmt: skip
+            call()
+    with pytest.raises(ValueError, match="method 'dl' needs dictionary=: a PatchDictionary"):
+        tc.reconstruct(sd.system, sd.measurement, "dl", max_iter=0)

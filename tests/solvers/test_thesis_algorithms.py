@@ -86,7 +86,7 @@ def test_thesis_algorithms_refuse_other_systems(method, system):
         n_bands=4,
         **({"views": (2, 2)} if system == "c3slfi" else {}),
     )
-    with pytest.raises(ValueError, match=f"{method} reconstructs"):
+    with pytest.raises(ValueError, match=f"'{method}' reconstructs"):
         tc.reconstruct(p.system, p.measurement, method)
 
 

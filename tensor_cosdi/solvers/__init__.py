@@ -12,6 +12,7 @@ from . import denoisers, engine, priors
 from ._base import (
     METHODS,
     Method,
+    MethodOutput,
     Result,
     methods,
     reconstruct,
@@ -39,6 +40,7 @@ __all__ = [
     "reconstruct",
     "reconstruct_tiled",
     "methods",
+    "MethodOutput",
     "register_method",
     "require_system",
     "signature_defaults",

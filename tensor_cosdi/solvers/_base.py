@@ -6,7 +6,7 @@ import inspect
 import logging
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 import tensorly as tl
@@ -25,6 +25,28 @@ __all__ = [
     "History",
     "relative_change",
 ]
+
+
+class MethodOutput(NamedTuple):
+    """What a registered method returns to :func:`reconstruct`: ``(cube, history, converged)`` and
+    optionally the method's own ``depth`` map.  A plain tuple of three or four works too."""
+
+    cube: Any
+    history: dict
+    converged: bool = True
+    depth: Any = None
+
+    @classmethod
+    def of(cls, out, method: str) -> "MethodOutput":
+        """``out`` as a :class:`MethodOutput`, or a ``TypeError`` naming the method."""
+        if isinstance(out, cls):
+            return out
+        if isinstance(out, tuple) and len(out) in (3, 4):
+            return cls(*out)
+        raise TypeError(
+            f"method {method!r} returned {type(out).__name__}; a method returns "
+            "MethodOutput(cube, history, converged[, depth]) or that tuple"
+        )
 
 
 @dataclass(frozen=True)
@@ -149,7 +171,8 @@ def register_method(
     systems: tuple = (),
     needs: dict | None = None,
 ) -> None:
-    """Register ``func(system, measurement, **options) -> (cube, history, converged[, depth])``.
+    """Register ``func(system, measurement, **options) -> MethodOutput`` (or the tuple
+    ``(cube, history, converged[, depth])``).
 
     ``defaults`` lists every option the method accepts with its default
     (``None``: read from ``func``'s signature, :func:`signature_defaults` — how
@@ -265,7 +288,8 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     # method or library keeps in absolute units (Chambolle's stopping tolerance, ε floors)
     out = entry.func(system, g / peak, **opts)
     seconds = time.perf_counter() - t0
-    cube, history, converged = out[:3]
+    out = MethodOutput.of(out, method)
+    cube, history, converged = out.cube, out.history, out.converged
     if not B.all_finite(cube):
         raise FloatingPointError(
             f"method {method!r} produced NaN or inf from a finite measurement; this is a bug in "
@@ -280,7 +304,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
         )
     if isinstance(history, dict) and "objective" in history:
         history["objective"] = [v * peak * peak for v in history["objective"]]
-    depth = out[3] if len(out) > 3 else None
+    depth = out.depth
     log.info(
         "%s on %s %s: %.2f s, %d iterations, converged %s",
         method, type(system).__name__, tuple(system.cube_shape), seconds,

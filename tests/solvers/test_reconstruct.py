@@ -215,3 +215,25 @@ def test_method_metadata_says_which_systems_and_what_is_needed():
             call()
     with pytest.raises(ValueError, match="method 'dl' needs dictionary=: a PatchDictionary"):
         tc.reconstruct(sd.system, sd.measurement, "dl", max_iter=0)
+
+
+def test_a_method_returns_a_method_output_or_the_tuple():
+    from tensor_cosdi.solvers import MethodOutput
+
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+
+    def typed(system, measurement, *, scale: float = 1.0):
+        return MethodOutput(system.adjoint(measurement) * scale, {"residual": [0.5]}, True)
+
+    def wrong(system, measurement):
+        return system.adjoint(measurement)
+
+    for name, f in (("user_typed_test", typed), ("user_wrong_test", wrong)):
+        tc.solvers.register_method(name, f, replace=True)
+    try:
+        assert tc.reconstruct(p.system, p.measurement, "user_typed_test").converged
+        with pytest.raises(TypeError, match="'user_wrong_test' returned ndarray; a method returns"):
+            tc.reconstruct(p.system, p.measurement, "user_wrong_test")
+    finally:
+        for name in ("user_typed_test", "user_wrong_test"):
+            tc.solvers.METHODS.unregister(name)

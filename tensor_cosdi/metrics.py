@@ -8,15 +8,36 @@ design studies.  Argument names follow scikit-image (``image_true``,
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from . import _backend as B
+from .validate import integer
 
 __all__ = ["psnr", "ssim", "rmse", "sam", "combined_error"]
 
 
-def psnr(image_true, image_test, *, data_range=None, band_axis: int = 2) -> float:
+def _channel_axis(channel_axis, band_axis, ndim: int) -> int:
+    """The bands' axis from ``channel_axis`` (scikit-image's name) or the older ``band_axis``
+    (deprecated), checked against the images' ``ndim``."""
+    if band_axis is not None:
+        warnings.warn(
+            "band_axis is deprecated; use channel_axis (scikit-image's name)",
+            DeprecationWarning,
+            stacklevel=3,
+        )
+        channel_axis = band_axis
+    axis = integer("channel_axis", channel_axis)
+    if ndim >= 3 and not -ndim <= axis < ndim:
+        raise ValueError(f"channel_axis {axis} is out of range for images of {ndim} axes")
+    return axis
+
+
+def psnr(
+    image_true, image_test, *, data_range=None, channel_axis: int = 2, band_axis=None
+) -> float:
     """PSNR in dB computed per band and averaged over bands.
 
     Parameters
@@ -24,8 +45,10 @@ def psnr(image_true, image_test, *, data_range=None, band_axis: int = 2) -> floa
     image_true, image_test : tensors of equal shape ``(Nx, Ny, Nλ, …)``
     data_range : float, optional
         Peak-to-peak range of the true image (default: its max − min).
-    band_axis : int
-        Axis of the bands (default 2, SPEC §1).
+    channel_axis : int
+        Axis of the bands (default 2, SPEC §1; scikit-image's name).
+    band_axis : int, optional
+        Deprecated name of ``channel_axis``.
 
     Examples
     --------
@@ -35,8 +58,9 @@ def psnr(image_true, image_test, *, data_range=None, band_axis: int = 2) -> floa
     20.0
     """
     t, e, data_range = _pair(image_true, image_test, data_range)
-    t = np.moveaxis(t, band_axis, 0) if t.ndim >= 3 else t[None]
-    e = np.moveaxis(e, band_axis, 0) if e.ndim >= 3 else e[None]
+    axis = _channel_axis(channel_axis, band_axis, t.ndim)
+    t = np.moveaxis(t, axis, 0) if t.ndim >= 3 else t[None]
+    e = np.moveaxis(e, axis, 0) if e.ndim >= 3 else e[None]
     vals = []
     for tb, eb in zip(t, e):
         if np.array_equal(tb, eb):
@@ -60,22 +84,24 @@ def _pair(image_true, image_test, data_range=None):
     return t, e, float(data_range)
 
 
-def _bands_last_as_images(x: np.ndarray, band_axis: int) -> np.ndarray:
+def _bands_last_as_images(x: np.ndarray, axis: int) -> np.ndarray:
     """``(…, Nλ)`` cube → stack of 2-D band images ``(n, Nx, Ny)`` (extra axes become more
     images)."""
     if x.ndim == 2:
         return x[None]
-    x = np.moveaxis(x, band_axis, -1)
+    x = np.moveaxis(x, axis, -1)
     x = np.moveaxis(x, (0, 1), (-2, -1))  # (…, Nλ, Nx, Ny)
     return x.reshape((-1,) + x.shape[-2:])
 
 
 def ssim(
-    image_true, image_test, *, data_range=None, band_axis: int = 2, win_size: int = 7
+    image_true, image_test, *, data_range=None, channel_axis: int = 2, win_size: int = 7,
+    band_axis=None,
 ) -> float:
     """Structural similarity per band (scikit-image, Gaussian-free 7×7 window), averaged.
 
     Images smaller than the window use the largest odd window that fits.
+    ``channel_axis``: the bands' axis (``band_axis``: its deprecated name).
 
     Examples
     --------
@@ -85,7 +111,8 @@ def ssim(
     1.0
     """
     t, e, data_range = _pair(image_true, image_test, data_range)
-    tb, eb = _bands_last_as_images(t, band_axis), _bands_last_as_images(e, band_axis)
+    axis = _channel_axis(channel_axis, band_axis, t.ndim)
+    tb, eb = _bands_last_as_images(t, axis), _bands_last_as_images(e, axis)
     w = min(win_size, *tb.shape[1:])
     w -= 1 - w % 2
     if w < 3:
@@ -107,11 +134,12 @@ def rmse(image_true, image_test) -> float:
     return float(np.sqrt(np.mean((t - e) ** 2)))
 
 
-def sam(image_true, image_test, *, band_axis: int = 2) -> float:
+def sam(image_true, image_test, *, channel_axis: int = 2, band_axis=None) -> float:
     """Spectral angle mapper in degrees: the angle between true and estimated spectra, averaged.
 
     ``θ = arccos(⟨f, f̂⟩ / (‖f‖ ‖f̂‖))`` per pixel (every index except
-    ``band_axis``).  Pixels whose true spectrum is zero have no angle and
+    ``channel_axis``; ``band_axis``: its deprecated name).  Pixels whose true
+    spectrum is zero have no angle and
     are skipped; an estimated spectrum of zero where the truth is not counts
     as 90° (orthogonal: nothing of the spectrum was recovered).
 
@@ -123,8 +151,9 @@ def sam(image_true, image_test, *, band_axis: int = 2) -> float:
     45.0
     """
     t, e, _ = _pair(image_true, image_test, 1.0)
-    t = np.moveaxis(t, band_axis, -1).reshape(-1, t.shape[band_axis])
-    e = np.moveaxis(e, band_axis, -1).reshape(-1, e.shape[band_axis])
+    axis = _channel_axis(channel_axis, band_axis, t.ndim)
+    t = np.moveaxis(t, axis, -1).reshape(-1, t.shape[axis])
+    e = np.moveaxis(e, axis, -1).reshape(-1, e.shape[axis])
     nt, ne = np.linalg.norm(t, axis=1), np.linalg.norm(e, axis=1)
     valid = nt > 0
     if not valid.any():

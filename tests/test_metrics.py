@@ -26,7 +26,7 @@ def test_ssim_is_per_band_average():
     assert ssim(t, e) < 0.99
     # band axis elsewhere and extra axes (a 4-D cube: every (λ, z) image counts)
     assert ssim(
-        np.moveaxis(t, 2, 0), np.moveaxis(e, 2, 0), band_axis=0, data_range=1.0
+        np.moveaxis(t, 2, 0), np.moveaxis(e, 2, 0), channel_axis=0, data_range=1.0
     ) == pytest.approx(ref)
     four = np.stack([t, t], axis=3)
     assert ssim(four, np.stack([e, e], axis=3), data_range=1.0) == pytest.approx(ref)
@@ -86,3 +86,25 @@ def test_metric_input_errors():
         sam(np.ones((2, 2, 2)), np.full((2, 2, 2), np.nan))
     with pytest.raises(ValueError, match="data_range"):
         psnr(np.ones((2, 2, 2)), np.zeros((2, 2, 2)))
+
+
+def test_channel_axis_is_scikit_image_s_name_and_band_axis_still_works():
+    import warnings
+
+    from tensor_cosdi import metrics
+
+    rng = np.random.default_rng(0)
+    a = rng.random((3, 12, 12))  # bands first
+    b = a + 0.01 * rng.standard_normal(a.shape)
+    moved = (np.moveaxis(a, 0, 2), np.moveaxis(b, 0, 2))
+    for f in (metrics.psnr, metrics.ssim, metrics.sam):
+        assert f(a, b, channel_axis=0) == pytest.approx(f(*moved))
+        with pytest.warns(DeprecationWarning, match="use channel_axis"):
+            assert f(a, b, band_axis=0) == pytest.approx(f(*moved))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        metrics.psnr(*moved)  # the default warns about nothing
+    with pytest.raises(ValueError, match="channel_axis 5 is out of range"):
+        metrics.psnr(a, b, channel_axis=5)
+    with pytest.raises(ValueError, match="channel_axis must be an integer"):
+        metrics.sam(a, b, channel_axis=True)

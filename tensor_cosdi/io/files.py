@@ -263,9 +263,15 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
         if suffix in (".h5", ".hdf5"):
             h5py = _require_h5py()
             with h5py.File(tmp, "w") as f:
-                f.create_dataset("cube", data=cube, compression="gzip", shuffle=True)
+                ds = f.create_dataset("cube", data=cube, compression="gzip", shuffle=True)
+                ds.attrs["dims"] = ["rows", "columns", "bands", *(
+                    f"axis{i}" for i in range(3, cube.ndim)
+                )]  # fmt: skip
                 if wl is not None:
-                    f.create_dataset("wavelengths", data=wl)
+                    w = f.create_dataset("wavelengths", data=wl)
+                    w.attrs["units"] = "nm"
+                    w.make_scale("wavelength")
+                    ds.dims[2].attach_scale(w)
                 f.attrs["metadata"] = meta_json
         elif suffix == ".mat":
             import scipy.io

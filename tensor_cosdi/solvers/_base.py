@@ -228,6 +228,26 @@ def _context(x) -> dict:
     return ctx
 
 
+def _is_data_array(x) -> bool:
+    """An ``xarray.DataArray`` (recognised without importing xarray)."""
+    return type(x).__name__ == "DataArray" and hasattr(x, "dims") and hasattr(x, "coords")
+
+
+def _as_data_array(cube, system, method: str):
+    """The cube as an ``xarray.DataArray``: dims from ``system.axes``, the band centres (nm) as
+    the ``"λ"`` coordinate."""
+    import xarray as xr
+
+    values = B.to_numpy(cube)
+    coords = {}
+    if "λ" in system.axes:
+        coords["λ"] = ("λ", np.asarray(system.wavelengths), {"units": "nm"})
+    return xr.DataArray(
+        values, dims=tuple(system.axes), coords=coords,
+        attrs={"method": method, "system": type(system).__name__},
+    )  # fmt: skip
+
+
 def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     """Reconstruct a cube from ``measurement`` of ``system`` with a registered ``method``.
 
@@ -247,6 +267,10 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
 
     Notes
     -----
+    An ``xarray.DataArray`` measurement gives a ``DataArray`` cube (dims the
+    system's :attr:`~tensor_cosdi.systems.System.axes`, the band centres in
+    nm as the ``"λ"`` coordinate); a dask array is computed first (every
+    method needs the whole measurement).
     A float16 (or bfloat16) measurement is promoted to float32 first: its
     three significant digits cost every method 1-4 dB in its own precision.
     Every method runs on the measurement divided by its peak ``max|g|`` and
@@ -268,6 +292,12 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
             raise ValueError(f"method {method!r} needs {opt}=: {what}")
     option_types(f"method {method!r}", options, entry.defaults)
     opts = {**entry.defaults, **options}
+    labelled = _is_data_array(measurement)
+    if labelled:  # an xarray.DataArray: its values, and the cube comes back labelled
+        measurement = measurement.values
+    elif hasattr(measurement, "__dask_graph__"):  # a dask array: every method needs it whole
+        log.info("computing the dask measurement %s", getattr(measurement, "shape", ""))
+        measurement = measurement.compute()
     g = system._check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
     if B.real_dtype_name(g) in HALF_PRECISION:  # 3 significant digits: every method loses 1-4 dB
         g = tl.tensor(g, **{**_context(g), "dtype": B.dtype("float32")})
@@ -310,6 +340,8 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
         method, type(system).__name__, tuple(system.cube_shape), seconds,
         len(history.get("residual", [])) if isinstance(history, dict) else 0, bool(converged),
     )  # fmt: skip
+    if labelled:
+        cube = _as_data_array(cube, system, method)
     return Result(
         cube,
         history,

@@ -189,3 +189,16 @@ def test_tiff_with_three_or_four_bands_is_grey_pages_not_rgb(tmp_path, bands):
     back, wl = read_cube(path)
     np.testing.assert_array_equal(back, cube)
     np.testing.assert_allclose(wl, WL[:bands])
+
+
+def test_hdf5_cube_carries_dims_and_units(tmp_path):
+    import h5py
+
+    path = write_cube(tmp_path / "c.h5", _cube(), WL)
+    with h5py.File(path, "r") as f:
+        assert list(f["cube"].attrs["dims"]) == ["rows", "columns", "bands"]
+        assert f["wavelengths"].attrs["units"] == "nm"
+        assert f["cube"].dims[2].keys() == ["wavelength"]  # a dimension scale (netCDF-4 style)
+    back, wl = read_cube(path)
+    np.testing.assert_array_equal(back, _cube())
+    np.testing.assert_allclose(wl, WL)

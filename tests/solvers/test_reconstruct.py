@@ -237,3 +237,18 @@ def test_a_method_returns_a_method_output_or_the_tuple():
     finally:
         for name in ("user_typed_test", "user_wrong_test"):
             tc.solvers.METHODS.unregister(name)
+
+
+def test_labelled_and_lazy_measurements():
+    xr = pytest.importorskip("xarray")
+    da = pytest.importorskip("dask.array")
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+    g = np.asarray(p.measurement)
+    plain = tc.reconstruct(p.system, g, "lsq").cube
+    labelled = tc.reconstruct(p.system, xr.DataArray(g, dims=("x", "y")), "lsq").cube
+    assert isinstance(labelled, xr.DataArray) and labelled.dims == ("x", "y", "λ")
+    np.testing.assert_allclose(labelled["λ"].values, p.system.wavelengths)
+    assert labelled["λ"].attrs["units"] == "nm" and labelled.attrs["method"] == "lsq"
+    np.testing.assert_array_equal(labelled.values, plain)
+    lazy = tc.reconstruct(p.system, da.from_array(g, chunks=8), "lsq").cube
+    np.testing.assert_array_equal(np.asarray(lazy), plain)

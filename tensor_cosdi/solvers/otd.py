@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bases import DCT, Dense, Wavelet, block_hosvd, block_sizes, tucker_bases
+from ..validate import integer
 from . import engine
 from ._base import check_positive, register_method
 from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
@@ -296,7 +297,8 @@ def online_tucker_admm(
     :func:`tucker_admm` (``lam="auto"``, the default: :data:`LAM_SCHEDULE`;
     ``max_iter="auto"``: :data:`OTD_MAX_ITER`, 45 after
     a first-stage estimate, 60 where ``Z`` is exact and ADMM does all the
-    work); ``pan_*``: see :func:`panchromatic_estimate`;
+    work; an integer ``max_iter`` also caps the first stage's ``pan_iter``);
+    ``pan_*``: see :func:`panchromatic_estimate`;
     ``spatial_block``: see :func:`initial_bases`.  For C3SLFI, "OTD-3D" is
     this method on a 3-D system and "OTD-5D" on ``system.as_5d()``.
 
@@ -320,6 +322,9 @@ def online_tucker_admm(
     """
     if isinstance(max_iter, str) and max_iter != "auto":  # checked before the first stage runs
         raise ValueError(f"max_iter must be an integer ≥ 1 or 'auto', got {max_iter!r}")
+    if max_iter != "auto":  # a given cap bounds the first stage too
+        max_iter = integer("max_iter", max_iter, low=1)
+        pan_iter = min(integer("pan_iter", pan_iter, low=0), max_iter)
     bases, start = initial_bases(
         system,
         measurement,

@@ -265,3 +265,20 @@ def test_otd_on_the_pytorch_backend_matches_numpy():
         )
         assert isinstance(res.cube, torch.Tensor)
         np.testing.assert_allclose(tl.to_numpy(res.cube), ref, atol=1e-10 * np.abs(ref).max())
+
+
+def test_an_integer_max_iter_caps_the_first_stage_too(monkeypatch):
+    from tensor_cosdi.solvers import otd
+
+    seen = []
+    real = otd.initial_bases
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["pan_iter"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(otd, "initial_bases", spy)
+    p = studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    res = tc.reconstruct(p.system, p.measurement, "otd", max_iter=3)
+    tc.reconstruct(p.system, p.measurement, "otd")
+    assert seen == [3, 90] and len(res.history["residual"]) <= 3

@@ -28,7 +28,7 @@ def gap_tv(
     tv_weight: float = 0.3,
     accelerate: bool = True,
     tol: float = 1e-4,
-    eps: float = 1e-6,
+    eps="auto",
     tv_iter: int = 10,
     plane_support="auto",
     progress: bool = False,
@@ -37,7 +37,9 @@ def gap_tv(
 
     The projection uses the system's structured ``(εI + A Aᵀ)⁻¹`` (a division
     for diagonal ``A Aᵀ``; per-pixel blocks, banded rows or CG otherwise) with
-    ``ε = eps · s`` relative to the sensing gain ``s``.  With ``accelerate``
+    ``ε = eps · s`` relative to the sensing gain ``s`` (``eps="auto"``: the
+    system's :attr:`~tensor_cosdi.systems.System.gap_eps`, 1e-6 unless its
+    ``A Aᵀ`` has weak directions).  With ``accelerate``
     the measurement is replaced by the running ``ĝ ← ĝ + (g − A x)`` of
     accelerated GAP.  ``tv_weight`` is relative to the robust peak (99.9th
     percentile) of the first (least-norm) estimate.  Stops when the relative
@@ -54,6 +56,10 @@ def gap_tv(
     flowers, clay; SD-CASSI, TSA mask): 27.35 / 25.91 dB noiseless / 30 dB,
     against 27.24 / 25.88 at weight 0.2 and 26.29 / 25.15 at 0.1.
     """
+    if isinstance(eps, str):
+        if eps != "auto":
+            raise ValueError(f"eps must be 'auto' or a number > 0, got {eps!r}")
+        eps = getattr(system, "gap_eps", 1e-6)
     return gap_tv_operator(
         system.operator,
         measurement,

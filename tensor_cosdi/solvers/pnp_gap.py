@@ -95,8 +95,9 @@ def gap_settings(system, measurement, accelerate, eps, *, need_snr: bool = False
         accelerate = bool(snr >= ACCELERATE_ABOVE_DB)
     elif not isinstance(accelerate, bool):
         raise ValueError(f"accelerate must be True, False or 'auto', got {accelerate!r}")
-    if eps == "auto":
-        eps = 1e-6 if accelerate else snr_schedule(snr, EPS)
+    if eps == "auto":  # never below the system's own floor (an ill-conditioned A Aᵀ)
+        floor = getattr(system, "gap_eps", 1e-6)
+        eps = max(floor, 1e-6 if accelerate else snr_schedule(snr, EPS))
     return accelerate, check_positive("eps", eps), snr
 
 

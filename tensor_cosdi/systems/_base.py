@@ -104,6 +104,10 @@ class System(SystemRoles):
     axes: tuple[str, ...]
     measurement_axes: tuple[str, ...]
     panchromatic_axes: tuple[str, ...] = ("λ",)
+    #: ``ε`` of GAP's ``(AAᵀ + εI)⁻¹`` relative to the sensing gain when a method's ``eps`` is
+    #: ``"auto"``: tiny where ``A Aᵀ`` is well conditioned; a system whose ``A Aᵀ`` has weak
+    #: directions sets more, so GAP does not fit the noise along them.
+    gap_eps: float = 1e-6
     _frozen = False
 
     def _finish(self, operator: TensorOperator, *, wavelengths, axes, measurement_axes):

@@ -56,6 +56,7 @@ from tensor_cosdi.bases import KroneckerBasis
 from tensor_cosdi.io import _atomic, load_bundle, read_frame, save_bundle, write_frames
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
 from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
+from tensor_cosdi.testing import hostile_files, rgb_values
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import write_results  # noqa: E402
@@ -558,92 +559,39 @@ def harness_cases():
 def hostile_file_cases(folder: Path):
     """Files built to read data from elsewhere or to inflate past ``max_bytes``, and files whose
     content is not what it looks like."""
-    import struct
-    import zlib
-
     import h5py
-    import scipy.io
-    import scipy.sparse
-    import tifffile
 
     out = []
-    secret = folder / "secret.bin"
-    np.full(64, 7.0).tofile(secret)
-    ext = folder / "external.h5"
-    with h5py.File(ext, "w") as f:
-        f.create_dataset("cube", shape=(4, 4, 4), dtype="f8", external=[(str(secret), 0, 512)])
-    src = folder / "vds_source.h5"
-    with h5py.File(src, "w") as f:
-        f["data"] = np.ones((4, 4, 4))
-    layout = h5py.VirtualLayout(shape=(4, 4, 4), dtype="f8")
-    layout[:] = h5py.VirtualSource(str(src), "data", shape=(4, 4, 4))
-    vds = folder / "virtual.h5"
-    with h5py.File(vds, "w") as f:
-        f.create_virtual_dataset("cube", layout, fillvalue=0)
-    vds_missing = folder / "virtual_missing.h5"
-    layout2 = h5py.VirtualLayout(shape=(4, 4, 4), dtype="f8")
-    layout2[:] = h5py.VirtualSource(str(folder / "gone.h5"), "data", shape=(4, 4, 4))
-    with h5py.File(vds_missing, "w") as f:
-        f.create_virtual_dataset("cube", layout2, fillvalue=0)
-    link = folder / "extlink.h5"
-    with h5py.File(link, "w") as f:
-        f["cube"] = h5py.ExternalLink(str(src), "/data")
-    chunky = folder / "chunk_bomb.h5"
-    with h5py.File(chunky, "w") as f:
-        ds = f.create_dataset("cube", shape=(2, 2, 2), maxshape=(None,) * 3, chunks=(128,) * 3,
-                              dtype="f8", compression="gzip")  # fmt: skip
-        ds[...] = 1.0
-    npz_bomb = folder / "bomb.npz"
-    np.savez_compressed(npz_bomb, cube=np.zeros((256, 256, 8)))
-    mat_bomb = folder / "bomb.mat"
-    scipy.io.savemat(mat_bomb, {"cube": np.zeros((128, 128, 16))}, do_compression=True)
-    mat_padded = folder / "padded.mat"
-    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
-    data = zlib.compress(b"\0" * (8 << 20), 9)
-    mat_padded.write_bytes(head + struct.pack("<II", 15, len(data)) + data)
-    sparse = folder / "sparse.mat"
-    scipy.io.savemat(sparse, {"mask": scipy.sparse.eye(4, format="csc")})
-    complex_npz = folder / "complex.npz"
-    np.savez(complex_npz, cube=np.ones((4, 4, 3), complex))
-    wl_npz = folder / "wl_count.npz"
-    np.savez(wl_npz, cube=np.ones((4, 4, 4)), wavelengths=[450.0, 500.0, 550.0])
-    mixed = folder / "mixed.tif"
-    with tifffile.TiffWriter(mixed) as w:
-        for shape in ((8, 8), (8, 8), (4, 4), (8, 8)):
-            w.write(np.ones(shape, np.float32), metadata=None)
-    rgb = folder / "rgb.tif"
-    rgb_data = np.random.default_rng(0).integers(0, 255, (12, 16, 3), dtype=np.uint8)
-    tifffile.imwrite(rgb, rgb_data, photometric="rgb")
-    fifo = folder / "fifo.npy"
-    if hasattr(os, "mkfifo"):
-        os.mkfifo(fifo)
-    dev = folder / "zero.npy"
-    if os.path.exists("/dev/zero"):
-        os.symlink("/dev/zero", dev)
+    hf = hostile_files(folder)
+    rgb_data = rgb_values(0)
     mib = 1 << 20
     for name, call, words in [
-        ("HDF5 external raw storage", lambda: read_cube(ext), ("external",)),
-        ("HDF5 virtual dataset", lambda: read_cube(vds), ("virtual",)),
-        ("HDF5 virtual dataset, source missing", lambda: read_array(vds_missing), ("virtual",)),
-        ("HDF5 external link by key", lambda: read_array(link, "cube"), ("no array", "cube")),
-        ("HDF5 chunks past max_bytes", lambda: read_cube(chunky, max_bytes=mib), ("chunks",)),
-        (".npz member inflating past max_bytes", lambda: read_cube(npz_bomb, max_bytes=mib),
+        ("HDF5 external raw storage", lambda: read_cube(hf["hdf5_external"]), ("external",)),
+        ("HDF5 virtual dataset", lambda: read_cube(hf["hdf5_virtual"]), ("virtual",)),
+        ("HDF5 virtual dataset, source missing", lambda: read_array(hf["hdf5_virtual_missing"]),
+         ("virtual",)),
+        ("HDF5 external link by key", lambda: read_array(hf["hdf5_link"], "cube"),
+         ("no array", "cube")),
+        ("HDF5 chunks past max_bytes", lambda: read_cube(hf["hdf5_chunks"], max_bytes=mib),
+         ("chunks",)),
+        (".npz member inflating past max_bytes", lambda: read_cube(hf["npz_bomb"], max_bytes=mib),
          ("inflates",)),
-        ("MATLAB variable inflating past max_bytes", lambda: read_cube(mat_bomb, max_bytes=mib),
+        ("MATLAB variable inflating past max_bytes",
+         lambda: read_cube(hf["mat_bomb"], max_bytes=mib), ("inflates",)),
+        ("MATLAB element padded to 8 MiB", lambda: read_array(hf["mat_padded"], max_bytes=mib),
          ("inflates",)),
-        ("MATLAB element padded to 8 MiB", lambda: read_array(mat_padded, max_bytes=mib),
-         ("inflates",)),
-        ("MATLAB sparse matrix", lambda: read_array(sparse), ("sparse",)),
-        ("complex cube", lambda: read_cube(complex_npz), ("complex",)),
-        ("3 wavelengths for 4 bands", lambda: read_cube(wl_npz), ("wavelengths",)),
-        ("TIFF pages of two shapes", lambda: read_cube(mixed), ("series", "pages")),
-        ("a FIFO named .npy", lambda: read_array(fifo), ("file",)),
-        ("a link to /dev/zero named .npy", lambda: read_array(dev), ("file",)),
+        ("MATLAB sparse matrix", lambda: read_array(hf["mat_sparse"]), ("sparse",)),
+        ("complex cube", lambda: read_cube(hf["npz_complex"]), ("complex",)),
+        ("3 wavelengths for 4 bands", lambda: read_cube(hf["npz_wavelengths"]), ("wavelengths",)),
+        ("TIFF pages of two shapes", lambda: read_cube(hf["tiff_mixed"]), ("series", "pages")),
+    ] + [
+        (f"a {what} named .npy", lambda k=key: read_array(hf[k]), ("file",))
+        for key, what in (("fifo", "FIFO"), ("dev_zero", "link to /dev/zero")) if key in hf
     ]:  # fmt: skip
         out.append(Case("io.hostile", name, call, words))
     out.append(
         Case("io.hostile", "RGB TIFF as a (rows, columns, 3) cube",
-             lambda: bool(np.array_equal(read_cube(rgb)[0], rgb_data)), expect="same")
+             lambda: bool(np.array_equal(read_cube(hf["tiff_rgb"])[0], rgb_data)), expect="same")
     )  # fmt: skip
     # bundles: an edited document, a NaN that must never be written
     import json

@@ -28,7 +28,7 @@ from .operators import (
     weighted_sum,
 )
 
-__all__ = ["dot_test", "register", "registry", "random_tensor"]
+__all__ = ["dot_test", "register", "registry", "random_tensor", "hostile_files", "rgb_values"]
 
 
 def random_tensor(shape, *, rng=None, dtype="float64"):
@@ -224,3 +224,79 @@ def _systems():
 
 
 _builtin()
+
+
+def hostile_files(folder) -> dict:
+    """Write the files a reader must refuse (or read exactly) into ``folder``; ``name → path``.
+
+    ``hdf5_external`` (a dataset whose data is another file), ``hdf5_virtual``
+    and ``hdf5_virtual_missing`` (virtual datasets, the second's source gone),
+    ``hdf5_link`` (an external link named ``cube``), ``hdf5_chunks`` (2×2×2
+    data in 128³-element gzip chunks), ``npz_bomb`` (4 MiB of zeros in a few
+    KiB), ``mat_bomb`` (2 MiB compressed), ``mat_padded`` (an 8 MiB padded
+    compressed element), ``mat_sparse``, ``npz_complex``, ``npz_wavelengths``
+    (3 wavelengths for 4 bands), ``tiff_mixed`` (pages of two shapes),
+    ``tiff_rgb`` (a 12×16 RGB image, values ``rgb_values(0)``), and on POSIX
+    ``fifo`` (a FIFO named ``.npy``) and ``dev_zero`` (a link to ``/dev/zero``
+    named ``.npy``).  Shared by the tests and ``benchmarks/robustness.py``.
+    """
+    import os
+    import struct
+    import zlib
+    from pathlib import Path
+
+    import h5py
+    import scipy.io
+    import scipy.sparse
+    import tifffile
+
+    folder = Path(folder)
+    out = {name: folder / f"{name}{ext}" for name, ext in (
+        ("hdf5_external", ".h5"), ("hdf5_virtual", ".h5"), ("hdf5_virtual_missing", ".h5"),
+        ("hdf5_link", ".h5"), ("hdf5_chunks", ".h5"), ("npz_bomb", ".npz"),
+        ("mat_bomb", ".mat"), ("mat_padded", ".mat"), ("mat_sparse", ".mat"),
+        ("npz_complex", ".npz"), ("npz_wavelengths", ".npz"), ("tiff_mixed", ".tif"),
+        ("tiff_rgb", ".tif"),
+    )}  # fmt: skip
+    secret = folder / "secret.bin"
+    np.full(64, 7.0).tofile(secret)
+    with h5py.File(out["hdf5_external"], "w") as f:
+        f.create_dataset("cube", shape=(4, 4, 4), dtype="f8", external=[(str(secret), 0, 512)])
+    source = folder / "virtual_source.h5"
+    with h5py.File(source, "w") as f:
+        f["data"] = np.ones((4, 4, 4))
+    for name, src in (("hdf5_virtual", source), ("hdf5_virtual_missing", folder / "gone.h5")):
+        layout = h5py.VirtualLayout(shape=(4, 4, 4), dtype="f8")
+        layout[:] = h5py.VirtualSource(str(src), "data", shape=(4, 4, 4))
+        with h5py.File(out[name], "w") as f:
+            f.create_virtual_dataset("cube", layout, fillvalue=0)
+    with h5py.File(out["hdf5_link"], "w") as f:
+        f["cube"] = h5py.ExternalLink(str(source), "/data")
+    with h5py.File(out["hdf5_chunks"], "w") as f:
+        ds = f.create_dataset("cube", shape=(2, 2, 2), maxshape=(None,) * 3, chunks=(128,) * 3,
+                              dtype="f8", compression="gzip")  # fmt: skip
+        ds[...] = 1.0
+    np.savez_compressed(out["npz_bomb"], cube=np.zeros((256, 256, 8)))
+    scipy.io.savemat(out["mat_bomb"], {"cube": np.zeros((128, 128, 16))}, do_compression=True)
+    head = b"MATLAB 5.0 MAT-file".ljust(116, b" ") + b"\0" * 8 + struct.pack("<H", 0x0100) + b"IM"
+    data = zlib.compress(b"\0" * (8 << 20), 9)
+    out["mat_padded"].write_bytes(head + struct.pack("<II", 15, len(data)) + data)
+    scipy.io.savemat(out["mat_sparse"], {"mask": scipy.sparse.eye(4, format="csc")})
+    np.savez(out["npz_complex"], cube=np.ones((4, 4, 3), complex))
+    np.savez(out["npz_wavelengths"], cube=np.ones((4, 4, 4)), wavelengths=[450.0, 500.0, 550.0])
+    with tifffile.TiffWriter(out["tiff_mixed"]) as w:
+        for shape in ((8, 8), (8, 8), (4, 4), (8, 8)):
+            w.write(np.ones(shape, np.float32), metadata=None)
+    tifffile.imwrite(out["tiff_rgb"], rgb_values(0), photometric="rgb")
+    if hasattr(os, "mkfifo"):
+        out["fifo"] = folder / "fifo.npy"
+        os.mkfifo(out["fifo"])
+    if os.path.exists("/dev/zero"):
+        out["dev_zero"] = folder / "zero.npy"
+        os.symlink("/dev/zero", out["dev_zero"])
+    return out
+
+
+def rgb_values(seed: int = 0) -> np.ndarray:
+    """The 12×16×3 ``uint8`` image :func:`hostile_files` writes as ``tiff_rgb``."""
+    return np.random.default_rng(seed).integers(0, 255, (12, 16, 3), dtype=np.uint8)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import inspect
 import logging
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple
 
@@ -118,6 +119,10 @@ class Method:
     requires: tuple = ()
     systems: tuple = ()
     needs: dict = field(default_factory=dict)
+    #: Whether it solves with ``(μI + A Aᵀ)`` of the whole system (GAP, ADMM x-steps, least
+    #: squares): on a system without a cheap structure for it (PSFs) that is conjugate
+    #: gradients, and :func:`reconstruct` warns.
+    solves: bool = True
 
     def applies_to(self, system_name: str) -> bool:
         """Whether this method reconstructs the imager registered as ``system_name``."""
@@ -170,6 +175,7 @@ def register_method(
     requires: tuple = (),
     systems: tuple = (),
     needs: dict | None = None,
+    solves: bool = True,
 ) -> None:
     """Register ``func(system, measurement, **options) -> MethodOutput`` (or the tuple
     ``(cube, history, converged[, depth])``).
@@ -179,7 +185,7 @@ def register_method(
     every method of the library is registered, so that a default is written
     once); anything else passed to :func:`reconstruct` is an error.  A name
     that is taken needs ``replace=True``; the library's own methods cannot be
-    replaced.  ``systems`` and ``needs``: see :class:`Method`.
+    replaced.  ``systems``, ``needs`` and ``solves``: see :class:`Method`.
     """
     if not callable(func):
         raise ValueError(f"a method must be callable, got {func!r}")
@@ -190,7 +196,7 @@ def register_method(
         name,
         Method(
             func, dict(defaults), summary, name, tuple(requires), tuple(systems),
-            dict(needs or {}),
+            dict(needs or {}), bool(solves),
         ),  # fmt: skip
         replace=replace,
         builtin=builtin,
@@ -248,6 +254,28 @@ def _as_data_array(cube, system, method: str):
     )  # fmt: skip
 
 
+class SlowSolveWarning(UserWarning):
+    """The method will solve with ``(μI + A Aᵀ)`` by conjugate gradients (no cheap structure)."""
+
+
+def _warn_if_solves_are_slow(system, method: str) -> None:
+    op = system.operator
+    if op.gram_dual() is not None or (op.shape[0] > op.shape[1] and op.T.gram_dual() is not None):
+        return
+    probe = B.tensor_like(np.ones(op.output_shape), B.as_tensor(np.zeros(1)))
+    t0 = time.perf_counter()
+    op._forward(op._adjoint(probe))
+    product = time.perf_counter() - t0
+    closed = [n for n in methods(system) if not METHODS[n].solves]
+    warnings.warn(
+        f"{type(system).__name__}: (μI + A Aᵀ) has no cheap structure here (PSFs), so {method!r} "
+        f"solves it by conjugate gradients, tens of A Aᵀ products per solve (one took "
+        f"{product:.2g} s); in closed form: {', '.join(closed) or 'none'}",
+        SlowSolveWarning,
+        stacklevel=3,
+    )
+
+
 def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     """Reconstruct a cube from ``measurement`` of ``system`` with a registered ``method``.
 
@@ -291,6 +319,8 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
         if options.get(opt) is None:
             raise ValueError(f"method {method!r} needs {opt}=: {what}")
     option_types(f"method {method!r}", options, entry.defaults)
+    if entry.solves:
+        _warn_if_solves_are_slow(system, method)
     opts = {**entry.defaults, **options}
     labelled = _is_data_array(measurement)
     if labelled:  # an xarray.DataArray: its values, and the cube comes back labelled

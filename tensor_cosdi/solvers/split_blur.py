@@ -164,4 +164,5 @@ register_method(
     summary="ADMM-TV for CASSDI-DFA with PSFs, the blur split off: every step closed form "
     "(SPEC §4)",
     systems=("cassdi_dfa",),
+    solves=False,
 )

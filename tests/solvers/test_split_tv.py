@@ -68,3 +68,15 @@ def test_split_tv_refuses_what_it_cannot_split():
     sweep = CASSDIDFA(g.random((8, 8, 2)), n_bands=2, psfs=g.random((3, 3, 2, 2, 2)))
     with pytest.raises(ValueError, match="with a focal sweep"):
         tc.reconstruct(sweep, sweep.forward(np.ones(sweep.cube_shape)), "split_tv")
+
+
+def test_methods_that_would_solve_by_cg_warn_and_name_the_closed_form():
+    system, _, g = problem(n=16, nl=3, size=7)
+    with pytest.warns(tc.solvers.SlowSolveWarning, match="'lsq' solves it by conjugate gradients"
+                      ".*in closed form: split_tv"):  # fmt: skip
+        tc.reconstruct(system, g, "lsq")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", tc.solvers.SlowSolveWarning)
+        tc.reconstruct(system, g, "split_tv", max_iter=2)

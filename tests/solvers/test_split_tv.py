@@ -59,7 +59,7 @@ def test_split_tv_does_not_depend_on_the_measurement_units():
 
 def test_split_tv_refuses_what_it_cannot_split():
     sd = tc.systems.SDCASSI.example()
-    with pytest.raises(ValueError, match="CASSDIDFA with 4-D PSFs"):
+    with pytest.raises(ValueError, match="'split_tv' reconstructs cassdi_dfa systems, got SDCASSI"):
         tc.reconstruct(sd, sd.forward(np.ones(sd.cube_shape)), "split_tv")
     plain = CASSDIDFA.example()
     with pytest.raises(ValueError, match="without PSFs use 'gap_tv' or 'otd'"):

@@ -237,20 +237,27 @@ class _TiffComplaints:
 def _entries_tiff(path, max_bytes=MAX_ARRAY_BYTES):
     import tifffile
 
+    key = None
     with _TiffComplaints(), tifffile.TiffFile(path) as t:
         n_pages = len(t.pages)
         series = t.series[0]
-        if len(t.series) != 1 or len(series.pages) != n_pages:
+        same = {(tuple(s.shape), s.dtype, len(s.pages)) for s in t.series}
+        if len(t.series) > 1 and len(same) == 1 and series.ndim == 2 and len(series.pages) == 1:
+            # one 2-D page per series (pages appended one by one): the pages are the stack
+            shape, dtype = (len(t.series), *series.shape), series.dtype
+            axes, key = "QYX", slice(None)
+        elif len(t.series) != 1 or len(series.pages) != n_pages:
             shapes = ", ".join(str(tuple(s.shape)) for s in t.series)
             raise Refused(
                 f"{path}: {n_pages} pages in {len(t.series)} image series of shapes {shapes}; "
                 "expected one series (one page per band, all of one shape and type)"
             )
-        shape, dtype, axes = tuple(series.shape), series.dtype, series.axes
+        else:
+            shape, dtype, axes = tuple(series.shape), series.dtype, series.axes
 
     def load():
         with _TiffComplaints():
-            return tifffile.imread(path)
+            return tifffile.imread(path) if key is None else tifffile.imread(path, key=key)
 
     load.axes = axes  # tifffile's axis codes: "YXS" is one RGB(A) page, "QYX"/"IYX" pages
     return {"array": (shape, dtype, load)}

@@ -163,3 +163,14 @@ def test_an_npz_bundle_is_bounded_too(tmp_path):
     path = save_bundle(tmp_path / "b.npz", system=system, cube=np.zeros(system.cube_shape))
     with pytest.raises(ValueError, match="inflates to .* above the 1000-byte limit"):
         load_bundle(path, max_bytes=1000)
+
+
+def test_a_tiff_of_pages_appended_one_by_one_is_one_stack(tmp_path):
+    import tifffile
+
+    path = tmp_path / "appended.tif"
+    for band in range(4):
+        tifffile.imwrite(path, np.full((8, 8), band, np.float32), append=True)
+    cube, _ = read_cube(path)
+    assert cube.shape == (8, 8, 4)
+    np.testing.assert_array_equal(cube[0, 0], [0, 1, 2, 3])  # not the first page alone

@@ -52,7 +52,9 @@ def test_option_types_follows_the_defaults():
 def test_every_method_door_refuses_a_boolean_for_a_number():
     p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(8, 8), n_bands=4)
     checked = 0
-    for name in tc.solvers.methods():
+    for name in tc.solvers.methods(p.system):  # the imager check comes first
+        if tc.solvers.METHODS[name].needs:
+            continue  # a missing needed option is named first
         numeric = [
             k for k, v in tc.solvers.METHODS[name].defaults.items()
             if isinstance(v, float) and not isinstance(v, bool)
@@ -62,7 +64,7 @@ def test_every_method_door_refuses_a_boolean_for_a_number():
         with pytest.raises(ValueError, match=f"method '{name}': option {numeric[0]} must be"):
             tc.reconstruct(p.system, p.measurement, name, **{numeric[0]: True})
         checked += 1
-    assert checked >= 10
+    assert checked >= 6  # every method for SD-CASSI with a float option
 
 
 def test_denoisers_and_plans_validate_too():

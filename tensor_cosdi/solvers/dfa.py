@@ -166,4 +166,5 @@ register_method(
     summary="multiresolution CASSDI-DFA (thesis Alg. 2-4): grayscale, focal stack, spectral; "
     "depth map",
     systems=("cassdi_dfa",),
+    solves=False,  # FISTA stages; one decimated solve for the start
 )

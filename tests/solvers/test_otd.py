@@ -225,7 +225,7 @@ def test_progress_bar_on_request(capsys):
         ({"mu": True}, "option mu must be a finite number, got True"),
         ({"progress": "yes"}, "option progress must be True or False"),
         ({"max_iter": 0}, "max_iter must be an integer ≥ 1"),
-        ({"update_every": 1.5}, "update_every must be an integer ≥ 0"),
+        ({"update_every": 1.5}, "option update_every must be an integer, got 1.5"),
         ({"beta": -0.1}, "beta must be a finite number ≥ 0"),
         ({"spatial": "fft"}, "spatial must be one of"),
         ({"pan_iter": -1}, "pan_iter must be an integer ≥ 0"),
@@ -264,7 +264,8 @@ def test_otd_on_the_pytorch_backend_matches_numpy():
             p.system, tl.tensor(p.measurement, dtype=torch.float64), "otd", max_iter=8
         )
         assert isinstance(res.cube, torch.Tensor)
-        np.testing.assert_allclose(tl.to_numpy(res.cube), ref, atol=1e-10 * np.abs(ref).max())
+        # round-off only: 8 first-stage and 8 ADMM iterations amplify it to ~1e-9 of the peak
+        np.testing.assert_allclose(tl.to_numpy(res.cube), ref, atol=1e-8 * np.abs(ref).max())
 
 
 def test_an_integer_max_iter_caps_the_first_stage_too(monkeypatch):

@@ -56,7 +56,7 @@ from tensor_cosdi.bases import KroneckerBasis
 from tensor_cosdi.io import _atomic, load_bundle, read_frame, save_bundle, write_frames
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
 from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
-from tensor_cosdi.testing import hostile_files, rgb_values
+from tensor_cosdi.testing import edit_bundle_document, hostile_files, rgb_values
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import write_results  # noqa: E402
@@ -559,7 +559,6 @@ def harness_cases():
 def hostile_file_cases(folder: Path):
     """Files built to read data from elsewhere or to inflate past ``max_bytes``, and files whose
     content is not what it looks like."""
-    import h5py
 
     out = []
     hf = hostile_files(folder)
@@ -594,25 +593,13 @@ def hostile_file_cases(folder: Path):
              lambda: bool(np.array_equal(read_cube(hf["tiff_rgb"])[0], rgb_data)), expect="same")
     )  # fmt: skip
     # bundles: an edited document, a NaN that must never be written
-    import json
 
     sd = tc.systems.SDCASSI((np.arange(36).reshape(6, 6) % 2).astype(float), n_bands=3)
     for suffix in (".npz", ".h5"):
         path = save_bundle(folder / f"doc{suffix}", system=sd,
                            measurement=np.ones(sd.measurement_shape))  # fmt: skip
-        if suffix == ".npz":
-            with np.load(path) as z:
-                d = {k: z[k] for k in z.files}
-            doc = json.loads(str(d["__bundle__"]))
-            doc["system"]["shifts"] = 2
-            d["__bundle__"] = np.array(json.dumps(doc))
-            path.unlink()
-            np.savez(path, **d)
-        else:
-            with h5py.File(path, "r+") as f:
-                doc = json.loads(f.attrs["tensor_cosdi_bundle"])
-                doc["metadata"] = {"exposure_ms": 1}
-                f.attrs["tensor_cosdi_bundle"] = json.dumps(doc)
+        change = {"system.shifts": 2} if suffix == ".npz" else {"metadata": {"exposure_ms": 1}}
+        edit_bundle_document(path, lambda doc, c=change: _apply(doc, c))
         out.append(Case("io.hostile", f"bundle {suffix} with an edited document",
                         lambda p=path: load_bundle(p), ("sha-256", "document")))  # fmt: skip
     nan_g = np.ones(sd.measurement_shape)
@@ -621,6 +608,16 @@ def hostile_file_cases(folder: Path):
                     lambda: save_bundle(folder / "nan.npz", system=sd, measurement=nan_g),
                     ("nan",)))  # fmt: skip
     return out
+
+
+def _apply(doc: dict, change: dict) -> None:
+    """Set ``doc["a"]["b"] = v`` for each ``"a.b": v`` of ``change``."""
+    for key, value in change.items():
+        *parents, last = key.split(".")
+        node = doc
+        for p in parents:
+            node = node[p]
+        node[last] = value
 
 
 def option_cases():

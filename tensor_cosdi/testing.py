@@ -28,7 +28,15 @@ from .operators import (
     weighted_sum,
 )
 
-__all__ = ["dot_test", "register", "registry", "random_tensor", "hostile_files", "rgb_values"]
+__all__ = [
+    "dot_test",
+    "register",
+    "registry",
+    "random_tensor",
+    "hostile_files",
+    "rgb_values",
+    "edit_bundle_document",
+]
 
 
 def random_tensor(shape, *, rng=None, dtype="float64"):
@@ -300,3 +308,28 @@ def hostile_files(folder) -> dict:
 def rgb_values(seed: int = 0) -> np.ndarray:
     """The 12×16×3 ``uint8`` image :func:`hostile_files` writes as ``tiff_rgb``."""
     return np.random.default_rng(seed).integers(0, 255, (12, 16, 3), dtype=np.uint8)
+
+
+def edit_bundle_document(path, edit) -> None:
+    """Change a saved bundle's JSON document in place, as a hand edit would: ``edit(doc)``
+    mutates the parsed document of the ``.npz`` or HDF5 bundle at ``path`` (its checksums are
+    left as they were, so :func:`tensor_cosdi.io.load_bundle` must notice)."""
+    import json
+    from pathlib import Path
+
+    import h5py
+
+    path = Path(path)
+    if path.suffix.lower() == ".npz":
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+        doc = json.loads(str(data["__bundle__"]))
+        edit(doc)
+        data["__bundle__"] = np.array(json.dumps(doc))
+        path.unlink()
+        np.savez(path, **data)
+    else:
+        with h5py.File(path, "r+") as f:
+            doc = json.loads(f.attrs["tensor_cosdi_bundle"])
+            edit(doc)
+            f.attrs["tensor_cosdi_bundle"] = json.dumps(doc)

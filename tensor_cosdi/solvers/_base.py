@@ -270,7 +270,7 @@ def _warn_if_solves_are_slow(system, method: str) -> None:
     warnings.warn(
         f"{type(system).__name__}: (μI + A Aᵀ) has no cheap structure here (PSFs), so {method!r} "
         f"solves it by conjugate gradients, tens of A Aᵀ products per solve (one took "
-        f"{product:.2g} s); in closed form: {', '.join(closed) or 'none'}",
+        f"{product:.2g} s); methods without such solves: {', '.join(closed) or 'none'}",
         SlowSolveWarning,
         stacklevel=3,
     )

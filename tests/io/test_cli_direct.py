@@ -223,18 +223,18 @@ def test_damaged_inputs_never_show_a_traceback_or_advise_unpickling(files, capsy
 
 def test_wavelengths_as_a_list_a_name_or_a_file(files, tmp_path):
     from tensor_cosdi import datasets
-    from tensor_cosdi._cli_files import _wavelength_range
+    from tensor_cosdi.cli.files import parse_wavelengths
 
-    np.testing.assert_allclose(_wavelength_range("kaist", 28), datasets.KAIST_WAVELENGTHS)
-    np.testing.assert_allclose(_wavelength_range("450, 500,550", 3), [450, 500, 550])
+    np.testing.assert_allclose(parse_wavelengths("kaist", 28), datasets.KAIST_WAVELENGTHS)
+    np.testing.assert_allclose(parse_wavelengths("450, 500,550", 3), [450, 500, 550])
     np.savetxt(tmp_path / "wl.txt", [460.0, 520.0])
-    np.testing.assert_allclose(_wavelength_range(str(tmp_path / "wl.txt"), 2), [460, 520])
+    np.testing.assert_allclose(parse_wavelengths(str(tmp_path / "wl.txt"), 2), [460, 520])
     with pytest.raises(ValueError, match="gives 28 band centres for 8 bands"):
-        _wavelength_range("kaist", 8)
+        parse_wavelengths("kaist", 8)
     with pytest.raises(ValueError, match="micrometres"):
-        _wavelength_range("0.45:0.65", 8)
+        parse_wavelengths("0.45:0.65", 8)
     with pytest.raises(ValueError, match="START:STOP"):
-        _wavelength_range("blue", 8)
+        parse_wavelengths("blue", 8)
     d, _ = files
     args = _args(d, "kaist.h5")
     args[args.index("--wavelengths") + 1] = ",".join(str(450 + 25 * i) for i in range(8))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from ._cli_util import _positive_int
+from .util import _positive_int
 
 
 def _training_options(p, *, steps: int, batch: int):
@@ -25,7 +25,7 @@ def _training_options(p, *, steps: int, batch: int):
 
 
 def _run_training(args, train, cfg) -> int:
-    from .learn import require_torch
+    from ..learn import require_torch
 
     torch = require_torch()
     if args.threads:
@@ -52,7 +52,7 @@ def _run_training(args, train, cfg) -> int:
 
 
 def run_train_denoiser(args) -> int:
-    from .learn.train import TrainConfig, train_denoiser
+    from ..learn.train import TrainConfig, train_denoiser
 
     cfg = TrainConfig(
         steps=args.steps,
@@ -66,7 +66,7 @@ def run_train_denoiser(args) -> int:
 
 
 def run_train_dcosnet(args) -> int:
-    from .learn.dcosnet_train import DCoSNetConfig, train_dcosnet
+    from ..learn.dcosnet_train import DCoSNetConfig, train_dcosnet
 
     cfg = DCoSNetConfig(
         system=args.system,

@@ -1,6 +1,10 @@
-"""The ``tensor-cosdi`` command line.
+"""The ``tensor-cosdi`` command line: this module builds the parser and runs
+``plan``, ``acquire`` and the bundle path of ``reconstruct``; :mod:`.files`
+holds the direct ``reconstruct`` path, ``preview`` and ``info``,
+:mod:`.train` the training commands, :mod:`.demo` the demo, :mod:`.util` the
+argument helpers.
 
-Sub-commands so far:
+Sub-commands:
 
 ``demo``
     The five imagers of the thesis (CASSI-VSI, CASSDI-DFA, C3SLFI, CS2LI,
@@ -39,10 +43,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.triggers import LockedError
+from .demo import demo_cases, run_demo
+from .files import _reconstruct_direct, run_info, run_preview
+from .train import _training_options, run_train_dcosnet, run_train_denoiser
+from .util import _method_defaults, _option_value, _positive_int, run_metadata
+
 __all__ = ["main", "build_parser"]
 
 
-from .demo import demo_cases, run_demo  # noqa: E402  (the demo sub-command)
 
 
 def __getattr__(name):
@@ -52,7 +61,7 @@ def __getattr__(name):
 
 
 def run_plan(args) -> int:
-    from .io import AcquisitionPlan
+    from ..io import AcquisitionPlan
 
     if args.kind == "snapshots":
         plan = AcquisitionPlan.snapshots(args.count, suffix=args.suffix)
@@ -83,7 +92,7 @@ def run_plan(args) -> int:
 
 
 def run_acquire(args) -> int:
-    from .io import Acquisition, AcquisitionPlan, DeviceError, FolderCamera, SerialDevice
+    from ..io import Acquisition, AcquisitionPlan, DeviceError, FolderCamera, SerialDevice
 
     plan = AcquisitionPlan.load(args.plan)
     camera = FolderCamera(args.frames_dir, timeout=args.frame_timeout)
@@ -118,9 +127,9 @@ def run_reconstruct(args) -> int:
             "reconstruct needs --system, --mask and --measurement (direct path) or a calibration "
             "bundle and frames"
         )
-    from . import reconstruct
-    from .colour import reflectance
-    from .io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
+    from .. import reconstruct
+    from ..colour import reflectance
+    from ..io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
 
     defaults = _method_defaults(args.method)  # an unknown method fails before any file is read
     out = Path(args.out)
@@ -186,16 +195,13 @@ def run_reconstruct(args) -> int:
     return 0
 
 
-from ._cli_files import _reconstruct_direct, run_info, run_preview  # noqa: E402
-from ._cli_train import _training_options, run_train_dcosnet, run_train_denoiser  # noqa: E402
-from ._cli_util import _method_defaults, _option_value, _positive_int, run_metadata  # noqa: E402
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tensor-cosdi", description="Compressive spectral and spectral-depth imaging"
     )
-    from . import __version__
+    from .. import __version__
 
     parser.add_argument("--version", action="version", version=f"tensor-cosdi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -275,8 +281,8 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "frames", nargs="*", help="frame files or a folder, in the system's frame order"
     )
-    from .solvers import methods
-    from .systems import REGISTRY
+    from ..solvers import methods
+    from ..systems import REGISTRY
 
     rec.add_argument(
         "--system", help=f"direct path: the imager, one of {', '.join(REGISTRY.names())}"
@@ -299,7 +305,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--out", required=True, help="bundle to write: .h5 (HDF5) or .npz (bundle path: .npz)"
     )
-    from .solvers import METHODS
+    from ..solvers import METHODS
 
     listed = ", ".join(
         f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n
@@ -398,7 +404,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-from .io.triggers import LockedError  # noqa: E402  (an expected error, reported like the others)
 
 
 def main(argv=None) -> int:

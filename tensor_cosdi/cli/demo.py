@@ -19,7 +19,7 @@ __all__ = ["run_demo", "demo_cases", "DEMO_METHODS"]
 def demo_cases():
     """``(system, scene, options)`` of every registered system with a ``demo_scene`` (registry
     order)."""
-    from .systems import REGISTRY
+    from ..systems import REGISTRY
 
     return tuple(
         (name, cls.demo_scene, dict(cls.demo_options))
@@ -47,7 +47,7 @@ def _measurement_image(g: np.ndarray) -> np.ndarray:
 
 
 def _has_depth(system: str) -> bool:
-    from .systems import REGISTRY
+    from ..systems import REGISTRY
 
     return REGISTRY[system].has_depth
 
@@ -77,8 +77,8 @@ def _compare_figure(problem, results, title):
     any; returns the figure."""
     import matplotlib.pyplot as plt
 
-    from . import plot
-    from .studies import spectral_view
+    from .. import plot
+    from ..studies import spectral_view
 
     truth = spectral_view(problem, problem.cube)
     ests = {r["method"]: spectral_view(problem, r["result"].cube) for r in results}
@@ -131,7 +131,7 @@ def _depth_image(truth, est, is_phase: bool) -> np.ndarray:
     t = np.asarray(truth, dtype=np.float64)
     e = np.asarray(est, dtype=np.float64)
     if is_phase:
-        from .depth import wrap
+        from ..depth import wrap
 
         t, e, lo, hi = wrap(t[..., 0]), e[..., 0], -np.pi, np.pi
     else:
@@ -144,9 +144,9 @@ def run_demo(args) -> int:
     from skimage import io
     from tqdm import tqdm
 
-    from .colour import to_srgb
-    from .io import atomic_write
-    from .studies import compare, make_problem, score_depth, spectral_view
+    from ..colour import to_srgb
+    from ..io import atomic_write
+    from ..studies import compare, make_problem, score_depth, spectral_view
 
     if args.size % 4:
         raise ValueError(

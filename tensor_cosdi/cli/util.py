@@ -18,7 +18,7 @@ def _option_value(text: str):
 
 
 def _method_defaults(name):
-    from .solvers import METHODS
+    from ..solvers import METHODS
 
     return METHODS[name].defaults  # an unknown name is an error listing the registered ones
 

@@ -8,17 +8,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ._cli_util import _method_defaults, run_metadata
+from .util import _method_defaults, run_metadata
 
 
-def _wavelength_range(text: str, n: int) -> np.ndarray:
+def parse_wavelengths(text: str, n: int) -> np.ndarray:
     """``--wavelengths`` → ``n`` band centres in nm, checked.
 
     ``START:STOP`` (evenly spaced), a comma-separated list of ``n`` values,
     ``kaist`` (the 28 KAIST band centres, :data:`tensor_cosdi.datasets.KAIST_WAVELENGTHS`)
     or a text / ``.npy`` file of ``n`` values.
     """
-    from ._units import check_wavelengths_nm
+    from .._units import check_wavelengths_nm
 
     text = str(text).strip()
     what = (
@@ -26,7 +26,7 @@ def _wavelength_range(text: str, n: int) -> np.ndarray:
         f"values; got {text!r}"
     )
     if text.lower() == "kaist":
-        from .datasets import KAIST_WAVELENGTHS
+        from ..datasets import KAIST_WAVELENGTHS
 
         wl = np.asarray(KAIST_WAVELENGTHS, dtype=np.float64)
     elif ":" in text and "," not in text and not Path(text).is_file():
@@ -59,7 +59,7 @@ def _wavelength_range(text: str, n: int) -> np.ndarray:
 def _system_from_args(args, code):
     import inspect
 
-    from .systems import REGISTRY
+    from ..systems import REGISTRY
 
     cls = REGISTRY[args.system]  # an unknown name lists the registered ones
     params = inspect.signature(cls.__init__).parameters
@@ -68,7 +68,7 @@ def _system_from_args(args, code):
     if args.wavelengths:
         if args.bands is None:
             raise ValueError("--wavelengths needs --bands")
-        named["wavelengths"] = _wavelength_range(args.wavelengths, args.bands)
+        named["wavelengths"] = parse_wavelengths(args.wavelengths, args.bands)
     for k, v in named.items():
         if v is not None:
             if k not in params:
@@ -95,9 +95,9 @@ def _system_from_args(args, code):
 
 
 def _reconstruct_direct(args) -> int:
-    from . import reconstruct
-    from .io import read_array, save_bundle
-    from .io.files import split_key
+    from .. import reconstruct
+    from ..io import read_array, save_bundle
+    from ..io.files import split_key
 
     for name in ("system", "mask", "measurement"):
         if getattr(args, name) is None:
@@ -154,8 +154,8 @@ def _reconstruct_direct(args) -> int:
 
 
 def _cube_and_wavelengths(spec, wavelengths):
-    from .io import files, load_bundle
-    from .io.bundle import bundle_document
+    from ..io import files, load_bundle
+    from ..io.bundle import bundle_document
 
     path, key = files.split_key(spec)
     p = Path(path)
@@ -171,7 +171,7 @@ def _cube_and_wavelengths(spec, wavelengths):
     else:
         cube, wl = files.read_cube(p, key)
     if wavelengths:
-        wl = _wavelength_range(wavelengths, cube.shape[2])
+        wl = parse_wavelengths(wavelengths, cube.shape[2])
     if wl is None:
         raise ValueError(
             f"{p} holds no wavelengths; pass --wavelengths START:STOP, a list or a file (nm)"
@@ -185,8 +185,8 @@ def run_preview(args) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from . import plot
-    from .io import atomic_write
+    from .. import plot
+    from ..io import atomic_write
 
     path, cube, wl = _cube_and_wavelengths(args.file, args.wavelengths)
     out = Path(args.out) if args.out else path.with_name(path.stem + "_preview.png")
@@ -217,8 +217,8 @@ def run_preview(args) -> int:
 def run_info(args) -> int:
     import json
 
-    from .io import files
-    from .io.bundle import bundle_document
+    from ..io import files
+    from ..io.bundle import bundle_document
 
     path = Path(args.file)
     suffix = files._suffix(path)
@@ -246,7 +246,7 @@ def run_info(args) -> int:
         if system:
             print(f"  system: {system.get('class')} {system.get('params')}")
             try:
-                from .io import load_bundle
+                from ..io import load_bundle
 
                 built = load_bundle(path).system
             except (ValueError, KeyError, OSError) as e:

@@ -86,6 +86,8 @@ def _check_mat_inflation(path, max_bytes):
     limit = max_bytes + HEADER_SLACK_BYTES
     with open(path, "rb") as f:
         head = f.read(128)
+        if len(head) < 128 or head[126:128] not in (b"IM", b"MI"):
+            return  # not a version-5 file (version 4 has no compressed elements)
         order = "<" if head[126:128] == b"IM" else ">"
         while True:
             tag = f.read(8)

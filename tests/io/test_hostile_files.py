@@ -164,3 +164,10 @@ def test_a_tiff_of_pages_appended_one_by_one_is_one_stack(tmp_path):
     cube, _ = read_cube(path)
     assert cube.shape == (8, 8, 4)
     np.testing.assert_array_equal(cube[0, 0], [0, 1, 2, 3])  # not the first page alone
+
+
+def test_a_matlab_v4_file_still_reads(tmp_path):
+    import scipy.io
+
+    scipy.io.savemat(tmp_path / "v4.mat", {"mask": np.eye(3)}, format="4")
+    np.testing.assert_array_equal(read_array(tmp_path / "v4.mat", "mask"), np.eye(3))

@@ -47,7 +47,7 @@ from ..io.triggers import LockedError
 from .demo import demo_cases, run_demo
 from .files import _reconstruct_direct, run_info, run_preview
 from .train import _training_options, run_train_dcosnet, run_train_denoiser
-from .util import _method_defaults, _option_value, _positive_int, run_metadata
+from .util import _method_defaults, _option_value, _positive_int, done_line, run_metadata
 
 __all__ = ["main", "build_parser"]
 
@@ -186,12 +186,7 @@ def run_reconstruct(args) -> int:
         overwrite=args.force,
         metadata=run_metadata(args, res, seconds, roi=args.roi, binning=args.binning),
     )
-    print(
-        f"{type(cal.system).__name__} {tuple(cal.system.cube_shape)} reconstructed with "
-        f"{args.method} in "
-        f"{seconds:.1f} s ({res.iterations} iterations, residual "
-        f"{res.history['residual'][-1]:.3g}); written to {out}"
-    )
+    print(done_line(cal.system, args.method, res, seconds, out))
     return 0
 
 

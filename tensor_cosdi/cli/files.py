@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .util import _method_defaults, run_metadata
+from .util import _method_defaults, done_line, run_metadata
 
 
 def parse_wavelengths(text: str, n: int) -> np.ndarray:
@@ -145,11 +145,7 @@ def _reconstruct_direct(args) -> int:
         overwrite=args.force,
         metadata=run_metadata(args, res, seconds, mask=args.mask, measurement=args.measurement),
     )
-    print(
-        f"{type(system).__name__} {tuple(system.cube_shape)} reconstructed with {args.method} in "
-        f"{seconds:.1f} s ({res.iterations} iterations, residual "
-        f"{res.history['residual'][-1]:.3g}); written to {out}"
-    )
+    print(done_line(system, args.method, res, seconds, out))
     return 0
 
 

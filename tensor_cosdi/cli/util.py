@@ -52,3 +52,12 @@ def run_metadata(args, res, seconds, **extra) -> dict:
         "iterations": res.iterations,
         **extra,
     }
+
+
+def done_line(system, method: str, res, seconds: float, out) -> str:
+    """The line ``reconstruct`` prints when it has written its bundle."""
+    return (
+        f"{type(system).__name__} {tuple(system.cube_shape)} reconstructed with {method} in "
+        f"{seconds:.1f} s ({res.iterations} iterations, residual "
+        f"{res.history['residual'][-1]:.3g}); written to {out}"
+    )

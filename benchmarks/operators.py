@@ -87,12 +87,12 @@ def main(argv=None):
 
     def unfused_forward(x):
         for f in reversed(op.factors):
-            x = f._forward(x)
+            x = f.apply(x)
         return x
 
     def unfused_adjoint(v):
         for f in op.factors:
-            v = f._adjoint(v)
+            v = f.apply_adjoint(v)
         return v
 
     rows = []
@@ -101,9 +101,9 @@ def main(argv=None):
         t_copy = median_seconds(lambda: np.copy(cube, order="K"), r)
         entries = [
             ("forward (checked)", lambda: op.forward(cube)),
-            ("forward (kernel)", lambda: op._forward(cube)),
+            ("forward (kernel)", lambda: op.apply(cube)),
             ("adjoint (checked)", lambda: op.adjoint(y)),
-            ("adjoint (kernel)", lambda: op._adjoint(y)),
+            ("adjoint (kernel)", lambda: op.apply_adjoint(y)),
             ("forward, unfused factors", lambda: unfused_forward(cube)),
             ("adjoint, unfused factors", lambda: unfused_adjoint(y)),
         ]

@@ -1,6 +1,13 @@
-"""Shared fixtures: TensorLy backends × dtypes, seeded generators."""
+"""Shared fixtures: TensorLy backends × dtypes, seeded generators; the report header names the
+package under test (installed or the source tree) and whether PyTorch is there.
+
+With ``TENSOR_COSDI_CI=1`` (set by ``.ci/run``) the run refuses to start unless it tests the
+*installed* package (not the checkout's ``tensor_cosdi/``) with PyTorch importable, so that CI
+tests what a user installs and skips none of the learned parts."""
 
 import importlib.util
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +24,38 @@ settings.register_profile(
 settings.load_profile("tensor_cosdi")
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
+SOURCE_TREE = Path(__file__).resolve().parents[1] / "tensor_cosdi"
+
+
+def package_under_test() -> tuple[Path, bool]:
+    """Where ``import tensor_cosdi`` finds the package, and whether that is the source tree."""
+    import tensor_cosdi
+
+    where = Path(tensor_cosdi.__file__).resolve().parent
+    return where, where == SOURCE_TREE.resolve()
+
+
+def pytest_report_header(config):
+    where, source = package_under_test()
+    kind = "the source tree (editable or not installed)" if source else "installed"
+    torch = "PyTorch present" if HAS_TORCH else "PyTorch absent: the learned and torch tests skip"
+    return [f"tensor_cosdi under test: {where} ({kind}); {torch}"]
+
+
+def pytest_configure(config):
+    if os.environ.get("TENSOR_COSDI_CI") != "1":
+        return
+    where, source = package_under_test()
+    if source:
+        raise pytest.UsageError(
+            f"TENSOR_COSDI_CI=1: the tests import tensor_cosdi from the source tree ({where}); "
+            "install it (pip install .) and run the pytest command, not python -m pytest"
+        )
+    if not HAS_TORCH:
+        raise pytest.UsageError(
+            "TENSOR_COSDI_CI=1: PyTorch is not installed, so the learned tests would skip; "
+            "install torch==2.13.0 first"
+        )
 
 BACKENDS = [
     pytest.param(("numpy", "float64"), id="numpy-float64"),

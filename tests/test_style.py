@@ -148,3 +148,75 @@ def test_the_private_import_finder_finds_one(tmp_path):
 def test_no_sub_package_imports_another_ones_private_module():
     found = private_imports(import_graph(ROOT / "tensor_cosdi", "tensor_cosdi"), "tensor_cosdi")
     assert found == [], "private modules imported from outside: " + "; ".join(found)
+
+
+def private_members(package_dir: Path) -> dict[str, set[str]]:
+    """``_name → {sub-packages whose classes define it}`` (methods and class attributes with one
+    leading underscore; a root module counts as its own sub-package)."""
+    found: dict[str, set[str]] = {}
+    for p in package_dir.rglob("*.py"):
+        rel = p.relative_to(package_dir).parts
+        sub = rel[0] if len(rel) > 1 else rel[0].removesuffix(".py")
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            for item in node.body:
+                if isinstance(item, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    names = [item.name]
+                elif isinstance(item, ast.Assign):
+                    names = [t.id for t in item.targets if isinstance(t, ast.Name)]
+                else:
+                    names = []
+                for n in names:
+                    if n.startswith("_") and not n.endswith("__"):
+                        found.setdefault(n, set()).add(sub)
+    return found
+
+
+def private_calls(path: Path, members: dict[str, set[str]], here: str | None) -> list[str]:
+    """``"file:line ._name"`` for every call ``obj._name(…)`` in ``path`` of a private member
+    that only other sub-packages define (``here``: the file's own sub-package, ``None`` for a
+    test, example or benchmark, for which every package member is foreign).  Calls on ``self``,
+    ``cls`` and ``super()`` are a class's own business."""
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+            continue
+        name, owner = node.func.attr, node.func.value
+        if name not in members or (here is not None and here in members[name]):
+            continue
+        if isinstance(owner, ast.Name) and owner.id in ("self", "cls"):
+            continue
+        if isinstance(owner, ast.Call) and getattr(owner.func, "id", None) == "super":
+            continue
+        bad.append(f"{path.relative_to(ROOT) if path.is_relative_to(ROOT) else path.name}:"
+                   f"{node.lineno} .{name}")  # fmt: skip
+    return bad
+
+
+def test_the_private_call_finder_finds_one(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "ops").mkdir(parents=True)
+    (pkg / "ops" / "base.py").write_text(
+        "class Op:\n    def _apply(self, x):\n        return x\n"
+        "    def run(self, other):\n        return self._apply(other._apply(1))\n"
+    )
+    (pkg / "solve.py").write_text("def f(op):\n    return op._apply(1) + op.run(op)\n")
+    members = private_members(pkg)
+    assert members == {"_apply": {"ops"}}
+    # inside its own sub-package, on self or on another instance: fine
+    assert private_calls(pkg / "ops" / "base.py", members, "ops") == []
+    assert private_calls(pkg / "solve.py", members, "solve") == ["solve.py:2 ._apply"]
+    assert private_calls(pkg / "solve.py", members, None) == ["solve.py:2 ._apply"]
+
+
+def test_no_private_method_is_called_from_another_sub_package_a_test_or_an_example():
+    package = ROOT / "tensor_cosdi"
+    members = private_members(package)
+    bad = []
+    for top in ("tensor_cosdi", "tests", "examples", "benchmarks"):
+        for p in sorted((ROOT / top).rglob("*.py")):
+            rel = p.relative_to(package).parts if top == "tensor_cosdi" else None
+            here = None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
+            bad += private_calls(p, members, here)
+    assert bad == [], "private members called from outside their sub-package: " + "; ".join(bad)

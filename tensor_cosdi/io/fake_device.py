@@ -101,7 +101,8 @@ class FakeTriggerDevice:
                 if line:
                     self._answer(line)
 
-    def _send(self, text):
+    def send(self, text):
+        """Write one reply line to the host, as the device would (nothing once closed)."""
         with self._fd_lock:
             if self._closed:
                 return
@@ -115,7 +116,7 @@ class FakeTriggerDevice:
         first = line not in self._seen
         self._seen.add(line)
         if self.echo:
-            self._send(line)
+            self.send(line)
         if self._match(self.silent, line):
             return
         delay = self._match(self.delays, line) or 0.0
@@ -124,26 +125,26 @@ class FakeTriggerDevice:
         if delay:
             time.sleep(delay)
         if first and self._match(self.garbage_once, line):
-            self._send("#$%?!")
+            self.send("#$%?!")
             return
         verb, *args = line.split()
         if self._match(self.refuse, line):
-            self._send(f"ERR {verb} refused")
+            self.send(f"ERR {verb} refused")
             return
         if verb == "TRIG":
             n = int(args[0]) if args and args[0].isdigit() else None
             if n is None:
-                self._send("ERR TRIG needs a frame number")
+                self.send("ERR TRIG needs a frame number")
                 return
             if not self.fired or self.fired[-1] != n:
                 self.fired.append(n)
                 if self.on_trigger is not None:
                     self.on_trigger(n)
-            self._send(f"OK TRIG {n}")
+            self.send(f"OK TRIG {n}")
         elif verb in ("PING", "DMD", "DM", "PROJ"):
-            self._send(f"OK {verb}")
+            self.send(f"OK {verb}")
         else:
-            self._send(f"ERR {verb} unknown command")
+            self.send(f"ERR {verb} unknown command")
 
     def disconnect(self):
         """Close the device end: the host's next read or write fails.  Idempotent; each

@@ -24,7 +24,7 @@ import tensorly as tl
 from .. import _backend as B
 from .gram import MAX_BANDWIDTH, Pattern, pattern_from_terms, probe_structure
 from .routing import Routing
-from .woodbury import conjugate_gradient
+from .woodbury import conjugate_gradient, gram_eigenvalues
 
 __all__ = [
     "TensorOperator",
@@ -116,8 +116,10 @@ class TensorOperator:
     Notes
     -----
     ``forward`` and ``adjoint`` check the shape and the finiteness of their
-    argument and raise ``ValueError`` naming both shapes; the library's own
-    solvers call the unchecked ``_forward`` / ``_adjoint``.
+    argument and raise ``ValueError`` naming both shapes.  ``apply`` and
+    ``apply_adjoint`` skip those checks: iterative solvers, which check the
+    measurement once at the door and then apply the operator hundreds of
+    times to tensors they made themselves, call them.
     """
 
     input_shape: tuple[int, ...]
@@ -142,6 +144,31 @@ class TensorOperator:
         )
 
     __call__ = forward
+
+    def apply(self, x):
+        """``A x`` without the shape and finiteness checks of :meth:`forward`.
+
+        For inner loops whose argument is known to have ``input_shape`` and a
+        floating dtype (a solver's own iterates); anything else gives an
+        undefined result or a low-level error.
+        """
+        return self._forward(x)
+
+    def apply_adjoint(self, y):
+        """``Aᵀ y`` without the checks of :meth:`adjoint` (see :meth:`apply`)."""
+        return self._adjoint(y)
+
+    def check_input(self, x, caller: str = "forward"):
+        """``x`` as a tensor of the active backend, checked as :meth:`forward` checks it.
+
+        Raises ``ValueError`` naming ``caller`` when ``x`` is not a floating
+        tensor of ``input_shape`` or holds NaN or inf.
+        """
+        return self._check(x, self.input_shape, caller, "input")
+
+    def check_output(self, y, caller: str = "adjoint"):
+        """``y`` checked as a tensor of ``output_shape`` (a measurement), as :meth:`check_input`."""
+        return self._check(y, self.output_shape, caller, "output")
 
     def _checked_apply(self, x, shape_in, shape_out, apply, method, side):
         """Check shape and dtype at the door; NaN/inf on the smaller of argument and result.
@@ -246,6 +273,89 @@ class TensorOperator:
     def sensing_gain(self, like=None) -> float:
         """``‖A 1‖² / ‖1‖²``, the mean squared gain (:func:`sensing_gain`)."""
         return sensing_gain(self, like)
+
+    def norm(self, like=None, *, n_iter: int = 20, seed: int = 0) -> float:
+        """``‖A‖₂``, the largest singular value, by ``n_iter`` power iterations on ``AᵀA``.
+
+        ``like`` fixes backend, dtype and device of the seeded random start
+        (default: float64 NumPy).  Power iteration approaches ``‖A‖₂`` from
+        below; :meth:`lipschitz` adds a margin.
+        """
+        if isinstance(n_iter, bool) or not isinstance(n_iter, numbers.Integral) or n_iter < 1:
+            raise ValueError(f"n_iter must be a positive integer, got {n_iter!r}")
+        start = np.random.default_rng(seed).random(self.input_shape)
+        v = start if like is None else B.tensor_like(start, like)
+        tiny = np.finfo(float).tiny
+        for _ in range(int(n_iter)):
+            v = self._adjoint(self._forward(v))
+            v = v / max(float(tl.norm(v)), tiny)
+        return float(np.sqrt(float(tl.norm(self._adjoint(self._forward(v))))))
+
+    def lipschitz(self, like=None, *, n_iter: int = 20, seed: int = 0) -> float:
+        """``1.05 ‖A‖₂²``: the Lipschitz constant of ``∇ ½‖A x − g‖²`` with a 5 % margin
+        over the power-iteration estimate (the step bound of FISTA and TwIST)."""
+        return 1.05 * self.norm(like, n_iter=n_iter, seed=seed) ** 2
+
+    def conditioning(self, *, exact_below: int = 4096, tol: float = 1e-8) -> dict:
+        """How well posed the Woodbury inner matrix ``A Aᵀ`` is.
+
+        Returns ``lambda_min``, ``lambda_max`` (extreme eigenvalues of ``A Aᵀ``,
+        i.e. squared extreme singular values of ``A``), ``cond`` =
+        ``lambda_max / lambda_min`` (``inf`` when singular), ``zero`` (how many
+        eigenvalues are below ``tol · lambda_max``: measurement entries no
+        input entry reaches), ``lambda_min_nonzero`` and ``cond_nonzero`` (the
+        same on the rest; Lanczos gives only the extremes, so there they
+        equal the plain ones unless the smallest is zero), Gershgorin bounds
+        ``gershgorin_min`` / ``gershgorin_max``, the ``structure`` of
+        ``A Aᵀ``, its ``size`` and the ``method`` used: ``"structure"``
+        (exact, from the diagonal / per-pixel blocks / banded rows that
+        :meth:`gram_dual` finds), ``"dense"`` (exact, for at most
+        ``exact_below`` measurements) or ``"lanczos"`` (SciPy ``eigsh``
+        through :meth:`aslinearoperator`).
+        """
+        gram = self.gram_dual()
+        m = int(np.prod(self.output_shape))
+        out = {"structure": None if gram is None else gram.kind, "size": m}
+        if gram is not None:
+            ev, (glo, ghi) = gram_eigenvalues(gram)
+            method = "structure"
+        elif m <= exact_below:
+            M = self.to_matrix()
+            G = (M @ M.T).toarray()
+            ev = np.linalg.eigvalsh(G)
+            radius = np.abs(G).sum(axis=1) - np.abs(np.diag(G))
+            glo, ghi = float((np.diag(G) - radius).min()), float((np.diag(G) + radius).max())
+            method = "dense"
+        else:
+            from scipy.sparse.linalg import LinearOperator, eigsh
+
+            A = self.aslinearoperator()
+            AAt = LinearOperator((m, m), matvec=lambda y: A.matvec(A.rmatvec(y)), dtype=np.float64)
+            ncv = min(m, 40)
+            # full precision (tol 0): a loose tolerance stops "SA" far above a clustered minimum
+            hi = float(eigsh(AAt, k=1, which="LA", return_eigenvectors=False, ncv=ncv)[0])
+            lo = float(
+                eigsh(AAt, k=1, which="SA", return_eigenvectors=False, ncv=ncv, maxiter=100 * m)[0]
+            )
+            ev = np.array([lo, hi])
+            glo, ghi = float("nan"), float("nan")
+            method = "lanczos"
+        lmax = float(ev.max())
+        lmin = float(ev.min())
+        nonzero = ev[ev > tol * lmax]
+        lnz = float(nonzero.min()) if nonzero.size else float("nan")
+        out.update(
+            lambda_min=lmin,
+            lambda_max=lmax,
+            cond=float("inf") if lmin <= tol * lmax else lmax / lmin,
+            lambda_min_nonzero=lnz,
+            cond_nonzero=lmax / lnz,
+            zero=int((ev <= tol * lmax).sum()),
+            gershgorin_min=glo,
+            gershgorin_max=ghi,
+            method=method,
+        )
+        return out
 
     # ---- structure --------------------------------------------------------------
     def _routing(self) -> Routing | None:

@@ -145,7 +145,8 @@ class LightFieldLayout(TensorOperator):
         self.mid = shape[2:-2]
         super().__init__(shape, (N1 * N4, N2 * N5) + self.mid)
 
-    def _perm(self):
+    def permutation(self) -> tuple[int, ...]:
+        """Axis order that, followed by a reshape to ``output_shape``, tiles the views."""
         m = len(self.mid)
         nd = 4 + m
         a4, a5 = nd - 2, nd - 1
@@ -154,15 +155,17 @@ class LightFieldLayout(TensorOperator):
             return (0, a4, 1, a5) + mid
         return (a4, 0, a5, 1) + mid
 
-    def _split_shape(self):
+    def split_shape(self) -> tuple[int, ...]:
+        """The input shape in :meth:`permutation` order (the sensor image before merging)."""
         s = self.input_shape
-        return tuple(s[a] for a in self._perm())
+        return tuple(s[a] for a in self.permutation())
 
     def _forward(self, x):
-        return tl.reshape(tl.transpose(x, self._perm()), self.output_shape)
+        return tl.reshape(tl.transpose(x, self.permutation()), self.output_shape)
 
     def _adjoint(self, y):
-        return tl.transpose(tl.reshape(y, self._split_shape()), tuple(np.argsort(self._perm())))
+        order = tuple(np.argsort(self.permutation()))
+        return tl.transpose(tl.reshape(y, self.split_shape()), order)
 
     def _routing(self):
         nd_out = len(self.output_shape)
@@ -180,7 +183,8 @@ class LightFieldLayout(TensorOperator):
         out_idx = vec_index(self.output_shape)
         # C-order flat output position of every input entry, via the adjoint's reshaping
         flat_c = np.arange(int(np.prod(self.output_shape))).reshape(self.output_shape)  # C order
-        pos_c = np.transpose(flat_c.reshape(self._split_shape()), tuple(np.argsort(self._perm())))
+        order = tuple(np.argsort(self.permutation()))
+        pos_c = np.transpose(flat_c.reshape(self.split_shape()), order)
         # pos_c[input multi-index] = C-order flat output index; convert to vec (F) order
         multi = np.unravel_index(pos_c, self.output_shape)
         rows = out_idx[multi].reshape(-1, order="F")

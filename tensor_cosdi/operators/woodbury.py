@@ -35,6 +35,7 @@ __all__ = [
     "FoldedBanded",
     "fold_for",
     "conjugate_gradient",
+    "gram_eigenvalues",
 ]
 
 
@@ -326,3 +327,32 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
                 stacklevel=2,
             )
     return x
+
+
+def gram_eigenvalues(gram):
+    """All eigenvalues of a structured ``A Aᵀ`` (:class:`Diagonal`, :class:`PixelBlocks`,
+    :class:`RowBanded`) and its Gershgorin ``(lower, upper)`` bounds, in float64 NumPy."""
+    kind = gram.kind
+    if kind == "diagonal":
+        d = np.asarray(B.to_numpy(gram.d), dtype=np.float64).ravel()
+        return d, (float(d.min()), float(d.max()))
+    if kind == "pixel_blocks":
+        q = np.asarray(B.to_numpy(gram.Q), dtype=np.float64)
+        q = q.reshape(-1, *q.shape[-2:])
+        ev = np.linalg.eigvalsh(q).ravel()
+        centre = np.diagonal(q, axis1=1, axis2=2)
+        radius = np.abs(q).sum(axis=2) - np.abs(centre)
+        return ev, (float((centre - radius).min()), float((centre + radius).max()))
+    if kind == "row_banded":
+        b = gram.bandwidth
+        evs, lo, hi = [], np.inf, -np.inf
+        for ab in gram.upper_form():
+            diag, radius = ab[b], np.zeros(ab.shape[1])
+            for o in range(1, b + 1):  # off-diagonal o: ab[b − o, o:] couples p and p + o
+                off = np.abs(ab[b - o, o:])
+                radius[:-o] += off
+                radius[o:] += off
+            evs.append(scipy.linalg.eig_banded(ab, eigvals_only=True))
+            lo, hi = min(lo, float((diag - radius).min())), max(hi, float((diag + radius).max()))
+        return np.concatenate(evs), (lo, hi)
+    raise ValueError(f"no eigenvalues for an A Aᵀ structure of kind {kind!r}")

@@ -264,7 +264,7 @@ def _warn_if_solves_are_slow(system, method: str) -> None:
         return
     probe = B.tensor_like(np.ones(op.output_shape), B.as_tensor(np.zeros(1)))
     t0 = time.perf_counter()
-    op._forward(op._adjoint(probe))
+    op.apply(op.apply_adjoint(probe))
     product = time.perf_counter() - t0
     closed = [n for n in methods(system) if not METHODS[n].solves]
     warnings.warn(
@@ -328,7 +328,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     elif hasattr(measurement, "__dask_graph__"):  # a dask array: every method needs it whole
         log.info("computing the dask measurement %s", getattr(measurement, "shape", ""))
         measurement = measurement.compute()
-    g = system._check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
+    g = system.check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
     if B.real_dtype_name(g) in HALF_PRECISION:  # 3 significant digits: every method loses 1-4 dB
         g = tl.tensor(g, **{**_context(g), "dtype": B.dtype("float32")})
     peak, low = float(tl.max(tl.abs(g))), float(tl.min(g))
@@ -433,7 +433,7 @@ def relative_change(new, old) -> float:
 def relative_residual(system, cube, g) -> float:
     import tensorly as tl
 
-    r = system.operator._forward(cube) - g
+    r = system.operator.apply(cube) - g
     return float(tl.norm(r)) / max(float(tl.norm(g)), np.finfo(float).tiny)
 
 

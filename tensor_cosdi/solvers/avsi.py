@@ -130,15 +130,15 @@ def avsi(
     s1, s2, s3 = s1 * s, s2 * s, s3 * s
 
     def normal_f(v):
-        out = H._adjoint(H._forward(v)) + s1 * v + s3 * D._adjoint(D._forward(v))
+        out = H.apply_adjoint(H.apply(v)) + s1 * v + s3 * D.apply_adjoint(D.apply(v))
         if at:
-            out = out + at**2 * HT._adjoint(HT._forward(v))
+            out = out + at**2 * HT.apply_adjoint(HT.apply(v))
         if ar:
-            out = out + ar**2 * HR._adjoint(HR._forward(v))
+            out = out + ar**2 * HR.apply_adjoint(HR.apply(v))
         return out
 
-    f = H.solve_normal(H._adjoint(g), s1)
-    z = D._forward(f)
+    f = H.solve_normal(H.apply_adjoint(g), s1)
+    z = D.apply(f)
     wx, wy = (_bases.Wavelet(n, wavelet_name, level=wavelet_level) for n in (nx, ny))
     psi_f = _bases.KroneckerBasis((nx, ny, nl), {0: wx, 1: wy, 2: _bases.DCT(nl)})
     psi_z = _bases.KroneckerBasis((nx, ny), {0: wx, 1: wy})
@@ -148,30 +148,30 @@ def avsi(
     theta_f = soft(psi_f.analysis(f), thr_f)
     theta_z = soft(psi_z.analysis(z), thr_z)
     chi1, chi2, chi3 = tl.zeros_like(theta_f), tl.zeros_like(theta_z), tl.zeros_like(z)
-    htg, hpg = H._adjoint(g), HP._adjoint(g)
+    htg, hpg = H.apply_adjoint(g), HP.apply_adjoint(g)
     loop = engine.Loop(max_iter, tol, progress=progress, desc="A-VSI")
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
     for it in loop:
-        g_r = g - at * HT._forward(f)
-        g_t = g - ar * HR._forward(f)
-        eta1 = htg + s1 * psi_f.synthesis(theta_f - chi1) + s3 * D._adjoint(z - chi3)
+        g_r = g - at * HT.apply(f)
+        g_t = g - ar * HR.apply(f)
+        eta1 = htg + s1 * psi_f.synthesis(theta_f - chi1) + s3 * D.apply_adjoint(z - chi3)
         if at:
-            eta1 = eta1 + at * HT._adjoint(g - g_r)
+            eta1 = eta1 + at * HT.apply_adjoint(g - g_r)
         if ar:
-            eta1 = eta1 + ar * HR._adjoint(g - g_t)
+            eta1 = eta1 + ar * HR.apply_adjoint(g - g_t)
         with (
             warnings.catch_warnings()
         ):  # a few CG steps per ADMM iteration is the design (inexact ADMM)
             warnings.simplefilter("ignore", RuntimeWarning)
             f_new = conjugate_gradient(normal_f, eta1, x0=f, rtol=1e-6, maxiter=inner_iter)
-        eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D._forward(f_new) + chi3)
+        eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D.apply(f_new) + chi3)
         z = HP.solve_normal(eta2, s2 + s3)
         az, af = psi_z.analysis(z), psi_f.analysis(f_new)  # each transform once per iteration
         theta_z = soft(az + chi2, thr_z)
         theta_f = soft(af + chi1, thr_f)
         chi1 = chi1 - (theta_f - af)
         chi2 = chi2 - (theta_z - az)
-        chi3 = chi3 - (z - D._forward(f_new))
+        chi3 = chi3 - (z - D.apply(f_new))
         change = relative_change(f_new, f)
         f = f_new
         prior = tau_f * s * rms_f * float(tl.sum(tl.abs(theta_f))) + tau_z * s * rms_z * float(

@@ -125,8 +125,8 @@ def multiresolution_dfa(
     lift_g = (1.0 / (nl * nz)) * (Replicate((nx, ny, nl), 3, nz) @ Replicate((nx, ny), 2, nl))
     a_g = op @ lift_g
     fg0 = a_g.solve_normal(
-        a_g._adjoint(g),
-        1e-2 * float(tl.norm(a_g._forward(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny),
+        a_g.apply_adjoint(g),
+        1e-2 * float(tl.norm(a_g.apply(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny),
     )
     fg, h, c1 = fista_tv(a_g, g, fg0, desc="DFA fg", **kw)
     fg = tl.clip(fg, 0, None)
@@ -137,7 +137,7 @@ def multiresolution_dfa(
     def tie_stack(x):
         return x + ((fg - tl.sum(x, axis=2)) / nz)[..., None]
 
-    ff0 = Replicate((nx, ny), 2, nz)._forward(fg / nz)
+    ff0 = Replicate((nx, ny), 2, nz).apply(fg / nz)
     ff, h, c2 = fista_tv(op @ lift_f, g, ff0, project=tie_stack, desc="DFA ff", **kw)
     ff = tl.clip(ff, 0, None)
     add(h)
@@ -150,11 +150,11 @@ def multiresolution_dfa(
     def tie_bands(x):
         return x + ((fg - tl.sum(x, axis=2)) / nl)[..., None]
 
-    fs0 = Replicate((nx, ny), 2, nl)._forward(fg / nl)
+    fs0 = Replicate((nx, ny), 2, nl).apply(fg / nl)
     fs, h, c3 = fista_tv(op @ lift_s, g, fs0, project=tie_bands, desc="DFA fs", **kw)
     fs = tl.clip(fs, 0, None)
     add(h)
-    cube = lift_s._forward(fs)
+    cube = lift_s.apply(fs)
     hist["residual"][-1] = relative_residual(system, cube, g)
     depth = np.argmax(B.to_numpy(w), axis=2).astype(np.float64)
     return cube, hist, bool(c1 and c2 and c3), B.tensor_like(depth, g)

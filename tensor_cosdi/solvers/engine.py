@@ -41,7 +41,6 @@ import warnings
 import numpy as np
 import tensorly as tl
 
-from .. import _backend as B
 from ..operators import sensing_gain
 from ..validate import integer
 from ._base import History, relative_change
@@ -142,7 +141,7 @@ def admm(
     """
     r = rho * sensing_gain(op, g)
     solve = normal_solve if normal_solve is not None else (lambda b, x0: op.solve_normal(b, r))
-    atg = op._adjoint(g)
+    atg = op.apply_adjoint(g)
     if isinstance(start, list):
         start = start.pop() if len(start) == 1 else _bad_handoff(start)
     x = solve(atg, None) if start is None else _layout_like(start, atg)
@@ -174,7 +173,7 @@ def admm(
             u = u + (x - z)
         if loop.record(
             it,
-            residual_norm=float(tl.norm(op._forward(z) - g)),
+            residual_norm=float(tl.norm(op.apply(z) - g)),
             gnorm=gnorm,
             change=change,
             prior_term=prior.objective(z) if loop.objective else float("nan"),
@@ -205,7 +204,7 @@ def _bad_handoff(start):
 def least_norm(op, g, eps: float = 1e-6):
     """``Aᵀ(AAᵀ + εI)⁻¹ g`` with ``ε = eps · s`` (the structured dual solve): the start of GAP and
     TwIST."""
-    return op._adjoint(op.solve_dual(g, eps * sensing_gain(op, g)))
+    return op.apply_adjoint(op.solve_dual(g, eps * sensing_gain(op, g)))
 
 
 def gap(
@@ -244,16 +243,16 @@ def gap(
     x = least_norm(op, g, eps) if start is None else start
     prior.setup(x, penalty=1.0, gain=lam / eps)
     g_hat = g
-    ax = op._forward(x)
+    ax = op.apply(x)
     loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
     for it in loop:
         if accelerate:
             g_hat = g_hat + (g - ax)
-        x_new = prior.prox(x + op._adjoint(op.solve_dual(g_hat - ax, lam)))
+        x_new = prior.prox(x + op.apply_adjoint(op.solve_dual(g_hat - ax, lam)))
         change = relative_change(x_new, x)
         x = x_new
-        ax = op._forward(x)
+        ax = op.apply(x)
         res = float(tl.norm(ax - g))
         done = loop.record(
             it,
@@ -277,12 +276,9 @@ def gap(
 
 
 def lipschitz(op, like, *, n_iter: int = 20, seed: int = 0) -> float:
-    """``1.05 ‖A‖²`` by ``n_iter`` power iterations on ``AᵀA`` (the FISTA step bound)."""
-    v = B.tensor_like(np.random.default_rng(seed).random(op.input_shape), like)
-    for _ in range(n_iter):
-        v = op._adjoint(op._forward(v))
-        v = v / max(float(tl.norm(v)), np.finfo(float).tiny)
-    return 1.05 * float(tl.norm(op._adjoint(op._forward(v))))
+    """``1.05 ‖A‖²`` by ``n_iter`` power iterations on ``AᵀA`` (the FISTA step bound;
+    :meth:`~tensor_cosdi.operators.TensorOperator.lipschitz`)."""
+    return op.lipschitz(like, n_iter=n_iter, seed=seed)
 
 
 def fista(
@@ -310,7 +306,7 @@ def fista(
     loop = Loop(max_iter, tol, progress=progress, desc=desc, objective=objective)
     gnorm = _gnorm(g)
     for it in loop:
-        x_new = prior.prox(y + op._adjoint(g - op._forward(y)) / L)
+        x_new = prior.prox(y + op.apply_adjoint(g - op.apply(y)) / L)
         if project is not None:
             x_new = project(x_new)
         t_new = (1 + np.sqrt(1 + 4 * t * t)) / 2
@@ -319,7 +315,7 @@ def fista(
         x, t = x_new, t_new
         if loop.record(
             it,
-            residual_norm=float(tl.norm(op._forward(x) - g)),
+            residual_norm=float(tl.norm(op.apply(x) - g)),
             gnorm=gnorm,
             change=change,
             prior_term=prior.objective(x) if loop.objective else float("nan"),
@@ -368,18 +364,18 @@ def twist(
     def terms(x, ax):  # (data term, prior term)
         return 0.5 * float(tl.norm(ax - g)) ** 2, prior.objective(x)
 
-    x = prior.prox(start + op._adjoint(g - op._forward(start)) / L)
-    x_prev, ax = start, op._forward(x)
+    x = prior.prox(start + op.apply_adjoint(g - op.apply(start)) / L)
+    x_prev, ax = start, op.apply(x)
     f = sum(terms(x, ax)) if monotone else float("nan")
     loop = Loop(max_iter, tol, progress=progress, desc=desc)
     gnorm = _gnorm(g)
     for it in loop:
-        step = prior.prox(x + op._adjoint(g - ax) / L)
+        step = prior.prox(x + op.apply_adjoint(g - ax) / L)
         x_new = (1 - alpha) * x_prev + (alpha - beta) * x + beta * step
-        ax_new = op._forward(x_new)
+        ax_new = op.apply(x_new)
         data, reg = terms(x_new, ax_new)
         if monotone and data + reg > f:  # fall back to the IST step
-            x_new, ax_new = step, op._forward(step)
+            x_new, ax_new = step, op.apply(step)
             data, reg = terms(x_new, ax_new)
         change = relative_change(x_new, x)
         x_prev, x, ax, f = x, x_new, ax_new, data + reg

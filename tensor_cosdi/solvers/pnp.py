@@ -75,10 +75,10 @@ def pnp_admm_operator(
         w, r = w * s, rho * s
 
         def normal(v):
-            return op._adjoint(op._forward(v)) + w * T._adjoint(T._forward(v)) + r * v
+            return op.apply_adjoint(op.apply(v)) + w * T.apply_adjoint(T.apply(v)) + r * v
 
         cg = engine.cg_solver(normal, rtol=1e-6, maxiter=20)
-        extra = w * T._adjoint(t_val)
+        extra = w * T.apply_adjoint(t_val)
 
         def normal_solve(b, x0):
             # the engine forms Aᵀg + ρ(z − u); the tie adds w Tᵀt to the right-hand side
@@ -158,7 +158,7 @@ def hierarchical_pnp(
         desc="PnP-ADMM F",
     )
     f = tl.clip(f, 0, None)
-    cube = mod._forward(f)
+    cube = mod.apply(f)
     hist = History()
     hist.extend(h1)  # stage residuals: ‖G − A_stage x‖/‖G‖ of each stage's model …
     hist.extend(h2)

@@ -125,11 +125,11 @@ def split_tv(
 
     s = sensing_gain(H, g)
     r1, r2 = rho1 * s, rho2 * s
-    f0 = H.solve_normal(H._adjoint(g), 1e-6 * s)  # the unblurred least-norm start
+    f0 = H.solve_normal(H.apply_adjoint(g), 1e-6 * s)  # the unblurred least-norm start
     tau = tv_weight * robust_peak(f0)
     w = embed(f0, (0, 0))
     z, u1, u2 = w, B.zeros_like_shape(pad + (nl, nz), g), B.zeros_like_shape(pad + (nl, nz), g)
-    htg = embed(H._adjoint(g), (c0, c1))
+    htg = embed(H.apply_adjoint(g), (c0, c1))
     loop = engine.Loop(max_iter, tol, progress=progress, desc="split-TV")
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
     cube, cw = f0, conv(w)

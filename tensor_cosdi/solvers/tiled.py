@@ -23,21 +23,8 @@ from ._base import Result, reconstruct
 
 __all__ = ["reconstruct_tiled", "TILED_SYSTEMS"]
 
-#: Imagers :func:`reconstruct_tiled` can cut into tiles.
+#: Imagers :func:`reconstruct_tiled` can cut into tiles: those whose class has ``window``.
 TILED_SYSTEMS = ("sd_cassi", "dd_cassi")
-
-
-def _tile_system(system, x0, x1, y0, y1):
-    """The imager on cube window ``[x0, x1) × [y0, y1)`` and its measurement's column range."""
-    from ..systems import DDCASSI, SDCASSI
-
-    s = system.measurement_shape[1] - system.cube_shape[1] if system.name == "sd_cassi" else 0
-    extra = system.code.shape[1] - system.cube_shape[1]  # DD-CASSI: the code's extra columns
-    kw = {"n_bands": system.cube_shape[2], "shifts": system.shifts}
-    kw["wavelengths"] = system.wavelengths
-    if system.name == "sd_cassi":
-        return SDCASSI(system.code[x0:x1, y0:y1], colour=system.colour, **kw), (y0, y1 + s)
-    return DDCASSI(system.code[x0:x1, y0 : y1 + extra], **kw), (y0, y1)
 
 
 def _solve_tile(system, g, method, options):
@@ -119,7 +106,7 @@ def reconstruct_tiled(
     """
     from .engine import check_int
 
-    if getattr(system, "name", None) not in TILED_SYSTEMS:
+    if not callable(getattr(system, "window", None)):
         raise ValueError(
             f"reconstruct_tiled supports {TILED_SYSTEMS}, got {getattr(system, 'name', system)!r}"
         )
@@ -133,7 +120,7 @@ def reconstruct_tiled(
             f"measurement has shape {g.shape}; {system.name} expects {system.measurement_shape}"
         )
     nx, ny, nl = system.cube_shape
-    s = system.measurement_shape[1] - ny if system.name == "sd_cassi" else 0
+    s = system.window_spill
     places = []  # (extended window, core) of each tile, in tile order
     xs, ys = np.cumsum([0] + block_sizes(nx, tile)), np.cumsum([0] + block_sizes(ny, tile))
     for a0, a1 in zip(xs[:-1], xs[1:]):
@@ -144,7 +131,7 @@ def reconstruct_tiled(
 
     def job(i):  # built when needed: sixteen sub-systems at once cost a cube of memory
         x0, x1, y0, y1 = places[i][0]
-        sub, (m0, m1) = _tile_system(system, x0, x1, y0, y1)
+        sub, (m0, m1) = system.window(x0, x1, y0, y1)
         return sub, g[x0:x1, m0:m1]
 
     if client is None:

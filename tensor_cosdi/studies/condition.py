@@ -206,93 +206,13 @@ def vsi_arms(
     return records
 
 
-def _gram_eigenvalues(gram):
-    """All eigenvalues of ``A Aᵀ`` and Gershgorin (lower, upper) bounds from its structure."""
-    kind = gram.kind
-    if kind == "diagonal":
-        d = np.asarray(gram.d, dtype=np.float64).ravel()
-        return d, (float(d.min()), float(d.max()))
-    if kind == "pixel_blocks":
-        q = np.asarray(gram.Q, dtype=np.float64)
-        q = q.reshape(-1, *q.shape[-2:])
-        ev = np.linalg.eigvalsh(q).ravel()
-        centre = np.diagonal(q, axis1=1, axis2=2)
-        radius = np.abs(q).sum(axis=2) - np.abs(centre)
-        return ev, (float((centre - radius).min()), float((centre + radius).max()))
-    if kind == "row_banded":
-        import scipy.linalg
-
-        b = gram.bandwidth
-        evs, lo, hi = [], np.inf, -np.inf
-        for ab in gram.upper_form():
-            diag, radius = ab[b], np.zeros(ab.shape[1])
-            for o in range(1, b + 1):  # off-diagonal o: ab[b − o, o:] couples p and p + o
-                off = np.abs(ab[b - o, o:])
-                radius[:-o] += off
-                radius[o:] += off
-            evs.append(scipy.linalg.eig_banded(ab, eigvals_only=True))
-            lo, hi = min(lo, float((diag - radius).min())), max(hi, float((diag + radius).max()))
-        return np.concatenate(evs), (lo, hi)
-    raise ValueError(f"unknown structure {kind!r}")  # pragma: no cover
-
-
 def conditioning(system, *, exact_below: int = 4096, tol: float = 1e-8) -> dict:
     """How well posed the system's Woodbury inner matrix ``A Aᵀ`` is (SPEC §4).
 
-    Returns ``lambda_min``, ``lambda_max`` (extreme eigenvalues of ``A Aᵀ``,
-    i.e. squared extreme singular values of ``A``), ``cond`` =
-    ``lambda_max / lambda_min`` (``inf`` when singular), ``zero`` (how many
-    eigenvalues are below ``tol · lambda_max``: measurement entries no
-    voxel reaches), ``lambda_min_nonzero`` and ``cond_nonzero`` (the same on
-    the rest; Lanczos gives only the extremes, so there they equal the
-    plain ones unless the smallest is zero), Gershgorin bounds ``gershgorin_min`` /
-    ``gershgorin_max``, the ``structure`` of ``A Aᵀ`` and the ``method``
-    used: ``"structure"`` (exact, from the diagonal / per-pixel blocks /
-    banded rows the library derives), ``"dense"`` (exact, for at most
-    ``exact_below`` measurements) or ``"lanczos"`` (SciPy ``eigsh`` through
-    :meth:`~tensor_cosdi.operators.TensorOperator.aslinearoperator`).
+    The system's :meth:`~tensor_cosdi.operators.TensorOperator.conditioning`:
+    extreme eigenvalues, condition numbers with and without the zero
+    eigenvalues (measurement entries no voxel reaches), Gershgorin bounds,
+    the structure of ``A Aᵀ`` and the method used (exact from the structure,
+    dense below ``exact_below`` measurements, else Lanczos).
     """
-    op = system.operator
-    gram = op.gram_dual()
-    m = int(np.prod(op.output_shape))
-    out = {"structure": None if gram is None else gram.kind, "size": m}
-    if gram is not None:
-        ev, (glo, ghi) = _gram_eigenvalues(gram)
-        method = "structure"
-    elif m <= exact_below:
-        M = op.to_matrix()
-        G = (M @ M.T).toarray()
-        ev = np.linalg.eigvalsh(G)
-        radius = np.abs(G).sum(axis=1) - np.abs(np.diag(G))
-        glo, ghi = float((np.diag(G) - radius).min()), float((np.diag(G) + radius).max())
-        method = "dense"
-    else:
-        from scipy.sparse.linalg import LinearOperator, eigsh
-
-        A = op.aslinearoperator()
-        AAt = LinearOperator((m, m), matvec=lambda y: A.matvec(A.rmatvec(y)), dtype=np.float64)
-        ncv = min(m, 40)
-        # full precision (tol 0): a loose tolerance stops "SA" far above a clustered minimum
-        hi = float(eigsh(AAt, k=1, which="LA", return_eigenvectors=False, ncv=ncv)[0])
-        lo = float(eigsh(AAt, k=1, which="SA", return_eigenvectors=False, ncv=ncv,
-                         maxiter=100 * m)[0])  # fmt: skip
-        ev = np.array([lo, hi])
-        glo, ghi = float("nan"), float("nan")
-        method = "lanczos"
-    lmax = float(ev.max())
-    zero = int((ev <= tol * lmax).sum())
-    lmin = float(ev.min())
-    nonzero = ev[ev > tol * lmax]
-    lnz = float(nonzero.min()) if nonzero.size else float("nan")
-    out.update(
-        lambda_min=lmin,
-        lambda_max=lmax,
-        cond=float("inf") if lmin <= tol * lmax else lmax / lmin,
-        lambda_min_nonzero=lnz,
-        cond_nonzero=lmax / lnz,
-        zero=zero,
-        gershgorin_min=glo,
-        gershgorin_max=ghi,
-        method=method,
-    )
-    return out
+    return system.operator.conditioning(exact_below=exact_below, tol=tol)

@@ -211,9 +211,11 @@ class System(SystemRoles):
             names.pop(axis)
         return op
 
-    def _check_measurement(self, measurement, method):
-        self._check_shape(measurement, method, False)
-        return self.operator._check(measurement, self.measurement_shape, method, "output")
+    def check_measurement(self, measurement, caller: str = "reconstruct"):
+        """The measurement as a tensor, refused with a one-line ``ValueError`` naming
+        ``caller`` unless it is a finite floating tensor of :attr:`measurement_shape`."""
+        self._check_shape(measurement, caller, False)
+        return self.operator.check_output(measurement, caller)
 
     @property
     def panchromatic_exact(self) -> bool:
@@ -242,7 +244,7 @@ class System(SystemRoles):
         -------
         tensor of shape :attr:`panchromatic_shape`
         """
-        g = self._check_measurement(measurement, "panchromatic")
+        g = self.check_measurement(measurement, "panchromatic")
         if not (np.isfinite(mu) and mu > 0):
             raise ValueError(f"mu must be a finite number > 0, got {mu!r}")
         D = self.decimation

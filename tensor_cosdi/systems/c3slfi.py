@@ -32,11 +32,11 @@ def _views(views):
 
 def _np_forward(layout: LightFieldLayout, x: np.ndarray) -> np.ndarray:
     """The layout permutation on a NumPy parameter array (any active backend)."""
-    return np.transpose(x, layout._perm()).reshape(layout.output_shape)
+    return np.transpose(x, layout.permutation()).reshape(layout.output_shape)
 
 
 def _np_adjoint(layout: LightFieldLayout, y: np.ndarray) -> np.ndarray:
-    return np.transpose(y.reshape(layout._split_shape()), tuple(np.argsort(layout._perm())))
+    return np.transpose(y.reshape(layout.split_shape()), tuple(np.argsort(layout.permutation())))
 
 
 class C3SLFI(System):
@@ -339,7 +339,7 @@ class C3SLFI(System):
         ``Z = Σ_k G[..., k, ...]``.  Otherwise the regularised least-squares
         estimate of :meth:`System.panchromatic` (``mu`` is its weight).
         """
-        g = self._check_measurement(measurement, "panchromatic")
+        g = self.check_measurement(measurement, "panchromatic")
         if self.complementary:
             return tl.sum(g, axis=2)
         return super().panchromatic(g, mu=mu)

@@ -136,6 +136,21 @@ class SDCASSI(System):
         code = random_binary(shape, transmittance=transmittance, rng=rng)
         return cls(code, n_bands=nl, **overrides)
 
+    @property
+    def window_spill(self) -> int:
+        """Measurement columns a cube window spills over on each side (the total shear ``S``)."""
+        return self.measurement_shape[1] - self.cube_shape[1]
+
+    def window(self, x0: int, x1: int, y0: int, y1: int):
+        """The same imager on the cube window ``[x0, x1) × [y0, y1)`` and the measurement
+        columns ``(m0, m1)`` it lands on (``[y0, y1 + S)``; the first and last ``S`` of them
+        also hold light from outside the window)."""
+        sub = SDCASSI(
+            self.code[x0:x1, y0:y1], n_bands=self.cube_shape[2], shifts=self.shifts,
+            wavelengths=self.wavelengths, colour=self.colour,
+        )  # fmt: skip
+        return sub, (y0, y1 + self.window_spill)
+
     def matrix(self):
         nx, ny, nl = self.cube_shape
         width = self.measurement_shape[1]
@@ -198,6 +213,19 @@ class DDCASSI(System):
         return cls(
             random_binary(shape, transmittance=transmittance, rng=rng), n_bands=nl, **overrides
         )
+
+    #: A cube window's measurement is exactly the same window (the image is not sheared).
+    window_spill = 0
+
+    def window(self, x0: int, x1: int, y0: int, y1: int):
+        """The same imager on the cube window ``[x0, x1) × [y0, y1)`` (the code window with
+        its ``S`` extra columns) and the measurement columns ``(y0, y1)`` it lands on."""
+        extra = self.code.shape[1] - self.cube_shape[1]
+        sub = DDCASSI(
+            self.code[x0:x1, y0 : y1 + extra], n_bands=self.cube_shape[2], shifts=self.shifts,
+            wavelengths=self.wavelengths,
+        )  # fmt: skip
+        return sub, (y0, y1)
 
     def matrix(self):
         ny = self.cube_shape[1]
@@ -311,7 +339,7 @@ class DualCameraCASSI(System):
 
     def panchromatic(self, measurement, *, mu=None):
         """The panchromatic camera's frame, ``G[:, :Ny, 1]`` (exact: no solve, ``mu`` unused)."""
-        g = self._check_measurement(measurement, "panchromatic")
+        g = self.check_measurement(measurement, "panchromatic")
         return g[:, : self.cube_shape[1], 1]
 
     def matrix(self):

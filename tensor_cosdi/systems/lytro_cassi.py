@@ -208,7 +208,7 @@ class LytroCASSI(System):
 
     def rgb_image(self, measurement) -> np.ndarray:
         """The Lytro arm's ``(Nx, Ny, 3)`` RGB lenslet image out of a measurement."""
-        g = self._check_measurement(measurement, "rgb_image")
+        g = self.check_measurement(measurement, "rgb_image")
         return np.asarray(B.to_numpy(g[:, : self.cube_shape[1], self.n_snapshots :]))
 
     def frames_to_measurement(self, frames):

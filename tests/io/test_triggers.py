@@ -231,7 +231,7 @@ def test_fake_device_never_touches_descriptors_it_closed(tmp_path):
     # the process reuses the lowest free descriptor numbers for new files
     fds = [os.open(tmp_path / f"f{i}", os.O_RDWR | os.O_CREAT) for i in range(4)]
     try:
-        dev._send("OK TRIG 1")
+        dev.send("OK TRIG 1")
         for i in range(4):
             assert (tmp_path / f"f{i}").read_bytes() == b""
     finally:

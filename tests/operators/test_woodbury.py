@@ -246,10 +246,10 @@ class _Misrouted(TensorOperator):
         self.op, self.pattern = op, pattern
 
     def _forward(self, x):
-        return self.op._forward(x)
+        return self.op.apply(x)
 
     def _adjoint(self, y):
-        return self.op._adjoint(y)
+        return self.op.apply_adjoint(y)
 
     def _gram_pattern(self):
         return self.pattern

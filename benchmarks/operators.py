@@ -11,12 +11,15 @@ logical ``(x, y, λ)`` tensor:
   ``tensor_cosdi/operators/_kernels.py`` reads;
 * ``band-major``: each band slice ``cube[:, :, l]`` C-contiguous (the
   per-band loop);
-* ``C``: NumPy's default, λ fastest in memory (the per-band loop).
+* ``C``: NumPy's default, λ fastest in memory (one sparse gather product,
+  ``operators._kernels.GatherMatrix``).
 
 Reference rows: the same composition executed factor by factor (no fusion)
 and a plain per-band loop over the C layout.
 
     python benchmarks/operators.py [--repeats 50] [--mask PATH] [--out FILE]
+
+The table and the run's provenance go to ``benchmarks/results/operators.md``.
 
 Never asserts anything: machines are shared and noisy; read the ratios.
 """
@@ -25,12 +28,16 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 from tensor_cosdi.operators import Code, Shear, SumAxis
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _protocol import RESULTS, write_results  # noqa: E402
 
 DEFAULT_MASK = (
     Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "masks" / "tsa_mask256.mat"
@@ -58,11 +65,28 @@ def load_mask(path):
     ), "random binary mask (real mask not found)"
 
 
+def verdicts(rows, target: float = 3.0) -> list[str]:
+    """One line per operation kind, computed from the table: the layouts within ``target``
+    copies and those above it."""
+    out = []
+    for op in ("forward (checked)", "adjoint (checked)"):
+        got = [(layout, ratio) for layout, name, _, ratio, _ in rows if name == op]
+        ok = [f"{layout} {ratio:.2f}×" for layout, ratio in got if ratio <= target]
+        over = [f"{layout} {ratio:.2f}×" for layout, ratio in got if ratio > target]
+        out.append(
+            f"* {op}: within {target:g}× a copy in "
+            + (", ".join(ok) if ok else "no layout")
+            + ("; above it in " + ", ".join(over) if over else "; every layout within it")
+            + "."
+        )
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=50)
     ap.add_argument("--mask", default=str(DEFAULT_MASK))
-    ap.add_argument("--out", default=None, help="also write the Markdown table to this file")
+    ap.add_argument("--out", default=str(RESULTS / "operators.md"), help="results file")
     args = ap.parse_args(argv)
 
     nx, ny, nb, step = 256, 256, 28, 2
@@ -127,12 +151,8 @@ def main(argv=None):
     ]
     for layout, name, ms, ratio, copy_ms in rows:
         lines.append(f"| {layout} | {name} | {ms:.3f} | {ratio:.2f} | {copy_ms:.3f} |")
-    text = "\n".join(lines)
-    print(text)
-    if args.out:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(text + "\n")
+    lines += ["", *verdicts(rows)]
+    write_results(args.out, lines)
     return rows
 
 

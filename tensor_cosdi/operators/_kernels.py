@@ -16,16 +16,32 @@ forward (multiply into a zero-padded ``W``-slice buffer, then one
 reduction over the bands' strided view) measured 5-8 copies: the buffer
 does not stay in cache.
 
-The adjoint returns its cube in that layout, so solver iterates stay in it;
-a cube in any other layout takes the per-band loop of the caller.
+The adjoint returns its cube in that layout, so solver iterates stay in it.
+
+A cube in any other memory order (NumPy's default C order, with the band
+axis fastest; band-major slices) cannot be read band by band without
+copying short rows, so :class:`GatherMatrix` applies the coded shear-and-sum
+as one sparse matrix–vector product over the cube's memory buffer: one
+row per measurement pixel holding the code values of the voxels that land
+on it, with column indices in the cube's own memory order (no transpose).
+SciPy's CSR product reads the cube once, in order, and writes each
+measurement pixel once.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.lib.stride_tricks import as_strided
 
-__all__ = ["linear_step", "moved", "shear_sum_forward", "shear_sum_adjoint"]
+__all__ = [
+    "linear_step",
+    "moved",
+    "shear_sum_forward",
+    "shear_sum_adjoint",
+    "memory_order",
+    "GatherMatrix",
+]
 
 
 def linear_step(shifts) -> int | None:
@@ -84,3 +100,94 @@ def shear_sum_adjoint(
         out = np.empty(np.broadcast_shapes(view.shape, weights.shape), dtype=y.dtype)
         np.multiply(view, weights, out=out)
     return np.moveaxis(out, (0, 1), (band_axis, shift_axis))
+
+
+def memory_order(x: np.ndarray) -> tuple[int, ...] | None:
+    """The axes of ``x`` from slowest to fastest in memory when its buffer is one dense block
+    in some axis order (C, Fortran or any permutation), else ``None``."""
+    if x.ndim == 0 or x.size == 0 or any(st < 0 for st in x.strides):
+        return None
+    order = tuple(sorted(range(x.ndim), key=lambda a: (x.strides[a], x.shape[a]), reverse=True))
+    expected = x.itemsize
+    for a in reversed(order):
+        if x.shape[a] != 1 and x.strides[a] != expected:
+            return None
+        expected *= x.shape[a]
+    return order
+
+
+class GatherMatrix:
+    """The coded shear-and-sum ``y[…, c + s_l, …] += W[…, l, …] x[…, l, …]`` as a CSR matrix
+    acting on the memory buffer of a cube in one fixed memory order.
+
+    Parameters
+    ----------
+    input_shape : tuple of int
+        The logical cube shape.
+    order : tuple of int
+        The cube's axes from slowest to fastest in memory (:func:`memory_order`).
+    sum_axis, shift_axis : int
+        Band axis (summed) and the axis band ``l`` is shifted along by ``shifts[l]``
+        (``shift_axis`` ``None``: no shift).
+    shifts : array of int
+        Non-negative integer shift of every band.
+    weights : ndarray or None
+        Code values broadcastable to ``input_shape`` (``None``: all ones).
+    dtype : numpy dtype
+        The dtype of the cubes it will be applied to (the matrix stores its values in it).
+
+    Notes
+    -----
+    The matrix holds one entry per voxel: 4 + 4 bytes (float32) or 8 + 4
+    (float64) per voxel, plus 4 per measurement pixel.
+    """
+
+    def __init__(self, input_shape, order, sum_axis, shift_axis, shifts, weights, dtype):
+        shape = tuple(int(n) for n in input_shape)
+        n_in = int(np.prod(shape))
+        out = list(shape)
+        if shift_axis is not None:
+            out[shift_axis] += int(np.max(shifts))
+        del out[sum_axis]
+        self.output_shape = tuple(out)
+        n_out = int(np.prod(self.output_shape))
+        index = np.int32 if max(n_in, n_out) < 2**31 - 1 else np.int64
+        # the memory position of every voxel (logical C order), then its measurement pixel
+        mem_strides = np.empty(len(shape), dtype=np.int64)
+        step = 1
+        for a in reversed(order):
+            mem_strides[a] = step
+            step *= shape[a]
+        grids = np.indices(shape, dtype=index, sparse=True)
+        cols = sum(g * index(st) for g, st in zip(grids, mem_strides))
+        out_strides = np.ones(len(self.output_shape), dtype=np.int64)
+        for a in range(len(self.output_shape) - 2, -1, -1):
+            out_strides[a] = out_strides[a + 1] * self.output_shape[a + 1]
+        rows = 0
+        k = 0
+        for a, g in enumerate(grids):
+            if a == sum_axis:
+                continue
+            pos = g
+            if a == shift_axis:
+                band = grids[sum_axis].reshape(-1)
+                pos = g + np.asarray(shifts, dtype=index)[band].reshape(grids[sum_axis].shape)
+            rows = rows + pos * index(out_strides[k])
+            k += 1
+        rows = np.broadcast_to(rows, shape).reshape(-1)
+        cols = np.broadcast_to(cols, shape).reshape(-1)
+        vals = (
+            np.ones(n_in, dtype=dtype)
+            if weights is None
+            else np.broadcast_to(np.asarray(weights, dtype=dtype), shape).reshape(-1)
+        )
+        coo = sp.coo_matrix((vals, (rows, cols)), shape=(n_out, n_in))
+        self.matrix = coo.tocsr()
+        self.matrix.sum_duplicates()
+        self.order = tuple(order)
+        self.dtype = np.dtype(dtype)
+
+    def forward(self, x: np.ndarray) -> np.ndarray:
+        """``y`` for a cube ``x`` held in :attr:`order` (its buffer is read in place)."""
+        flat = np.ravel(x, order="K")  # a view: x is one dense block in this order
+        return (self.matrix @ flat).reshape(self.output_shape)

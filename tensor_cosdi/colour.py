@@ -11,7 +11,7 @@ from . import _backend as B
 __all__ = ["to_srgb", "rgb_to_cube", "reflectance"]
 
 
-def _colour():
+def colour_science():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # colour warns when matplotlib is absent
         import colour
@@ -53,7 +53,7 @@ def to_srgb(
     >>> to_srgb(np.ones((2, 2, 5)), [450, 500, 550, 600, 650])[0, 0].round(6).tolist()
     [1.0, 1.0, 1.0]
     """
-    colour = _colour()
+    colour = colour_science()
     c = np.moveaxis(np.asarray(B.to_numpy(cube), dtype=np.float64), band_axis, -1)
     wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
     if wl.size != c.shape[-1]:
@@ -109,7 +109,7 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
     >>> rgb_to_cube([1.0, 1.0, 1.0], [450, 550, 650]).round(4).tolist()
     [1.0, 1.0, 1.0]
     """
-    colour = _colour()
+    colour = colour_science()
     x = np.asarray(B.to_numpy(rgb), dtype=np.float64)
     if x.ndim == 0 or x.shape[-1] != 3:
         raise ValueError(f"rgb must have a last axis of 3 (R, G, B), got shape {x.shape}")

@@ -220,3 +220,93 @@ def test_no_private_method_is_called_from_another_sub_package_a_test_or_an_examp
             here = None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
             bad += private_calls(p, members, here)
     assert bad == [], "private members called from outside their sub-package: " + "; ".join(bad)
+
+
+def private_module_uses(path: Path, package_dir: Path, here: str | None) -> list[str]:
+    """``"file:line name"`` for every use of another sub-package's module-level private name:
+    ``from pkg.sub.mod import _name`` or ``mod._name`` on a module bound by an import (``here``
+    as in :func:`private_calls`)."""
+    package = package_dir.name
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    if path.is_relative_to(package_dir):
+        parts = list(path.relative_to(package_dir.parent).with_suffix("").parts)
+        base_parts = parts[:-1]
+    else:
+        base_parts = []
+
+    def resolve(node):
+        if node.level:
+            return ".".join(base_parts[: len(base_parts) - node.level + 1] + [node.module or ""])
+        return node.module or ""
+
+    def sub_package(module: str) -> str | None:
+        parts = module.split(".")
+        return parts[1] if len(parts) > 1 and parts[0] == package else None
+
+    def is_module(dotted: str) -> bool:
+        rel = Path(*dotted.split("."))
+        return (package_dir.parent / rel).with_suffix(".py").is_file() or (
+            package_dir.parent / rel / "__init__.py"
+        ).is_file()
+
+    modules, bad = {}, []
+    where = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path.name
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            src = resolve(node).rstrip(".")
+            for a in node.names:
+                full = f"{src}.{a.name}"
+                if is_module(full):
+                    modules[a.asname or a.name] = full
+                elif (
+                    a.name.startswith("_")
+                    and not a.name.startswith("__")
+                    and sub_package(src) is not None
+                    and sub_package(src) != here
+                    and not src.rsplit(".", 1)[-1].startswith("_")  # counted by the import test
+                ):
+                    bad.append(f"{where}:{node.lineno} {src}.{a.name}")
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.asname and is_module(a.name):
+                    modules[a.asname] = a.name
+    for node in ast.walk(tree):
+        if (
+            isinstance(node, ast.Attribute)
+            and isinstance(node.value, ast.Name)
+            and node.value.id in modules
+            and node.attr.startswith("_")
+            and not node.attr.startswith("__")
+            and sub_package(modules[node.value.id]) not in (None, here)
+        ):
+            bad.append(f"{where}:{node.lineno} {modules[node.value.id]}.{node.attr}")
+    return bad
+
+
+def test_the_private_name_finder_finds_imports_and_module_attributes(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "io").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "io" / "__init__.py").write_text("")
+    (pkg / "io" / "files.py").write_text("def _suffix(p):\n    return p\n")
+    (pkg / "cli.py").write_text(
+        "from .io import files\nfrom .io.files import _suffix\n"
+        "def f(p):\n    return files._suffix(p), _suffix(p)\n"
+    )
+    (pkg / "io" / "use.py").write_text("from . import files\nx = files._suffix(1)\n")
+    assert private_module_uses(pkg / "cli.py", pkg, "cli") == [
+        "cli.py:2 pkg.io.files._suffix",
+        "cli.py:4 pkg.io.files._suffix",
+    ]
+    assert private_module_uses(pkg / "io" / "use.py", pkg, "io") == []  # its own sub-package
+
+
+def test_no_module_private_name_is_used_from_another_sub_package():
+    package = ROOT / "tensor_cosdi"
+    bad = []
+    for top in ("tensor_cosdi", "tests", "examples", "benchmarks"):
+        for p in sorted((ROOT / top).rglob("*.py")):
+            rel = p.relative_to(package).parts if top == "tensor_cosdi" else None
+            here = None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
+            bad += private_module_uses(p, package, here)
+    assert bad == [], "private names used from outside their sub-package: " + "; ".join(bad)

@@ -155,7 +155,7 @@ def _cube_and_wavelengths(spec, wavelengths):
 
     path, key = files.split_key(spec)
     p = Path(path)
-    files._suffix(p)  # an unknown extension is an error naming the known ones
+    files.cube_suffix(p)  # an unknown extension is an error naming the known ones
     bundle = load_bundle(p) if key is None and bundle_document(p) is not None else None
     if bundle is not None:
         if bundle.cube is None:
@@ -217,13 +217,13 @@ def run_info(args) -> int:
     from ..io.bundle import bundle_document
 
     path = Path(args.file)
-    suffix = files._suffix(path)
+    suffix = files.cube_suffix(path)
     print(f"{path} ({path.stat().st_size if path.is_file() else 0} bytes)")
     if suffix == ".hdr":
         cube, wl = files.read_cube(path)
         entries = {"cube": (cube.shape, cube.dtype, None)}
     else:
-        entries = files._entries(path, suffix)
+        entries = files.array_entries(path, suffix)
     for name, (shape, dtype, _) in entries.items():
         print(f"  {name}: {tuple(int(n) for n in shape)} {np.dtype(dtype)}")
     doc = bundle_document(path)

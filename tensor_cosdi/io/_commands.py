@@ -10,7 +10,7 @@ import numpy as np
 DM_MAX_WAVES = 10.0
 
 
-def _check_command(c):
+def check_command(c):
     """``c`` stripped, or a ``ValueError``: one line, a known verb, arguments of the right kind and
     range (``DMD``/``PROJ``/``TRIG``: one integer ≥ 0; ``DM``: ``j:a`` pairs, Noll ``j ≥ 1``,
     finite ``|a| ≤`` :data:`DM_MAX_WAVES`; ``PING``: none)."""

@@ -293,7 +293,10 @@ def _unreadable(path, suffix, exc) -> ValueError:
     )
 
 
-def _entries(path: Path, suffix: str, max_bytes: int = MAX_ARRAY_BYTES):
+def array_entries(path: Path, suffix: str, max_bytes: int = MAX_ARRAY_BYTES):
+    """The arrays a file of type ``suffix`` holds, as ``{name: (shape, dtype, third)}`` (the
+    third item is the format reader's own); any format library's failure becomes one clear
+    error naming the file."""
     if not path.is_file():
         raise FileNotFoundError(f"file not found: {path}")
     try:

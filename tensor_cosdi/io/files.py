@@ -38,9 +38,9 @@ from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
 from ._atomic import atomic_write
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
-    _entries,
     _load,
     _require_h5py,
+    array_entries,
     reason,
 )
 
@@ -73,7 +73,9 @@ def split_key(spec: str) -> tuple[str, str | None]:
     return spec, None
 
 
-def _suffix(path: Path) -> str:
+def cube_suffix(path: Path) -> str:
+    """The lower-case suffix of ``path`` when it is a file type the readers know, else a
+    one-line ``ValueError`` naming them (:data:`CUBE_SUFFIXES`)."""
     s = path.suffix.lower()
     if s not in CUBE_SUFFIXES:
         raise ValueError(
@@ -120,7 +122,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
     order MATLAB shows); nothing is converted or clipped.
     """
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = cube_suffix(path)
     if suffix == ".hdr":
         cube, _ = _read_envi(path, max_bytes)
         if key is not None:
@@ -128,7 +130,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
         return cube
     if suffix == ".npy" and key is not None:
         raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
-    entries = _entries(path, suffix, max_bytes)
+    entries = array_entries(path, suffix, max_bytes)
     name = _pick(path, entries, key)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
@@ -190,12 +192,12 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
     match the band count and lie in :data:`WAVELENGTH_RANGE_NM`.
     """
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = cube_suffix(path)
     if suffix == ".hdr":
         return _read_envi(path, max_bytes)
     if suffix == ".npy" and key is not None:
         raise ValueError(f"{path}: a .npy file holds one array; key must be None, got {key!r}")
-    entries = _entries(path, suffix, max_bytes)
+    entries = array_entries(path, suffix, max_bytes)
     name = _pick(path, entries, key, want_ndim=3)
     shape, dtype, load = entries[name]
     _check_size(path, name, shape, dtype, max_bytes)
@@ -247,7 +249,7 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
     Never replaces an existing file without ``overwrite=True``.  Returns the path.
     """
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = cube_suffix(path)
     cube = np.asarray(cube)
     if cube.ndim != 3 or cube.dtype.kind not in "biuf":
         raise ValueError(

@@ -46,7 +46,7 @@ def _single_array(mapping: dict, path, key):
 def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
     """Refuse a file whose header declares more than ``max_bytes`` before reading its data."""
     from ._readers import reason
-    from .files import _check_size, _entries
+    from .files import _check_size, array_entries
 
     try:
         if suffix in (".png", ".jpg", ".jpeg", ".bmp"):
@@ -55,7 +55,7 @@ def _check_declared(p: Path, suffix: str, max_bytes: int) -> None:
             props = iio.improps(p)
             entries = {"frame": (props.shape, props.dtype)}
         else:
-            found = _entries(p, ".tif" if suffix == ".tiff" else suffix, max_bytes)
+            found = array_entries(p, ".tif" if suffix == ".tiff" else suffix, max_bytes)
             entries = {k: (v[0], v[1]) for k, v in found.items()}
     except (ValueError, KeyError):
         raise

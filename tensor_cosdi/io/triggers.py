@@ -43,7 +43,7 @@ from pathlib import Path
 
 from ..validate import integer, number
 from ._atomic import atomic_write
-from ._commands import DM_MAX_WAVES, _check_command, _check_frame_name  # noqa: F401
+from ._commands import DM_MAX_WAVES, _check_frame_name, check_command  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
 
 log = logging.getLogger(__name__)
@@ -126,7 +126,7 @@ class AcquisitionPlan:
             _check_frame_name(f)
         for s in steps:
             for c in s.commands:
-                _check_command(c)
+                check_command(c)
         object.__setattr__(self, "steps", steps)
 
     @staticmethod
@@ -279,7 +279,7 @@ class SerialDevice:
     def command(self, line: str) -> str:
         """Send one command and return the device's ``OK`` line; raise :class:`DeviceError`
         otherwise."""
-        line = _check_command(line)
+        line = check_command(line)
         verb = line.split()[0]
         expected = f"OK {line}" if verb == "TRIG" else f"OK {verb}"
         problems = []

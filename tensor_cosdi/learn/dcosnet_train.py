@@ -201,7 +201,7 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
     )  # fmt: skip
 
 
-def _build(torch, cfg: DCoSNetConfig, data):
+def build_network(torch, cfg: DCoSNetConfig, data):
     """The network; the ``"spectral"`` prior starts from the pretrained denoiser's weights."""
     net = build_dcosnet(torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width, cfg.prior)
     if cfg.prior == "spectral":
@@ -244,7 +244,7 @@ def train_dcosnet(
         config=config,
         config_cls=DCoSNetConfig,
         prepare=lambda cfg: _training_data(cfg, folder),
-        build=_build,
+        build=build_network,
         batch_loss=_dcosnet_loss,
         weights_config=lambda cfg: {
             "system": cfg.system,

@@ -36,7 +36,7 @@ __all__ = ["PatchDictionary", "train_dictionary", "dictionary_admm"]
 NOISE_GAIN = 1.15
 
 
-def _omp(D, Y, *, n_nonzero, tol=None, G=None, chunk: int = 512):
+def omp(D, Y, *, n_nonzero, tol=None, G=None, chunk: int = 512):
     """Sparse codes ``X (n_atoms, N)`` with ``Y ≈ D X``: orthogonal matching pursuit on all
     columns of ``Y`` at once (Batch-OMP, Rubinstein, Zibulevsky & Elad 2008).
 
@@ -174,7 +174,7 @@ class PatchDictionary:
         dim = Y.shape[0]
         tol = dim * (NOISE_GAIN * max(float(sigma), 1e-12)) ** 2
         k = min(self.max_nonzero, self.n_atoms)
-        X = _omp(self.atoms, Y, n_nonzero=k, tol=tol, G=self._gram())
+        X = omp(self.atoms, Y, n_nonzero=k, tol=tol, G=self._gram())
         P = (self.atoms @ X).T.reshape(len(rows), len(cols), p, p, self.channels)
         out = np.zeros_like(xn)
         weight = np.zeros(xn.shape[:2])
@@ -261,7 +261,7 @@ def train_dictionary(
     D += 1e-6 * rng.standard_normal(D.shape)  # repeated draws must not give equal atoms
     D /= np.linalg.norm(D, axis=0)
     for _ in tqdm(range(int(n_iter)), desc="K-SVD", disable=not progress):
-        X = _omp(D, Y, n_nonzero=s)
+        X = omp(D, Y, n_nonzero=s)
         R = Y - D @ X
         for j in rng.permutation(k):
             users = np.flatnonzero(X[j])

@@ -49,9 +49,9 @@ def camera_response(wavelengths, camera: str = DEFAULT_CAMERA) -> np.ndarray:
     >>> r.shape, round(float(r.sum(axis=0).max()), 6)
     ((3, 3), 1.0)
     """
-    from ..colour import _colour
+    from ..colour import colour_science
 
-    colour = _colour()
+    colour = colour_science()
     if camera not in colour.MSDS_CAMERA_SENSITIVITIES:
         raise ValueError(
             f"unknown camera {camera!r}; colour-science has "

@@ -200,10 +200,10 @@ def test_plans(tmp_path):
     ],
 )
 def test_unsafe_commands_never_reach_the_device(command, message):
-    from tensor_cosdi.io.triggers import _check_command
+    from tensor_cosdi.io.triggers import check_command
 
     with pytest.raises(ValueError, match=message):
-        _check_command(command)
+        check_command(command)
     with pytest.raises(ValueError, match=message):
         AcquisitionPlan((Step({"t": 0}, (command,), "f.tif"),))
 

@@ -92,11 +92,11 @@ def test_spectral_prior_is_the_shipped_denoiser_and_trains():
     import torch
 
     from tensor_cosdi.learn.dcosnet import build_dcosnet
-    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, _build
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, build_network
     from tensor_cosdi.learn.spectral_net import SpectralDenoiser
 
     cfg = DCoSNetConfig(n_bands=6, stages=2, width=4, prior="spectral")
-    net = _build(torch, cfg, None)
+    net = build_network(torch, cfg, None)
     ref = SpectralDenoiser()
     x = _real("face", (24, 24), np.linspace(420, 680, 6)).transpose(2, 0, 1)[None]
     x = torch.from_numpy(x + 0.05 * np.random.default_rng(0).standard_normal(x.shape))

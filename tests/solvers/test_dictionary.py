@@ -5,7 +5,7 @@ import pytest
 
 import tensor_cosdi as tc
 from tensor_cosdi import datasets, studies
-from tensor_cosdi.solvers.dictionary import PatchDictionary, _omp, train_dictionary
+from tensor_cosdi.solvers.dictionary import PatchDictionary, omp, train_dictionary
 
 
 def _dictionary(rng, dim=40, k=80):
@@ -19,17 +19,17 @@ def test_omp_recovers_sparse_codes_and_stops_at_the_tolerance():
     X = np.zeros((80, 300))
     for n in range(300):
         X[rng.choice(80, 3, replace=False), n] = rng.choice([-1, 1], 3) * (1 + rng.random(3))
-    got = _omp(D, D @ X, n_nonzero=3, chunk=64)  # chunks must not change anything
+    got = omp(D, D @ X, n_nonzero=3, chunk=64)  # chunks must not change anything
     assert np.mean(np.all(np.abs(got - X) < 1e-8, axis=0)) > 0.95
     Y = rng.standard_normal((40, 200))
     tol = 15.0
-    codes = _omp(D, Y, n_nonzero=30, tol=tol)
+    codes = omp(D, Y, n_nonzero=30, tol=tol)
     resid = ((Y - D @ codes) ** 2).sum(axis=0)
     used = (codes != 0).sum(axis=0)
     assert np.all(resid <= tol + 1e-8)
     # one atom fewer would not have been enough: the greedy prefix had a residual above tol
     for n in np.flatnonzero(used > 1)[:20]:
-        fewer = _omp(D, Y[:, [n]], n_nonzero=int(used[n]) - 1)
+        fewer = omp(D, Y[:, [n]], n_nonzero=int(used[n]) - 1)
         assert ((Y[:, n] - D @ fewer[:, 0]) ** 2).sum() > tol
 
 
@@ -44,7 +44,7 @@ def test_ksvd_lowers_the_representation_error():
 
     def error(d):
         Y = patches.reshape(600, 32).T
-        return np.linalg.norm(Y - d.atoms @ _omp(d.atoms, Y, n_nonzero=2)) / np.linalg.norm(Y)
+        return np.linalg.norm(Y - d.atoms @ omp(d.atoms, Y, n_nonzero=2)) / np.linalg.norm(Y)
 
     first = train_dictionary(cubes, patch=4, n_atoms=20, sparsity=2, n_patches=1200, n_iter=1)
     more = train_dictionary(cubes, patch=4, n_atoms=20, sparsity=2, n_patches=1200, n_iter=15)

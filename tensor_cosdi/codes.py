@@ -184,7 +184,7 @@ def complementary_colour_codes(
 def colour_coded_aperture(
     shape, n_bands: int, *, n_filters: int = 6, transmittance: float = 0.5, rng=None
 ) -> np.ndarray:
-    """Colour-coded aperture with ``#f`` filters and transmittance ``κ`` (thesis Sec. 6.3.2).
+    """Colour-coded aperture with ``#f`` filters and transmittance ``κ`` (thesis Section 6.3.2).
 
     Each pixel is open with probability ``κ = transmittance``; an open pixel
     carries one of ``#f = n_filters`` contiguous band-pass filters

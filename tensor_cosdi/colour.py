@@ -132,8 +132,8 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
 
 
 def reflectance(cube, white, dark=0.0):
-    """Reflectance from a radiance cube and a white reference (thesis Eq. 171): ``(X − dark) / (W −
-    dark)``.
+    """Reflectance from a radiance cube and a white reference (thesis Equation 171):
+    ``(X − dark) / (W − dark)``.
 
     Parameters
     ----------

@@ -166,7 +166,7 @@ def sam(image_true, image_test, *, channel_axis: int = 2, band_axis=None) -> flo
 
 
 def combined_error(psnr_values, ssim_values, rmse_values, sam_values) -> np.ndarray:
-    """The combined percentage error of Eq. 49 that picks a design (e.g. the VSI splitting ratio).
+    """The combined percentage error of Equation 49 that picks a design (the VSI splitting ratio).
 
     Each argument is an ``(L1, L2)`` array: ``L1`` scenes × ``L2`` design
     settings.  Per scene, each metric becomes its relative distance to the

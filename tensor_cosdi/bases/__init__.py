@@ -1,4 +1,4 @@
-"""Orthonormal per-mode bases applied by n-mode products (SPEC §4, §5; thesis Eq. 82, 86).
+"""Orthonormal per-mode bases applied by n-mode products (SPEC §4, §5; thesis Equation 82, 86).
 
 A datacube is represented as ``F = Θ ×₁ Ψ1 ×₂ Ψ2 … ×_d Ψd`` with square
 orthonormal *synthesis* matrices ``Ψn`` (columns are the atoms).  Because

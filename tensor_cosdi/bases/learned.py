@@ -73,7 +73,7 @@ def unfolding_gram(x: np.ndarray, mode: int) -> np.ndarray:
 
 
 def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
-    """Complete HOSVD bases: ``{mode: svd_basis(unfolding(tensor, mode))}`` (thesis Eq. 97).
+    """Complete HOSVD bases: ``{mode: svd_basis(unfolding(tensor, mode))}`` (thesis Equation 97).
 
     Examples
     --------

@@ -52,7 +52,7 @@ def _sums(x):
 
 
 def wrapped_phase(frames, *, axis: int = -1):
-    """N-step least-squares phase (Eq. 19) of ``K ≥ 3`` frames ``I_k = a + b·cos(φ + 2πk/K)``.
+    """N-step least-squares phase (Equation 19) of ``K ≥ 3`` frames ``I_k = a + b·cos(φ + 2πk/K)``.
 
     ``φ = atan2(−Σ_k I_k sin(2πk/K), Σ_k I_k cos(2πk/K))`` in ``(−π, π]``
     — the sign makes it invert :func:`~tensor_cosdi.optics.phase_shift_patterns`
@@ -118,8 +118,8 @@ def temporal_unwrap(wrapped, reference, ratio):
 
 
 def heterodyne_unwrap(wrapped, frequencies):
-    """Absolute phase of the highest frequency from wrapped phases at several frequencies (Eq.
-    22-24).
+    """Absolute phase of the highest frequency from wrapped phases at several frequencies
+    (Equations 22-24).
 
     Multi-frequency temporal unwrapping.  Where the lowest frequency has at
     most one period across the field (``ν ≤ 1``) its phase is already

@@ -160,7 +160,7 @@ def crop(frame, roi):
 
 
 def bin_frame(frame, binning: int):
-    """Sum ``binning × binning`` blocks (sensor binning, e.g. 6×6 for a 2×2-binned DMD, Sec. 3.4).
+    """Sum ``binning × binning`` blocks (sensor binning: 6×6 for a 2×2-binned DMD, Section 3.4).
 
     The frame's size must be a multiple of ``binning`` (crop with ``roi``
     first): nothing is silently dropped.

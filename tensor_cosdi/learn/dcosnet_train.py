@@ -1,5 +1,5 @@
 """Training D-CoSNet (``tensor-cosdi train-dcosnet``): crops of the tuning scenes measured
-through crops of a real coded aperture, Eq. 152's loss, the shared training loop of
+through crops of a real coded aperture, Equation 152's loss, the shared training loop of
 :mod:`tensor_cosdi.learn._loop` (checkpoints, exact resume).  The network is in
 :mod:`tensor_cosdi.learn.dcosnet`."""
 
@@ -172,7 +172,7 @@ def _sample(rng, cfg: DCoSNetConfig, data):
 
 
 def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
-    """Eq. 152 with the ablation choices; ``G`` compared in units of ``d̄`` (cube-like)."""
+    """Equation 152 with the ablation choices; ``G`` compared in units of ``d̄`` (cube-like)."""
     db = _per_sample(dbar, g_true)
     total = (g_est - g_true).abs().div(db).mean()
     if loss in ("l1+ssim", "l1"):

@@ -747,7 +747,7 @@ class OperatorSum(TensorOperator):
 
 
 def weighted_sum(operators, weights) -> TensorOperator:
-    """``Σ_i w_i A_i`` (e.g. the two arms of CASSI-VSI, Eq. 45)."""
+    """``Σ_i w_i A_i`` (e.g. the two arms of CASSI-VSI, Equation 45)."""
     operators, weights = list(operators), list(weights)
     if len(operators) != len(weights) or not operators:
         raise ValueError(

@@ -1,4 +1,4 @@
-"""Per-slice 2-D blur by a point-spread function, via FFT (Eq. 51-59)."""
+"""Per-slice 2-D blur by a point-spread function, via FFT (Equation 51-59)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Integration over an axis (the detector sums bands, focal steps, snapshots) and
-its adjoint, replication (the thesis' decimator transpose ``Dᵀ``, Eq. 46, 62)."""
+its adjoint, replication (the thesis' decimator transpose ``Dᵀ``, Equation 46, 62)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Permutations and embeddings: axis transposes, zero padding / cropping, and the
-light-field layouts of SPEC §3.3 (5-D views ↔ interleaved lenslet image, Eq. 85,
-↔ tiled sub-aperture views, Eq. 78 as corrected in SPEC §12)."""
+light-field layouts of SPEC §3.3 (5-D views ↔ interleaved lenslet image, Equation 85,
+↔ tiled sub-aperture views, Equation 78 as corrected in SPEC §12)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""n-mode products: separable (Kronecker) sensing and per-mode bases (Eq. 80, 82)."""
+"""n-mode products: separable (Kronecker) sensing and per-mode bases (Equation 80, 82)."""
 
 from __future__ import annotations
 

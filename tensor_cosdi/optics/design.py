@@ -17,7 +17,7 @@ THESIS_DESIGN = {"phi1": 85.9, "phi3": 73.7, "glass1": "N-SK2", "glass2": "SF4"}
 
 
 def eq190_phi3(phi1):
-    """Eq. 190, the thesis' fit of the zero-deviation curve: ``φ3 = 0.3544 (φ1 − 50) + 77.5``.
+    """Equation 190, the thesis' fit of the zero-deviation curve: ``φ3 = 0.3544 (φ1 − 50) + 77.5``.
 
     It does not describe Alg. 7's zero-deviation curve: at the built prism's
     φ1 = 85.9° it gives 90.2° (no middle wedge at all) where the ray trace

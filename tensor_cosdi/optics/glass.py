@@ -1,4 +1,4 @@
-"""Optical glasses by their Sellmeier equations (SPEC §8, thesis Eq. 188-189)."""
+"""Optical glasses by their Sellmeier equations (SPEC §8, thesis Equation 188-189)."""
 
 from __future__ import annotations
 

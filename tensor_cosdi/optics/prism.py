@@ -26,7 +26,7 @@ def _finite(name, value):
 
 @dataclass(frozen=True)
 class DoubleAmiciPrism:
-    """A double Amici prism: glass 1 | glass 2 | glass 1, symmetric (thesis Fig. 92-95).
+    """A double Amici prism: glass 1 | glass 2 | glass 1, symmetric (thesis Figure 92-95).
 
     Parameters
     ----------
@@ -112,12 +112,12 @@ class DoubleAmiciPrism:
         return np.rad2deg(t4p - b1)
 
     def exit_angle(self, wavelength_nm, theta0=0.0):
-        """``θ5`` in degrees: angle of the emerging ray to the optical axis (Eq. 184)."""
+        """``θ5`` in degrees: angle of the emerging ray to the optical axis (Equation 184)."""
         out = self._trace(wavelength_nm, theta0)
         return float(out) if np.ndim(out) == 0 else out
 
     def deviation(self, wavelength_nm, theta0=0.0):
-        """Deviation ``δ = θ0 − θ5`` in degrees (Alg. 7) for incidence ``theta0`` (degrees).
+        """Deviation ``δ = θ0 − θ5`` in degrees (Algorithm 7) for incidence ``theta0`` (degrees).
 
         Broadcasts ``wavelength_nm`` (nm) against ``theta0``.
         """
@@ -127,7 +127,7 @@ class DoubleAmiciPrism:
     def mean_deviation(
         self, wavelength_nm, *, field_deg: float = THESIS_FIELD_DEG, n_angles: int = 41
     ):
-        """Deviation averaged over incidences ``θ0 ∈ [−field/2, field/2]`` (Alg. 8), degrees.
+        """Deviation averaged over incidences ``θ0 ∈ [−field/2, field/2]`` (Algorithm 8), degrees.
 
         ``field_deg`` is the full angular field (thesis: 2.29°, a 4 mm detector
         behind a 100 mm lens); ``n_angles`` evenly spaced incidences.
@@ -148,7 +148,7 @@ class DoubleAmiciPrism:
     def dispersion(
         self, wavelength_min_nm: float = 450.0, wavelength_max_nm: float = 650.0, theta0=0.0
     ) -> float:
-        """``Δ = δ(λmax) − δ(λmin)`` in degrees (Eq. 187)."""
+        """``Δ = δ(λmax) − δ(λmin)`` in degrees (Equation 187)."""
         return float(
             self.deviation(wavelength_max_nm, theta0) - self.deviation(wavelength_min_nm, theta0)
         )

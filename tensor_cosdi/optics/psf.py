@@ -1,4 +1,4 @@
-"""Incoherent PSFs from a pupil, Zernike aberrations and defocus (SPEC §8, thesis Eq. 51-53).
+"""Incoherent PSFs from a pupil, Zernike aberrations and defocus (SPEC §8, thesis Equation 51-53).
 
 The field in the image plane is the Fraunhofer transform of the pupil
 function, evaluated directly at the sensor's pixel positions by two small
@@ -109,7 +109,7 @@ class Lens:
 
 
 def defocus_coefficient(lens: Lens, wavelength_nm: float, depth_mm: float) -> float:
-    """``Ω = (π/λ)(1/z + 1/z_i − 1/f) r²`` in radians at the pupil edge (Eq. 51)."""
+    """``Ω = (π/λ)(1/z + 1/z_i − 1/f) r²`` in radians at the pupil edge (Equation 51)."""
     lam = _pos("wavelength_nm", wavelength_nm) * 1e-6  # mm
     z = _pos("depth_mm", depth_mm, allow_inf=True)
     return float(

@@ -1,4 +1,4 @@
-"""A-VSI: the thesis' ADMM for CASSI-VSI with virtual side information (Alg. 1, SPEC §3.1, §6).
+"""A-VSI: the thesis' ADMM for CASSI-VSI with virtual side information (Algorithm 1, SPEC §3.1, §6).
 
 Unknowns: the cube ``f`` and its grayscale projection ``z = D f`` (``D`` the
 band sum).  With the arms ``H = αT HT + αR HR`` (Eq. 45), the augmented
@@ -81,7 +81,7 @@ def avsi(
     wavelet_level="auto",
     progress: bool = False,
 ):
-    """A-VSI (thesis Alg. 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as
+    """A-VSI (thesis Algorithm 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as
     ``"avsi"``.
 
     Parameters

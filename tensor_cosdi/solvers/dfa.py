@@ -1,4 +1,4 @@
-"""The thesis' multiresolution reconstruction for CASSDI-DFA (Alg. 2-4, SPEC §3.2, §6).
+"""The thesis' multiresolution reconstruction for CASSDI-DFA (Algorithm 2-4, SPEC §3.2, §6).
 
 Three sub-problems on decimated unknowns, each a TV-regularised least-squares
 problem solved by FISTA (gradient step ``x + Aᵀ(g − A x)/L``, TV proximal
@@ -90,7 +90,7 @@ def multiresolution_dfa(
     tol: float = 1e-4,
     progress: bool = False,
 ):
-    """Multiresolution DFA (thesis Alg. 2-4) for a :class:`~tensor_cosdi.systems.CASSDIDFA`.
+    """Multiresolution DFA (thesis Algorithm 2-4) for a :class:`~tensor_cosdi.systems.CASSDIDFA`.
     Registered as ``"dfa"``.
 
     Parameters

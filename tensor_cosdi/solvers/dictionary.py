@@ -1,4 +1,4 @@
-"""A learned patch dictionary (K-SVD) as a prior: the thesis' DL-3D baseline (Sec. 5.3).
+"""A learned patch dictionary (K-SVD) as a prior: the thesis' DL-3D baseline (Section 5.3).
 
 The thesis compares OTD with "DL": an over-complete dictionary of 3-D
 patches (``8 × 8 × N3``, twice as many atoms as a patch has entries) trained
@@ -214,7 +214,7 @@ def train_dictionary(
     cubes, *, patch: int = 8, n_atoms=None, sparsity=None, n_patches: int = 6000,
     n_iter: int = 10, rng=0, progress: bool = False, **options,
 ) -> PatchDictionary:  # fmt: skip
-    """K-SVD on random patches of ``cubes``: the thesis' DL baseline (Sec. 5.3).
+    """K-SVD on random patches of ``cubes``: the thesis' DL baseline (Section 5.3).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The Lytro-CASSI baseline's reconstruction (thesis Sec. 5.3, after Xiong et al. 2017).
+"""The Lytro-CASSI baseline's reconstruction (thesis Section 5.3, after Xiong et al. 2017).
 
 The thesis trains "a dictionary with 2-D patches of size 8 × 8, selecting
 10⁴ patches at random" from the Lytro arm's RGB image and uses "a discrete

@@ -1,4 +1,4 @@
-"""Online Tucker dictionary ADMM (thesis Alg. 5, generalised to every system; SPEC §5) and
+"""Online Tucker dictionary ADMM (thesis Algorithm 5, generalised to every system; SPEC §5) and
 WDCT-ADMM.
 
 Both methods solve, for a cube written in a Kronecker basis
@@ -141,7 +141,7 @@ def initial_bases(
 
 
 def theta_step(operator, basis, atg, w, mu):
-    """Θ-step (Eq. 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg =
+    """Θ-step (Equation 101): ``Θ = argmin ‖G − AΨΘ‖² + μ‖Θ − w‖²``, with ``w = Ω + ν`` and ``atg =
     AᵀG``.
 
     ``Θ = Ψᵀ (AᵀA + μI)⁻¹ (AᵀG + μ Ψ w)``: orthonormal ``Ψ`` leaves the
@@ -281,8 +281,8 @@ def online_tucker_admm(
     plane_support="auto",
     progress: bool = False,
 ):
-    """OTD: online Tucker dictionary ADMM (thesis Alg. 5 for every system, SPEC §5).  Registered as
-    ``"otd"``.
+    """OTD: online Tucker dictionary ADMM (thesis Algorithm 5 for every system, SPEC §5).
+    Registered as ``"otd"``.
 
     Steps (SPEC §5): the panchromatic estimate ``Z`` (exact where the
     system allows, else :func:`subspace_gap_tv`, which also gives the

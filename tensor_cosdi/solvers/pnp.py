@@ -1,4 +1,4 @@
-"""Hierarchical plug-and-play ADMM for CS2LI and Mu-CoSDI (thesis Alg. 6, SPEC §3.4, §6).
+"""Hierarchical plug-and-play ADMM for CS2LI and Mu-CoSDI (thesis Algorithm 6, SPEC §3.4, §6).
 
 Structured light makes the cube bilinear: ``P[x, y, l, t] = F[x, y, l] · m[x, y, t]``,
 the reflectance ``F`` times the fringe modulation ``m`` (Eq. 107).  The
@@ -111,8 +111,8 @@ def hierarchical_pnp(
     n_steps: int | None = None,
     progress: bool = False,
 ):
-    """Alg. 6 for a system whose cube is ``(Nx, Ny, Nλ, Nt)``.  Returns ``(P, history, converged,
-    depth)``.
+    """Algorithm 6 for a system whose cube is ``(Nx, Ny, Nλ, Nt)``.
+    Returns ``(P, history, converged, depth)``.
 
     ``depth`` is the wrapped phase ``(Nx, Ny, n_freq)`` of the fringe images
     when ``n_steps`` (``K``) divides ``Nt`` (frequency-major patterns,
@@ -191,7 +191,8 @@ def pnp_admm(
     n_steps: int | None = 4,
     progress: bool = False,
 ):
-    """Hierarchical PnP-ADMM (thesis Alg. 6) for CS2LI and Mu-CoSDI.  Registered as ``"pnp_admm"``.
+    """Hierarchical PnP-ADMM (thesis Algorithm 6) for CS2LI and Mu-CoSDI.
+    Registered as ``"pnp_admm"``.
 
     Parameters
     ----------

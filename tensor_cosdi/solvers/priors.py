@@ -244,8 +244,8 @@ class FixedBasis(SparseInBasis):
 
 
 class TuckerDictionary(SparseInBasis):
-    """The online Tucker dictionary (thesis Alg. 5): sparse in per-mode bases re-learned from the
-    estimate.
+    """The online Tucker dictionary (thesis Algorithm 5): sparse in per-mode bases re-learned
+    from the estimate.
 
     Every ``update_every`` iterations (0: never) the bases of ``update_modes``
     are replaced by the HOSVD bases of the current estimate's unfoldings

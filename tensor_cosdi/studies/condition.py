@@ -1,5 +1,5 @@
 """The conditioning of ``A Aᵀ`` (its eigenvalues, exactly or by Lanczos), against design
-parameters, and the CASSI-VSI arm study (thesis Sec. 3.3.1)."""
+parameters, and the CASSI-VSI arm study (thesis Section 3.3.1)."""
 
 from __future__ import annotations
 
@@ -124,7 +124,7 @@ def vsi_arms(
     scenes=("cave.face",), alphas=ALPHAS, *, snr_db=20.0,
     shape=(64, 64), n_bands=12, seeds=(0,), beta=0,
 ) -> list[dict]:  # fmt: skip
-    """The CASSI-VSI beam-splitter design study of the thesis (Sec. 3.3.1, Fig. 19-20).
+    """The CASSI-VSI beam-splitter design study of the thesis (Section 3.3.1, Figure 19-20).
 
     Per splitting ratio ``αT``:
 

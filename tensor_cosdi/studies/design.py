@@ -51,8 +51,8 @@ def colour_code_design(
     progress=True, **options,
 ) -> list[dict]:  # fmt: skip
     """Reconstruction quality and conditioning of colour-coded SD-CASSI against the number of
-    filters ``#f`` and the transmittance ``κ`` (thesis Sec. 6.3.2; :func:`tensor_cosdi.codes.
-    colour_coded_aperture`).
+    filters ``#f`` and the transmittance ``κ`` (thesis Section 6.3.2;
+    :func:`tensor_cosdi.codes.colour_coded_aperture`).
 
     Judge it on a real scene (``"cave.<name>"``, the default): photo-derived
     spectra live in a 3-D subspace and favour any code.
@@ -182,7 +182,7 @@ def c3slfi_table(
     forms=("3d", "5d"), *, shape=(128, 128), views=(4, 4), n_bands=31, seeds=(0,), client=None,
     progress=True, **options,
 ) -> list[dict]:  # fmt: skip
-    """The thesis' Table 1 (Sec. 5.3.2): C3SLFI reconstruction quality over the compression
+    """The thesis' Table 1 (Section 5.3.2): C3SLFI reconstruction quality over the compression
     ratio ``C = K / N3`` (snapshots per band), the SNR, the method and the 3-D or 5-D
     parameterisation.
 

@@ -1,5 +1,5 @@
 """Which Zernike aberration encodes depth best in CASSDI-DFA (re-exported by
-:mod:`tensor_cosdi.studies`; thesis Sec. 4.3).
+:mod:`tensor_cosdi.studies`; thesis Section 4.3).
 
 The deformable mirror adds one Zernike mode to the focal sweep; the thesis
 picks vertical astigmatism (Noll 6) at ≈ 0.9-1 wave.  A PSF cropped to a few
@@ -91,7 +91,7 @@ def zernike_design(
     reference_size=81, sweep=False, client=None, progress=True, **options,
 ) -> list[dict]:  # fmt: skip
     """Depth and spectral quality of CASSDI-DFA against the Zernike mode and amplitude the
-    deformable mirror adds to defocus, at several PSF crop sizes (thesis Sec. 4.3).
+    deformable mirror adds to defocus, at several PSF crop sizes (thesis Section 4.3).
 
     Pure defocus (amplitude 0, the thesis' "CASSDI-DFD") is always included.
     Three depth planes at 800 / 1000 / 1300 mm, a 50 mm f/16.7 lens focused

@@ -199,7 +199,7 @@ class System(SystemRoles):
 
     @property
     def decimation(self) -> TensorOperator:
-        """``D``: cube → panchromatic, the sum over :attr:`panchromatic_axes` (Eq. 46, 62)."""
+        """``D``: cube → panchromatic, the sum over :attr:`panchromatic_axes` (Equation 46, 62)."""
         op = None
         shape = self.cube_shape
         names = list(self.axes)
@@ -277,7 +277,7 @@ def pixel_index(nx: int, ny: int) -> np.ndarray:
 
 
 def coded_shear_sum_matrix(weights: np.ndarray, shifts, width: int) -> sp.csr_matrix:
-    """``H = Σ_l P_{s_l} diag(w_l)`` (Eq. 43): columns ``j = u + NxNy l``, rows ``u + Nx s_l``.
+    """``H = Σ_l P_{s_l} diag(w_l)`` (Equation 43): columns ``j = u + NxNy l``, rows ``u + Nx s_l``.
 
     ``weights`` has shape ``(Nx, Ny, Nλ)`` (the code each band sees); band
     ``l`` lands ``s_l`` columns to the right on an ``Nx × width`` detector.
@@ -305,7 +305,7 @@ def coded_shear_sum_matrix(weights: np.ndarray, shifts, width: int) -> sp.csr_ma
 
 
 def unsheared_code(code: np.ndarray, shifts, ny: int) -> np.ndarray:
-    """``Ceff[:, c, l] = C[:, c + s_l, l]`` (dual disperser, Eq. 113 with SPEC §12's indices).
+    """``Ceff[:, c, l] = C[:, c + s_l, l]`` (dual disperser, Equation 113 with SPEC §12's indices).
 
     ``code`` is ``(Nx, Ny + ⌈max s⌉)`` (one code for all bands) or
     ``(Nx, Ny + ⌈max s⌉, Nλ)`` (colour-coded).  Fractional shifts read the code
@@ -349,13 +349,14 @@ def dual_disperser(code, n_bands: int, shifts):
 
 
 def dual_disperser_operator(ceff: np.ndarray, cube_shape):
-    """``G = Σ_l Ceff[:, :, l] ∘ F[:, :, l, …]`` for a cube ``(Nx, Ny, Nλ, …)`` (Eq. 113-115)."""
+    """``G = Σ_l Ceff[:, :, l] ∘ F[:, :, l, …]`` for a cube ``(Nx, Ny, Nλ, …)``
+    (Equations 113-115)."""
     return SumAxis(cube_shape, 2) @ Code(ceff, cube_shape, axes=(0, 1, 2))
 
 
 def dual_disperser_matrix(code: np.ndarray, shifts, ny: int, repeats: int) -> sp.csr_matrix:
-    """Eq. 115 / 144: ``H = I_repeats ⊗ A``, ``A = [diag(c_0) … diag(c_{Nλ−1})]``, ``c_l = vec(C[:,
-    s_l : s_l + Ny, l])``."""
+    """Equations 115 / 144: ``H = I_repeats ⊗ A``, ``A = [diag(c_0) … diag(c_{Nλ−1})]``,
+    ``c_l = vec(C[:, s_l : s_l + Ny, l])``."""
     lo, t = fractional_weights(shifts)
     diags = []
     for l in range(len(lo)):

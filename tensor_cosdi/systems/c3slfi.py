@@ -271,7 +271,7 @@ class C3SLFI(System):
         complementary=True,
         wavelengths=None,
     ):
-        """Spatially invariant spectral codes, the n-mode form ``G = F ×₃ Φ3`` (Eq. 80).
+        """Spatially invariant spectral codes, the n-mode form ``G = F ×₃ Φ3`` (Equation 80).
 
         Parameters
         ----------

@@ -22,7 +22,7 @@ __all__ = ["CASSDIDFA"]
 
 
 class CASSDIDFA(System):
-    """Focal sweep with a deformable mirror, one code per focal step, one exposure (Eq. 57-60).
+    """Focal sweep with a deformable mirror, one code per focal step, one exposure (Equation 57-60).
 
     ::
 

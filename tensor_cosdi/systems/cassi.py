@@ -45,7 +45,7 @@ def _finish_shots(system, ops, wavelengths):
 
 
 class SDCASSI(System):
-    """Single-disperser CASSI, single- or multi-shot (SPEC §3.0, thesis Eq. 43).
+    """Single-disperser CASSI, single- or multi-shot (SPEC §3.0, thesis Equation 43).
 
     ``G[:, :, k] = Σ_l shear_l(C_k ∘ F[:, :, l])``: the coded cube is sheared
     by ``s_l`` columns per band and integrated on the detector.
@@ -235,7 +235,7 @@ class DDCASSI(System):
 
 
 class DualCameraCASSI(System):
-    """SD-CASSI plus a separate panchromatic camera (side information, thesis Ch. 3).
+    """SD-CASSI plus a separate panchromatic camera (side information, thesis Chapter 3).
 
     Two frames in one tensor of shape ``(Nx, Ny + S, 2)`` (axes ``x, y,
     camera``): ``G[:, :, 0]`` is the SD-CASSI frame, ``G[:, :Ny, 1] = Σ_l

@@ -24,7 +24,7 @@ __all__ = ["CASSIVSI"]
 
 
 class CASSIVSI(System):
-    """CASSI with virtual side information: two arms on one detector (Eq. 40-44).
+    """CASSI with virtual side information: two arms on one detector (Equation 40-44).
 
     A beam splitter sends ``αT`` of the light through the prism (the coded,
     dispersed arm) and ``αR = 1 − αT`` straight to the same sensor (the coded

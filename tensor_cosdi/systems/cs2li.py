@@ -26,7 +26,7 @@ __all__ = ["CS2LI", "fringe_cube"]
 
 
 class CS2LI(System):
-    """Spectral structured light through a double Amici prism passed twice (Eq. 113-115).
+    """Spectral structured light through a double Amici prism passed twice (Equation 113-115).
 
     The prism, a colour-coded mirror and the prism again form a dual
     disperser, so each pattern's measurement is aligned with the scene::
@@ -81,7 +81,7 @@ class CS2LI(System):
         return fringe_phase(cube, n_steps)
 
     def spectral_view(self, cube):
-        """The reflectance: the mean over the phase steps (fringe offset 1, Eq. 107)."""
+        """The reflectance: the mean over the phase steps (fringe offset 1, Equation 107)."""
         return np.asarray(B.to_numpy(cube), dtype=np.float64).mean(axis=3)
 
     @classmethod
@@ -127,7 +127,7 @@ class CS2LI(System):
 def fringe_cube(
     reflectance, phases, *, n_steps: int = 4, offset: float = 1.0, amplitude: float = 1.0
 ):
-    """The cube ``P`` a CS2LI senses: reflectance under phase-shifted white fringes (Eq. 107).
+    """The cube ``P`` a CS2LI senses: reflectance under phase-shifted white fringes (Equation 107).
 
     ``P[x, y, l, f·K + k] = F[x, y, l] · (offset + amplitude · cos(φ_f(x, y) + 2πk/K))``
     for frequency ``f`` and step ``k = 0 … K−1`` — so each frequency

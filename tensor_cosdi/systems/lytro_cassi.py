@@ -1,4 +1,4 @@
-"""Lytro-CASSI: the dual-arm spectral light-field baseline of thesis Sec. 5.3 (Table 1).
+"""Lytro-CASSI: the dual-arm spectral light-field baseline of thesis Section 5.3 (Table 1).
 
 Xiong et al. ("Snapshot hyperspectral light field imaging", CVPR 2017) split
 the light of a scene between a plenoptic RGB camera (a Lytro) and a CASSI.
@@ -69,7 +69,7 @@ def camera_response(wavelengths, camera: str = DEFAULT_CAMERA) -> np.ndarray:
 
 
 class LytroCASSI(System):
-    """A plenoptic RGB arm plus a ``K``-shot SD-CASSI arm on one lenslet cube (thesis Sec. 5.3).
+    """A plenoptic RGB arm plus a ``K``-shot SD-CASSI arm on one lenslet cube (thesis Section 5.3).
 
     ``gap_eps`` is 0.1: with ``A Aᵀ``'s κ ≈ 10⁸, accelerated GAP-TV (chelsea,
     32×32×8, the default problem) reached −7.5 dB at ε = 1e-6, 0.6 at 1e-4,

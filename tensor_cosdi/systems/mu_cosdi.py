@@ -32,7 +32,7 @@ MODALITIES = {
 
 
 class MuCoSDI(System):
-    """Dual-disperser spectral core plus one depth modality (Eq. 144-151).
+    """Dual-disperser spectral core plus one depth modality (Equation 144-151).
 
     A binary code sheared by ``Γ(l) = γ·l`` (``shifts=γ``) modulates the cube
     the way CS2LI's does, ``G = Σ_l Ceff_l ∘ F_l`` with

@@ -52,26 +52,16 @@ def test_auto_weights_rescue_otd_at_20db_on_a_real_scene_and_mask():
     peak and pan_weight="auto" (the default) lam 0.1 gives 25.59 dB and
     lam="auto" 26.30: the default is rescued, and lam="auto" still adds.
     """
-    from pathlib import Path
 
     import scipy.io
 
     from tensor_cosdi import datasets
 
-    mask_file = (
-        Path(tc.__file__).resolve().parents[1]
-        / ".."
-        / "shared"
-        / "data"
-        / "masks"
-        / "tsa_mask256.mat"
-    )
     try:
         cube, wl = datasets.load_hsi("clay", "kaist", shape=(96, 96))
+        mask_file = datasets.data_file("masks/tsa_mask256.mat")
     except FileNotFoundError:
-        pytest.skip("../shared/data/hsi_train not present")
-    if not mask_file.exists():
-        pytest.skip("../shared/data/masks/tsa_mask256.mat not present")
+        pytest.skip("research data (hsi_train, masks/tsa_mask256.mat) not found: TENSOR_COSDI_DATA")
     mask = scipy.io.loadmat(mask_file)["mask"][:96, :96].astype(float)
     sd = tc.systems.SDCASSI(mask, n_bands=28, shifts=2, wavelengths=wl)
     g = sd.simulate(cube, snr_db=20, rng=0)
@@ -101,16 +91,15 @@ def test_snr_schedule_is_log_linear_between_anchors_and_flat_beyond():
 def _tsa_problem(snr):
     """A real scene through the real TSA mask (128×128 crops): the setting the automatic weights
     were tuned for."""
-    from pathlib import Path
 
     import scipy.io
 
     from tensor_cosdi import datasets
 
-    mask = Path(tc.__file__).resolve().parents[1] / ".." / "shared" / "data" / "masks"
     try:
         cube, _ = datasets.load_hsi("face", "kaist", shape=(128, 128))
-        code = scipy.io.loadmat(mask / "tsa_mask256.mat")["mask"][:128, :128].astype(float)
+        mask = datasets.data_file("masks/tsa_mask256.mat")
+        code = scipy.io.loadmat(mask)["mask"][:128, :128].astype(float)
     except (FileNotFoundError, OSError):
         pytest.skip("../shared/data (hsi_train scenes, TSA mask) not present")
     system = tc.systems.SDCASSI(code, n_bands=28, shifts=2)

@@ -210,15 +210,20 @@ def test_the_private_call_finder_finds_one(tmp_path):
     assert private_calls(pkg / "solve.py", members, None) == ["solve.py:2 ._apply"]
 
 
-def test_no_private_method_is_called_from_another_sub_package_a_test_or_an_example():
+def python_files_and_their_sub_package():
+    """Every ``.py`` file of the package, tests, examples and benchmarks with its sub-package
+    (``None`` outside the package)."""
     package = ROOT / "tensor_cosdi"
-    members = private_members(package)
-    bad = []
     for top in ("tensor_cosdi", "tests", "examples", "benchmarks"):
         for p in sorted((ROOT / top).rglob("*.py")):
             rel = p.relative_to(package).parts if top == "tensor_cosdi" else None
-            here = None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
-            bad += private_calls(p, members, here)
+            yield p, None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
+
+
+def test_no_private_method_is_called_from_another_sub_package_a_test_or_an_example():
+    members = private_members(ROOT / "tensor_cosdi")
+    bad = [b for p, here in python_files_and_their_sub_package()
+           for b in private_calls(p, members, here)]  # fmt: skip
     assert bad == [], "private members called from outside their sub-package: " + "; ".join(bad)
 
 
@@ -303,10 +308,6 @@ def test_the_private_name_finder_finds_imports_and_module_attributes(tmp_path):
 
 def test_no_module_private_name_is_used_from_another_sub_package():
     package = ROOT / "tensor_cosdi"
-    bad = []
-    for top in ("tensor_cosdi", "tests", "examples", "benchmarks"):
-        for p in sorted((ROOT / top).rglob("*.py")):
-            rel = p.relative_to(package).parts if top == "tensor_cosdi" else None
-            here = None if rel is None else rel[0] if len(rel) > 1 else rel[0][:-3]
-            bad += private_module_uses(p, package, here)
+    bad = [b for p, here in python_files_and_their_sub_package()
+           for b in private_module_uses(p, package, here)]  # fmt: skip
     assert bad == [], "private names used from outside their sub-package: " + "; ".join(bad)

@@ -45,7 +45,14 @@ import numpy as np
 
 from ..io.triggers import LockedError
 from .demo import demo_cases, run_demo
-from .files import _reconstruct_direct, run_info, run_preview
+from .files import (
+    _reconstruct_direct,
+    parse_points,
+    preview_target,
+    run_info,
+    run_preview,
+    write_preview,
+)
 from .train import _training_options, run_train_dcosnet, run_train_denoiser
 from .util import _method_defaults, _option_value, _positive_int, done_line, run_metadata
 
@@ -114,6 +121,17 @@ def run_acquire(args) -> int:
 
 
 def run_reconstruct(args) -> int:
+    """Either path; with ``--preview``, the PNG's name and matplotlib are checked first and the
+    preview is written from the bundle just saved."""
+    points = parse_points(args.points)
+    target = preview_target(args.out, None, args.force) if args.preview else None
+    rc = _reconstruct(args)
+    if target is not None:
+        write_preview(args.out, target, points, None, args.force)
+    return rc
+
+
+def _reconstruct(args) -> int:
     direct = [n for n in ("system", "mask", "measurement") if getattr(args, n) is not None]
     if direct:
         if args.calibration or args.frames:
@@ -331,6 +349,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
+    rec.add_argument(
+        "--preview",
+        action="store_true",
+        help="also write OUT's name + _preview.png (sRGB and spectra; needs matplotlib)",
+    )
+    rec.add_argument(
+        "--points", nargs="*", default=[], metavar="ROW,COL", help="with --preview: spectra here"
+    )
     rec.set_defaults(func=run_reconstruct)
 
     pv = sub.add_parser(

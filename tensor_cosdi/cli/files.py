@@ -175,7 +175,40 @@ def _cube_and_wavelengths(spec, wavelengths):
     return p, cube, np.asarray(wl, dtype=np.float64)
 
 
-def run_preview(args) -> int:
+def preview_target(spec: str, out, force: bool) -> Path:
+    """The PNG a preview of ``spec`` goes to (``out``, else its name + ``_preview.png``), checked
+    before any work: an existing file without ``force`` and a missing matplotlib are errors."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise ImportError(
+            "a preview needs matplotlib: pip install 'tensor_cosdi[plot]'"
+        ) from None
+    from ..io import files
+
+    path, _ = files.split_key(spec)
+    target = Path(out) if out else Path(path).with_name(Path(path).stem + "_preview.png")
+    if target.suffix.lower() != ".png":
+        raise ValueError(f"--out {target}: a preview is a .png file")
+    if target.exists() and not force:
+        raise FileExistsError(f"{target} exists; pass --force to replace it")
+    return target
+
+
+def parse_points(texts) -> list[tuple[int, int]]:
+    """``ROW,COL`` strings as integer pairs, or a one-line ``ValueError``."""
+    points = []
+    for text in texts or []:
+        try:
+            r, c = (int(v) for v in text.split(","))
+        except ValueError:
+            raise ValueError(f"--points takes ROW,COL pairs, got {text!r}") from None
+        points.append((r, c))
+    return points
+
+
+def write_preview(spec: str, out: Path, points, wavelengths=None, force: bool = False) -> Path:
+    """A labelled PNG of the cube in ``spec``: sRGB preview, spectra at ``points``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -184,17 +217,12 @@ def run_preview(args) -> int:
     from .. import plot
     from ..io import atomic_write
 
-    path, cube, wl = _cube_and_wavelengths(args.file, args.wavelengths)
-    out = Path(args.out) if args.out else path.with_name(path.stem + "_preview.png")
-    if out.exists() and not args.force:
-        raise FileExistsError(f"{out} exists; pass --force to replace it")
-    points = []
-    for text in args.points:
-        try:
-            r, c = (int(v) for v in text.split(","))
-        except ValueError:
-            raise ValueError(f"--points takes ROW,COL pairs, got {text!r}") from None
-        points.append((r, c))
+    path, cube, wl = _cube_and_wavelengths(spec, wavelengths)
+    for r, c in points:
+        if not (0 <= r < cube.shape[0] and 0 <= c < cube.shape[1]):
+            raise ValueError(
+                f"--points {r},{c} is outside the cube's {cube.shape[0]}×{cube.shape[1]} pixels"
+            )
     fig, axes = plt.subplots(
         1, 2 if points else 1, figsize=(9 if points else 4.5, 4), squeeze=False
     )
@@ -204,9 +232,16 @@ def run_preview(args) -> int:
     if points:
         plot.spectra(cube, wl, points, ax=axes[0, 1])
     fig.tight_layout()
-    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=120, format="png"), overwrite=args.force)
+    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=120, format="png"), overwrite=force)
     plt.close(fig)
     print(f"wrote {out}")
+    return out
+
+
+def run_preview(args) -> int:
+    points = parse_points(args.points)
+    write_preview(args.file, preview_target(args.file, args.out, args.force), points,
+                  args.wavelengths, args.force)  # fmt: skip
     return 0
 
 

@@ -241,3 +241,22 @@ def test_wavelengths_as_a_list_a_name_or_a_file(files, tmp_path):
     assert cli.main(args) == 0
     wl = load_bundle(d / "kaist.h5").system.wavelengths
     np.testing.assert_allclose(wl, 450 + 25 * np.arange(8))
+
+
+def test_one_command_from_files_to_cube_and_preview(files, capsys):
+    """``reconstruct … --preview``: the bundle and its PNG (sRGB and spectra at --points); an
+    existing PNG without --force stops the run before any reconstruction."""
+    pytest.importorskip("matplotlib")
+    d, _ = files
+    assert cli.main(_args(d, "cube.h5", "--preview", "--points", "5,6", "20,30")) == 0
+    png = d / "cube_preview.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    out = capsys.readouterr().out
+    assert "written to" in out and f"wrote {png}" in out
+    (d / "cube.h5").unlink()
+    before = png.read_bytes()
+    assert cli.main(_args(d, "cube.h5", "--preview")) == 2
+    assert "--force" in capsys.readouterr().err
+    assert not (d / "cube.h5").exists() and png.read_bytes() == before  # nothing was run
+    assert cli.main(_args(d, "cube2.h5", "--preview", "--points", "99,1")) == 2
+    assert "outside the cube's 32×32 pixels" in capsys.readouterr().err

@@ -23,9 +23,10 @@ MAX_SHIFT_PX = 65_536
 def parse_shifts(shifts, n_bands: int) -> np.ndarray:
     """Per-band shifts from a step (``2`` → ``0, 2, 4, …``) or a sequence.
 
-    Shifts must be finite, ``≥ 0`` and non-decreasing (dispersion runs towards
-    larger column index, SPEC §1).  Integral values come back as ``int64``,
-    anything fractional as ``float64`` (linear interpolation).
+    Shifts must be finite, ``≥ 0`` and monotone: non-decreasing (dispersion
+    runs towards larger column index, SPEC §1) or non-increasing (a mirrored
+    prism: the first band is shifted most).  Integral values come back as
+    ``int64``, anything fractional as ``float64`` (linear interpolation).
     """
     if isinstance(n_bands, bool) or not isinstance(n_bands, numbers.Integral) or n_bands < 1:
         raise ValueError(f"n_bands must be a positive integer, got {n_bands!r}")
@@ -47,15 +48,19 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
         raise ValueError(f"shifts must be finite, got {s.tolist()}")
     if (s < 0).any():
         raise ValueError(f"shifts must be ≥ 0, got {s.tolist()}")
-    if (np.diff(s) < 0).any():
-        bad = int(np.nonzero(np.diff(s) < 0)[0][0])
+    d = np.diff(s)
+    if (d < 0).any() and (d > 0).any():  # neither direction
+        first = np.sign(d[np.nonzero(d)[0][0]])
+        bad = int(np.nonzero(np.sign(d) == -first)[0][0])
+        rel = "<" if s[bad + 1] < s[bad] else ">"
         raise ValueError(
-            f"shifts must be non-decreasing, but band {bad + 1} has shift {s[bad + 1]:g} < "
-            f"{s[bad]:g} of band {bad}"
+            "shifts must be monotone (non-decreasing, or non-increasing for a mirrored "
+            f"dispersion), but band {bad + 1} has shift {s[bad + 1]:g} {rel} {s[bad]:g} of "
+            f"band {bad}"
         )
-    if s.size and s[-1] > MAX_SHIFT_PX:
+    if s.size and s.max() > MAX_SHIFT_PX:
         raise ValueError(
-            f"the largest shift is {s[-1]:g} px; at most {MAX_SHIFT_PX} px (the measurement "
+            f"the largest shift is {s.max():g} px; at most {MAX_SHIFT_PX} px (the measurement "
             "grows by it)"
         )
     if np.all(s == np.round(s)):

@@ -62,10 +62,17 @@ class SDCASSI(System):
     n_bands : int
         ``Nλ``.
     shifts : int, float or sequence
-        A step (``s_l = step · l``) or one non-decreasing shift per band
+        A step (``s_l = step · l``) or one monotone shift per band
         (fractional values from a calibrated prism use linear interpolation).
     wavelengths : sequence of float, optional
         Band centres in nm (default: ``Nλ`` evenly spaced over 450–650 nm).
+    shear_direction : {1, -1}
+        ``1``: band ``l`` lands ``s_l`` columns to the right.  ``-1``: a
+        mirrored dispersion, the shifts replaced by ``max(s) − s_l`` (the first
+        band moves most).  A measurement cannot tell the two apart by itself:
+        the mirrored system measures the band-reversed cube exactly as this
+        one measures the cube, so the direction comes from the optics (or a
+        calibration frame), not from the fit.
     colour : bool
         Whether ``code`` has a band axis (colour-coded CASSI).  ``A Aᵀ`` stays
         diagonal, so every closed-form step holds.
@@ -93,7 +100,11 @@ class SDCASSI(System):
     demo_scene = "colorchecker"
     example_options = {"code": None}
 
-    def __init__(self, code, *, n_bands, shifts=1, wavelengths=None, colour=False):
+    def __init__(
+        self, code, *, n_bands, shifts=1, wavelengths=None, colour=False, shear_direction=1
+    ):
+        if isinstance(shear_direction, bool) or shear_direction not in (1, -1):
+            raise ValueError(f"shear_direction must be 1 or -1, got {shear_direction!r}")
         if not isinstance(colour, (bool, np.bool_)):
             raise ValueError(f"colour must be True or False, got {colour!r}")
         self.colour = bool(colour)
@@ -107,6 +118,8 @@ class SDCASSI(System):
                 f"expected n_bands = {nl} (shape (Nx, Ny, {nl}) or (Nx, Ny, {nl}, K))"
             )
         self.shifts, _ = shifts_for(shifts, nl)
+        if shear_direction == -1:
+            self.shifts, _ = shifts_for(self.shifts.max() - self.shifts, nl)
         nx, ny = self.code.shape[:2]
         cube = (nx, ny, nl)
         shear = Shear(cube, self.shifts)
@@ -135,6 +148,11 @@ class SDCASSI(System):
         shape = (nx, ny) if shots == 1 else (nx, ny, count(shots, "shots"))
         code = random_binary(shape, transmittance=transmittance, rng=rng)
         return cls(code, n_bands=nl, **overrides)
+
+    @property
+    def shear_direction(self) -> int:
+        """``-1`` when the first band is shifted most (a mirrored dispersion), else ``1``."""
+        return -1 if self.shifts[0] > self.shifts[-1] else 1
 
     @property
     def window_spill(self) -> int:

@@ -30,7 +30,7 @@ CASES = [
     (lambda: SDCASSI(ones((4, 5)), n_bands=2, wavelengths=[0, 500]), "must be nanometres in 200"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=2, wavelengths=[0.5, 0.6]), "look like micrometres"),
     # shifts
-    (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=[0, 2, 1]), "non-decreasing"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=[0, 2, 1]), "monotone"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=[0, 1]), "expected 3 per-band shifts"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=-1), "≥ 0"),
     (lambda: DDCASSI(ones((4, 5)), n_bands=4, shifts=2), r"shifts do not fit.*Ny \+ 6"),

@@ -430,3 +430,26 @@ def test_micrometre_wavelengths_are_refused_at_the_door(name):
     with pytest.raises(ValueError, match="look like micrometres"):
         cls.example(rng=0, wavelengths=np.asarray(good.wavelengths) / 1000.0)
     assert len(cls.example(rng=0, wavelengths=good.wavelengths).wavelengths) == n
+
+
+def test_a_mirrored_dispersion_measures_the_band_reversed_cube(rng):
+    """``shear_direction=-1`` shifts the first band most; it measures the band-reversed cube
+    exactly as the usual direction measures the cube (why a fit cannot find the direction),
+    keeps its explicit matrix, adjoint and diagonal ``A Aᵀ``, and survives a state round
+    trip."""
+    code = rng.random((6, 7))
+    fwd = SDCASSI(code, n_bands=5, shifts=2)
+    mir = SDCASSI(code, n_bands=5, shifts=2, shear_direction=-1)
+    assert fwd.shear_direction == 1 and mir.shear_direction == -1
+    assert mir.shifts.tolist() == [8, 6, 4, 2, 0] and mir.measurement_shape == (6, 15)
+    cube = rng.random((6, 7, 5))
+    np.testing.assert_allclose(mir.forward(cube[:, :, ::-1]), fwd.forward(cube), atol=1e-12)
+    assert not np.allclose(mir.forward(cube), fwd.forward(cube))
+    np.testing.assert_allclose(vec(mir.forward(cube)), mir.matrix() @ vec(cube), atol=1e-12)
+    assert dot_test(mir.operator) < 1e-12
+    assert isinstance(mir.gram_dual(), Diagonal)
+    back = SDCASSI.from_state(mir.to_state())
+    assert back.shear_direction == -1 and back.shifts.tolist() == mir.shifts.tolist()
+    for bad in (0, 2, True, "-1"):
+        with pytest.raises(ValueError, match="shear_direction must be 1 or -1"):
+            SDCASSI(code, n_bands=5, shifts=2, shear_direction=bad)

@@ -145,6 +145,11 @@ def _reconstruct(args) -> int:
             "reconstruct needs --system, --mask and --measurement (direct path) or a calibration "
             "bundle and frames"
         )
+    if args.calibrate:
+        raise ValueError(
+            "--calibrate belongs to the direct path (--system/--mask/--measurement); a "
+            "calibration bundle already holds the registered code"
+        )
     from .. import reconstruct
     from ..colour import reflectance
     from ..io import frame_paths, frames_to_measurement, load_bundle, load_frames, save_bundle
@@ -349,6 +354,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     rec.add_argument("--force", action="store_true", help="overwrite an existing output bundle")
     rec.add_argument("--quiet", action="store_true", help="no progress bar")
+    rec.add_argument(
+        "--calibrate",
+        action="store_true",
+        help="direct path, SD-CASSI: estimate where the mask sits on the sensor (sub-pixel) from "
+        "the capture and reconstruct with the mask moved there",
+    )
     rec.add_argument(
         "--preview",
         action="store_true",

@@ -128,6 +128,9 @@ def _reconstruct_direct(args) -> int:
             f"{tuple(system.measurement_shape)} (code {code.shape}, options as given)"
         )
     g = g.astype(np.float32 if g.dtype.itemsize <= 4 else np.float64)
+    registration = {}
+    if getattr(args, "calibrate", False):
+        system, registration = _registered(system, g)
     options = dict(args.option or [])
     if "progress" in defaults:
         options.setdefault("progress", not args.quiet)
@@ -143,10 +146,39 @@ def _reconstruct_direct(args) -> int:
         depth=None if depth is None else np.asarray(depth),
         sources=[Path(mask_path), Path(meas_path)],
         overwrite=args.force,
-        metadata=run_metadata(args, res, seconds, mask=args.mask, measurement=args.measurement),
+        metadata=run_metadata(
+            args, res, seconds, mask=args.mask, measurement=args.measurement, **registration
+        ),
     )
     print(done_line(system, args.method, res, seconds, out))
     return 0
+
+
+def _registered(system, g):
+    """``--calibrate``: the system with its code moved to where the capture says it sits, and
+    what the bundle records; an estimate that does not stand out is an error, not a guess."""
+    from ..io import estimate_registration
+
+    if not callable(getattr(system, "with_code", None)) or np.ndim(system.code) != 2:
+        raise ValueError(
+            f"--calibrate estimates where a single-shot code sits on the sensor; {system.name} "
+            "with this code has none to move"
+        )
+    reg = estimate_registration(system, g)
+    line = (
+        f"mask registration: rows {reg.row_offset:+.2f} px, columns {reg.col_offset:+.2f} px "
+        f"(score {reg.score:.3f}, margin {reg.margin:.3f})"
+    )
+    if not reg.reliable:
+        raise ValueError(
+            f"{line} does not stand out (needs score ≥ {reg.MIN_SCORE}, margin ≥ "
+            f"{reg.MIN_MARGIN}); reconstruct without --calibrate or check the mask file"
+        )
+    print(line)
+    record = {"registration": {"row_offset": float(reg.row_offset),
+                               "col_offset": float(reg.col_offset), "score": float(reg.score),
+                               "margin": float(reg.margin)}}  # fmt: skip
+    return reg.apply(system), record
 
 
 def _cube_and_wavelengths(spec, wavelengths):

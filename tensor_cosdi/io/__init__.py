@@ -20,7 +20,12 @@ provenance.
 
 from ._atomic import atomic_write
 from .bundle import Bundle, file_digest, load_bundle, save_bundle, system_from_state, system_state
-from .calibration import code_from_monochromator, shifts_from_line_frames
+from .calibration import (
+    Registration,
+    code_from_monochromator,
+    estimate_registration,
+    shifts_from_line_frames,
+)
 from .files import read_array, read_cube, split_key, write_cube
 from .frames import (
     FRAME_SUFFIXES,
@@ -71,6 +76,8 @@ __all__ = [
     "system_from_state",
     "code_from_monochromator",
     "shifts_from_line_frames",
+    "estimate_registration",
+    "Registration",
     "Acquisition",
     "AcquisitionPlan",
     "DeviceError",

@@ -8,14 +8,28 @@ correlation against the first band) and :func:`code_from_monochromator`
 undoes them to return the code per band and its mean — the calibrated code
 of an :class:`~tensor_cosdi.systems.SDCASSI` with those shifts.  Line or
 point targets (a slit, a pinhole) work the same way.
+
+Without such frames, :func:`estimate_registration` finds how the mask sits
+on the sensor from the capture itself: the measurement's fine texture is the
+code's texture seen through the dispersion, so its correlation with the
+sensing of a white scene ``A 1`` through a shifted mask peaks at the true
+offset.  A shift by one band step ``s`` changes ``A 1`` only at the
+measurement's ends, so the whole measurement is used, edges included.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["shifts_from_line_frames", "code_from_monochromator"]
+__all__ = [
+    "shifts_from_line_frames",
+    "code_from_monochromator",
+    "estimate_registration",
+    "Registration",
+]
 
 
 def _stack(frames, what):
@@ -130,3 +144,174 @@ def code_from_monochromator(frames, *, shifts, ny: int | None = None, dark=None,
         back = ndimage.shift(a[..., l], (0.0, -s[l]), order=1, mode="constant")
         per_band[..., l] = back[:, :ny]
     return per_band.mean(axis=2), per_band
+
+
+@dataclass(frozen=True)
+class Registration:
+    """Where the mask sits on the sensor, as :func:`estimate_registration` found it.
+
+    Attributes
+    ----------
+    row_offset, col_offset : float
+        Sub-pixel displacement of the code on the sensor relative to the mask
+        file (rows down, columns towards the dispersion): the sensor sees
+        ``mask`` shifted by ``(row_offset, col_offset)``.
+    score : float
+        Normalised correlation of the measurement's texture with the
+        predicted one at the estimate (1: identical texture; about 0 for a
+        measurement unrelated to the code).
+    margin : float
+        ``score`` minus the best score at an integer offset at least 1.5 px
+        away.  The hardest competitor is one band step along the dispersion,
+        which changes the predicted texture only at the measurement's ends,
+        so margins are small even when the peak is right.
+    grid : dict
+        The score at every integer offset searched, ``{(row, col): score}``.
+    """
+
+    row_offset: float
+    col_offset: float
+    score: float
+    margin: float
+    grid: dict = field(repr=False, default_factory=dict)
+
+    #: ``reliable`` needs at least this score and this margin.
+    MIN_SCORE = 0.1
+    MIN_MARGIN = 0.01
+
+    @property
+    def reliable(self) -> bool:
+        """Whether the peak stands out: ``score ≥ MIN_SCORE`` and ``margin ≥ MIN_MARGIN``."""
+        return self.score >= self.MIN_SCORE and self.margin >= self.MIN_MARGIN
+
+    def apply(self, system):
+        """The system with its code moved by the estimated offsets (linear interpolation; the
+        border row or column repeats where the shift uncovers one)."""
+        code = np.asarray(system.code, dtype=np.float64)
+        moved = shift_code(code, self.row_offset, self.col_offset)
+        return system.with_code(moved)
+
+
+def shift_code(code: np.ndarray, rows: float, cols: float) -> np.ndarray:
+    """``code`` moved by ``(rows, cols)`` pixels (linear interpolation, edges repeated)."""
+    shift = (rows, cols) + (0.0,) * (code.ndim - 2)
+    return ndimage.shift(code, shift, order=1, mode="nearest")
+
+
+def _texture(a: np.ndarray) -> np.ndarray:
+    """The fine texture of a 2-D frame: the frame minus its Gaussian blur (σ 1 px)."""
+    return a - ndimage.gaussian_filter(a, 1.0)
+
+
+def _peak(positions, values, half_width: float = 0.5) -> float:
+    """The vertex of a parabola fitted to the scores within ``half_width`` of the best one
+    (the best position itself when the fit is not concave or leaves that window).  Along the
+    dispersion the score is flat-topped and the argmax alone wanders; across it the peak is
+    sharp and the argmax is kept (``benchmarks/registration.py`` measures both on tuning
+    scenes)."""
+    pos, val = np.asarray(positions, dtype=np.float64), np.asarray(values, dtype=np.float64)
+    best = float(pos[int(np.argmax(val))])
+    near = np.abs(pos - best) <= half_width + 1e-9
+    if near.sum() >= 3:
+        a, b, _ = np.polyfit(pos[near] - best, val[near], 2)
+        if a < 0 and abs(-b / (2 * a)) <= half_width:
+            return round(best - b / (2 * a), 3)
+    return best
+
+
+def estimate_registration(system, measurement, *, max_offset: int = 3) -> Registration:
+    """Estimate the mask-to-sensor offset of a coded-aperture capture from the capture alone.
+
+    Parameters
+    ----------
+    system : SDCASSI
+        The imager as calibrated (any system with ``code`` and ``with_code``,
+        a single-shot 2-D code).
+    measurement : array_like
+        The capture, of the system's measurement shape.
+    max_offset : int
+        Integer offsets ``−max_offset … max_offset`` are searched in rows and
+        columns, then refined to 0.05 px around the best.
+
+    Returns
+    -------
+    Registration
+        The offsets, the score, the margin over the runner-up, whether that
+        makes it ``reliable``, and the integer-offset grid;
+        ``Registration.apply(system)`` gives the corrected system.
+
+    Notes
+    -----
+    The criterion is the normalised correlation between the fine texture of
+    the measurement and that of ``A' 1`` (a white scene seen through the
+    code shifted by the candidate offset).  A data-fit residual hardly
+    changes with the offset (a reconstruction absorbs the error); the
+    texture correlation does.  The dispersion *direction* is not estimated:
+    a mirrored system measures the band-reversed cube exactly as the other
+    measures the cube (see :class:`~tensor_cosdi.systems.SDCASSI`'s
+    ``shear_direction``), so no criterion on the capture can tell them apart.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi import codes, scenes, systems
+    >>> from tensor_cosdi.io.calibration import estimate_registration, shift_code
+    >>> mask = codes.random_binary((48, 48), rng=0)
+    >>> true = systems.SDCASSI(shift_code(mask, 0.5, -1.0), n_bands=8, shifts=2)
+    >>> g = true.simulate(scenes.colorchecker((48, 48), true.wavelengths), snr_db=30, rng=0)
+    >>> reg = estimate_registration(systems.SDCASSI(mask, n_bands=8, shifts=2), g)
+    >>> round(reg.row_offset, 1), round(reg.col_offset, 1)
+    (0.5, -1.0)
+    """
+    if not callable(getattr(system, "with_code", None)):
+        raise ValueError(
+            f"estimate_registration needs an imager with a movable code (SDCASSI), got "
+            f"{type(system).__name__}"
+        )
+    code = np.asarray(system.code, dtype=np.float64)
+    if code.ndim != 2:
+        raise ValueError(
+            f"estimate_registration needs a single-shot 2-D code, got one of shape {code.shape}"
+        )
+    if isinstance(max_offset, bool) or not isinstance(max_offset, (int, np.integer)):
+        raise ValueError(f"max_offset must be an integer number of pixels, got {max_offset!r}")
+    if not 1 <= max_offset <= min(code.shape) // 4:
+        raise ValueError(
+            f"max_offset must be between 1 and a quarter of the code ({min(code.shape) // 4} "
+            f"px), got {max_offset}"
+        )
+    g = np.asarray(measurement, dtype=np.float64)
+    if g.shape != tuple(system.measurement_shape):
+        raise ValueError(
+            f"measurement of shape {g.shape}; the system measures {tuple(system.measurement_shape)}"
+        )
+    if not np.all(np.isfinite(g)):
+        raise ValueError("the measurement holds NaN or infinite values")
+    a = _texture(g)
+    norm_a = float(np.linalg.norm(a))
+    if norm_a == 0.0:
+        raise ValueError("the measurement has no texture (a constant frame): nothing to register")
+    a = a / norm_a
+    white = np.ones(system.cube_shape)
+    cache: dict = {}
+
+    def score(r: float, c: float) -> float:
+        key = (round(r, 4), round(c, 4))
+        if key not in cache:
+            b = _texture(np.asarray(system.with_code(shift_code(code, r, c)).forward(white)))
+            nb = float(np.linalg.norm(b))
+            cache[key] = float(np.sum(a * b) / nb) if nb > 0 else -1.0
+        return cache[key]
+
+    span = range(-max_offset, max_offset + 1)
+    grid = {(r, c): score(r, c) for r in span for c in span}
+    r, c = max(grid, key=grid.get)
+    x, y = float(r), float(c)
+    fine = np.round(np.linspace(-1.0, 1.0, 41), 2)  # 0.05 px within a pixel of the best
+    for _ in range(2):  # rows at the best column, then columns at the best row, twice
+        x = float(max(r + fine, key=lambda v: score(v, y)))  # a sharp peak across the dispersion
+        y = _peak(c + fine, [score(x, v) for v in c + fine])  # flat-topped along it
+    best_score = score(x, y)
+    far = [v for (gr, gc), v in grid.items() if max(abs(gr - x), abs(gc - y)) >= 1.5]
+    margin = best_score - (max(far) if far else -1.0)
+    return Registration(x, y, best_score, margin, grid)

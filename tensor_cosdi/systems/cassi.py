@@ -149,6 +149,16 @@ class SDCASSI(System):
         code = random_binary(shape, transmittance=transmittance, rng=rng)
         return cls(code, n_bands=nl, **overrides)
 
+    def with_code(self, code) -> "SDCASSI":
+        """The same imager (shifts, wavelengths, colour) with another code of the same shape."""
+        code = np.asarray(code)
+        if code.shape != self.code.shape:
+            raise ValueError(f"code of shape {code.shape}; this imager's is {self.code.shape}")
+        return SDCASSI(
+            code, n_bands=self.cube_shape[2], shifts=self.shifts, wavelengths=self.wavelengths,
+            colour=self.colour,
+        )  # fmt: skip
+
     @property
     def shear_direction(self) -> int:
         """``-1`` when the first band is shifted most (a mirrored dispersion), else ``1``."""

@@ -67,7 +67,7 @@ def trial(scene, snr, seed, mask):
         for name, s in (("filed", filed), ("corrected", reg.apply(filed)), ("true", truth))
     }
     err = (abs(reg.row_offset - true[0]), abs(reg.col_offset - true[1]))
-    return {"scene": scene, "snr": snr, "seed": seed, "true": true, "reg": reg, "err": err,
+    return {"scene": scene, "snr": snr, "seed": seed, "offset": true, "reg": reg, "err": err,
             "seconds": seconds, **psnr}  # fmt: skip
 
 
@@ -100,7 +100,7 @@ def main(argv=None):
     for r in rows:
         reg = r["reg"]
         lines.append(
-            f"| {r['scene']} | {r['snr']} | {r['true'][0]:+.2f}, {r['true'][1]:+.2f} "
+            f"| {r['scene']} | {r['snr']} | {r['offset'][0]:+.2f}, {r['offset'][1]:+.2f} "
             f"| {reg.row_offset:+.2f}, {reg.col_offset:+.2f} | {r['err'][0]:.2f}, "
             f"{r['err'][1]:.2f} | {'yes' if reg.reliable else 'no'} | {r['filed']:.2f} "
             f"| {r['corrected']:.2f} | {r['true']:.2f} | {r['seconds']:.1f} |"

@@ -57,6 +57,14 @@ def _frames_to_cube(ns):
     assert ns["reflectance_psnr"] > ns["radiance_psnr"] + 1
 
 
+def _mask_registration(ns):
+    reg, true = ns["reg"], ns["true_offset"]
+    assert abs(reg.row_offset - true[0]) <= 0.25 and abs(reg.col_offset - true[1]) <= 0.25, reg
+    assert reg.reliable
+    psnr = ns["psnr"]
+    assert psnr["mask registered"] > psnr["mask as filed"] + 1.0, psnr
+
+
 def _sdcassi_forward(ns):
     assert ns["g"].shape == (64, 150)
     assert (
@@ -202,6 +210,7 @@ CHECKS = {
     "plot_light_field_depth": _light_field,
     "plot_structured_light_depth": _structured_light,
     "plot_frames_to_cube": _frames_to_cube,
+    "plot_mask_registration": _mask_registration,
     "plot_sdcassi_forward": _sdcassi_forward,
     "plot_dfa_psfs_depth": _dfa_psfs,
     "plot_prism_design": _prism,

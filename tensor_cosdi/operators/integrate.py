@@ -117,6 +117,8 @@ class Replicate(TensorOperator):
 #: Above this many voxels the forward on a cube outside the band-major layout keeps the
 #: per-band loop instead of building a sparse gather matrix (8-12 bytes per voxel).
 GATHER_MAX_VOXELS = 2**25
+#: The dtypes SciPy's sparse product takes (a float16 cube keeps the per-band loop).
+GATHER_DTYPES = (np.dtype(np.float32), np.dtype(np.float64))
 
 
 class _CodedShearSum(TensorOperator):
@@ -184,7 +186,7 @@ class _CodedShearSum(TensorOperator):
             y = shear_sum_forward(x, self._w_moved(x), self.sum_axis, self.shift_axis, self._step)
             if y is not None:
                 return y
-        if numpy and x.dtype.kind == "f" and x.size <= GATHER_MAX_VOXELS:
+        if numpy and x.dtype in GATHER_DTYPES and x.size <= GATHER_MAX_VOXELS:
             order = memory_order(x)
             # the band axis fastest in memory (NumPy's C order for (x, y, λ)): band slices are
             # strided single values, so one sparse product over the buffer (≈ 7 copies against

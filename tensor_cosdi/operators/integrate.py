@@ -153,7 +153,7 @@ class _CodedShearSum(TensorOperator):
             self._wslices = None
         # linear integer shifts s·l: the strided kernels of _kernels.py (NumPy tensors)
         self._step = None if shift_axis is None else linear_step(self.shifts)
-        self._gathers: dict = {}  # (memory order, dtype) → GatherMatrix, the last two used
+        self._gathers: dict = {}  # (memory order, dtype) → GatherMatrix
 
     def _fuse_with(self, inner):
         if isinstance(inner, Code):
@@ -213,17 +213,21 @@ class _CodedShearSum(TensorOperator):
 
     def _gather(self, order, dtype) -> GatherMatrix:
         key = (order, np.dtype(dtype).str)
-        hit = self._gathers.pop(key, None)
+        hit = self._gathers.get(key)
         if hit is None:
             w = None if self.weights is None else np.asarray(self.weights)
-            shift_axis = self.shift_axis
             hit = GatherMatrix(
-                self.input_shape, order, self.sum_axis, shift_axis, self.shifts, w, dtype
+                self.input_shape, order, self.sum_axis, self.shift_axis, self.shifts, w, dtype
             )
-        self._gathers[key] = hit  # most recent last
-        while len(self._gathers) > 2:
-            self._gathers.pop(next(iter(self._gathers)))
+            if len(self._gathers) >= 2:  # at most two layouts; clear() and setting one key are
+                self._gathers.clear()  # atomic, and callers keep the matrices they hold
+            self._gathers[key] = hit
         return hit
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_gathers"] = {}  # rebuilt where it is needed, not shipped to Dask workers
+        return state
 
     def _adjoint(self, y):
         nb = self.input_shape[self.sum_axis]

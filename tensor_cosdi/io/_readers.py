@@ -271,6 +271,7 @@ _READERS = {
     ".mat": ("MATLAB", _entries_mat),
     ".h5": ("HDF5", _entries_h5),
     ".hdf5": ("HDF5", _entries_h5),
+    ".nc": ("NetCDF-4 (HDF5)", _entries_h5),  # NetCDF-4 is HDF5: the same hardened reader
     ".tif": ("TIFF", _entries_tiff),
     ".tiff": ("TIFF", _entries_tiff),
 }

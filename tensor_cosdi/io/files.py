@@ -9,6 +9,10 @@ extension                 read (:func:`read_array`, cube)    write (:func:`write
                                                              ``wavelengths``; gzip
 ``.npy``, ``.npz``        NumPy (no pickles)                 ``.npz`` (compressed);
                                                              ``.npy`` without wavelengths
+``.nc`` (NetCDF-4)        h5py (NetCDF-4 is HDF5)            xarray + h5netcdf (extra
+                                                             ``.[xarray]``): ``cube`` with
+                                                             dims and a ``wavelength``
+                                                             coordinate in nm
 ``.hdr`` (ENVI)           ``spectral`` (extra ``.[envi]``)   ``spectral``
 ``.tif``, ``.tiff``       tifffile (pages = bands)           tifffile (one page per band)
 ========================  =================================  ===============================
@@ -58,7 +62,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 #: Extensions :func:`read_array` / :func:`read_cube` / :func:`write_cube` know.
-CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".npy", ".npz", ".hdr", ".tif", ".tiff")
+CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".nc", ".npy", ".npz", ".hdr", ".tif", ".tiff")
 #: Variable names taken as the band centres of a cube (case-insensitive).
 WAVELENGTH_KEYS = ("wavelengths", "wavelengths_nm", "wavelength", "wl", "lambda", "bands_nm")
 
@@ -275,6 +279,8 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
                     w.make_scale("wavelength")
                     ds.dims[2].attach_scale(w)
                 f.attrs["metadata"] = meta_json
+        elif suffix == ".nc":
+            _write_netcdf(tmp, cube, wl, meta_json)
         elif suffix == ".mat":
             import scipy.io
 
@@ -300,11 +306,37 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
                 description=json.dumps(desc),
             )  # fmt: skip
 
+    if suffix == ".nc":
+        _netcdf_libraries()  # before anything is written
     if suffix == ".npy" and (wl is not None or metadata):
         raise ValueError(f"{path}: .npy holds the cube only; use .npz or .h5 to keep wavelengths")
     if suffix == ".hdr":
         return _write_envi_atomic(path, cube, wl, metadata, overwrite)
     return atomic_write(path, write, overwrite=overwrite)
+
+
+def _netcdf_libraries():
+    try:
+        import h5netcdf  # noqa: F401
+        import xarray
+    except ImportError:
+        raise ImportError(
+            "writing NetCDF needs xarray and h5netcdf: pip install 'tensor_cosdi[xarray]'"
+        ) from None
+    return xarray
+
+
+def _write_netcdf(tmp, cube, wl, meta_json):
+    """``cube`` as a NetCDF-4 variable with dims ``rows, columns, wavelength`` (extra axes
+    ``axis3…``), the wavelengths in nm as the coordinate, the metadata as a JSON attribute."""
+    xarray = _netcdf_libraries()
+    dims = ["rows", "columns", "wavelength", *(f"axis{i}" for i in range(3, cube.ndim))]
+    coords = {} if wl is None else {"wavelength": ("wavelength", wl, {"units": "nm"})}
+    da = xarray.DataArray(cube, dims=dims, coords=coords, name="cube")
+    ds = da.to_dataset()
+    ds.attrs["metadata"] = meta_json
+    encoding = {"cube": {"compression": "gzip", "shuffle": True}}
+    ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
 
 
 def _write_envi_atomic(path: Path, cube, wl, metadata, overwrite):

@@ -16,15 +16,35 @@ def _cube(dtype=np.float32):
     return np.random.default_rng(0).random((6, 7, 5)).astype(dtype)
 
 
-@pytest.mark.parametrize("suffix", [".h5", ".hdf5", ".mat", ".npz", ".tif", ".hdr"])
+@pytest.mark.parametrize("suffix", [".h5", ".hdf5", ".nc", ".mat", ".npz", ".tif", ".hdr"])
 def test_every_format_round_trips_cube_and_wavelengths(tmp_path, suffix):
     pytest.importorskip("spectral") if suffix == ".hdr" else None
+    pytest.importorskip("h5netcdf") if suffix == ".nc" else None
     cube = _cube()
     path = write_cube(tmp_path / f"c{suffix}", cube, WL, metadata={"scene": "x"})
     back, wl = read_cube(path)
     np.testing.assert_array_equal(back, cube)
     assert back.dtype == cube.dtype
     np.testing.assert_allclose(wl, WL)
+
+
+def test_netcdf_is_what_xarray_reads_and_needs_its_libraries_to_write(tmp_path, monkeypatch):
+    """A NetCDF-4 cube opens in xarray with its dims, the wavelength coordinate in nm and the
+    metadata; without h5netcdf, writing one is a one-line ImportError naming the extra and
+    nothing is written."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    path = write_cube(tmp_path / "c.nc", _cube(), WL, metadata={"scene": "x"})
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        assert ds["cube"].dims == ("rows", "columns", "wavelength")
+        np.testing.assert_allclose(ds["wavelength"].values, WL)
+        assert ds["wavelength"].attrs["units"] == "nm"
+        assert json.loads(ds.attrs["metadata"]) == {"scene": "x"}
+        np.testing.assert_array_equal(ds["cube"].values, _cube())
+    monkeypatch.setitem(__import__("sys").modules, "h5netcdf", None)
+    with pytest.raises(ImportError, match=r"tensor_cosdi\[xarray\]"):
+        write_cube(tmp_path / "d.nc", _cube(), WL)
+    assert not (tmp_path / "d.nc").exists()
 
 
 def test_npy_holds_the_cube_only(tmp_path):

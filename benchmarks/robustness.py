@@ -175,11 +175,12 @@ def reconstruct_cases():
                          lambda m=method, s=system, g=g: tc.reconstruct(s, g, m), ("reconstructs",))
                 )  # fmt: skip
                 continue
+            needs = (NEEDS[method],) if method in NEEDS else ()
             for label, (bad, words) in _measurement_variants(g).items():
                 out.append(
                     Case("reconstruct", f"{sname} {method} measurement {label}",
                          lambda m=method, b=bad, s=system: tc.reconstruct(s, b, m),
-                         words + ("measurement",))
+                         words + ("measurement",) + needs)
                 )  # fmt: skip
             for opt, v in [("max_iter", 0), ("max_iter", -3), ("max_iter", 2.5), ("bogus", 1)]:
 
@@ -627,9 +628,20 @@ def option_cases():
     from tensor_cosdi.solvers import METHODS, denoisers
 
     out = []
-    p = studies.make_problem("sd_cassi", "colorchecker", **SMALL)
-    g, system = np.asarray(p.measurement, dtype=np.float64), p.system
+    problems = {}
+
+    def problem_for(method):
+        """A small problem on an imager the method is written for (SD-CASSI when any)."""
+        name = (METHODS[method].systems or ("sd_cassi",))[0]
+        if name not in problems:
+            p = studies.make_problem(name, "colorchecker", **SMALL)
+            problems[name] = (p.system, np.asarray(p.measurement, dtype=np.float64))
+        return problems[name]
+
     for method in tc.reconstruct.methods():
+        system, g = problem_for(method)
+        # a method that needs an argument names it first, whatever else is wrong
+        extra = (NEEDS[method],) if method in NEEDS else ()
         for opt, default in METHODS[method].defaults.items():
             if isinstance(default, bool):
                 bad = ["yes", 1]
@@ -639,8 +651,9 @@ def option_cases():
                 continue
             for v in bad:
                 out.append(Case("options", f"{method} {opt}={v!r}",
-                                lambda m=method, o=opt, v=v: tc.reconstruct(system, g, m, **{o: v}),
-                                (opt,)))  # fmt: skip
+                                lambda m=method, o=opt, v=v, s=system, g=g:
+                                tc.reconstruct(s, g, m, **{o: v}),
+                                (opt, *extra)))  # fmt: skip
     code = np.ones((8, 8))
     for name, call, words in [
         ("SDCASSI n_bands=2**40", lambda: tc.systems.SDCASSI(code, n_bands=2**40), ("n_bands",)),
@@ -656,6 +669,7 @@ def option_cases():
          ("sigma",)),
     ]:  # fmt: skip
         out.append(Case("options", name, call, words))
+    system, g = problem_for("lsq")
     out.append(
         Case("reconstruct", "float16 measurement promoted",
              lambda: tc.reconstruct(system, g.astype(np.float16), "lsq").cube.dtype

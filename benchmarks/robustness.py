@@ -655,6 +655,9 @@ def option_cases():
                                 tc.reconstruct(s, g, m, **{o: v}),
                                 (opt, *extra)))  # fmt: skip
     code = np.ones((8, 8))
+    reg_sd = tc.systems.SDCASSI(tc.codes.random_binary((16, 16), rng=0), n_bands=4, shifts=1)
+    reg_g = np.random.default_rng(0).random(reg_sd.measurement_shape)
+    vsi = tc.systems.REGISTRY["cassi_vsi"].example((16, 16, 4))
     for name, call, words in [
         ("SDCASSI n_bands=2**40", lambda: tc.systems.SDCASSI(code, n_bands=2**40), ("n_bands",)),
         ("SDCASSI shifts=1e15", lambda: tc.systems.SDCASSI(code, n_bands=3, shifts=1e15),
@@ -665,6 +668,20 @@ def option_cases():
          ("frames",)),
         ("AcquisitionPlan.patterns(True)", lambda: AcquisitionPlan.patterns(True), ("frames",)),
         ("denoisers.tv sigma=-1", lambda: denoisers.tv(np.ones((4, 4, 2)), -1), ("sigma",)),
+        ("SDCASSI shear_direction=0",
+         lambda: tc.systems.SDCASSI(code, n_bands=3, shear_direction=0), ("shear_direction",)),
+        ("SDCASSI shifts neither increasing nor decreasing",
+         lambda: tc.systems.SDCASSI(code, n_bands=3, shifts=[0, 2, 1]), ("monotone",)),
+        ("estimate_registration max_offset=True",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g, max_offset=True), ("max_offset",)),
+        ("estimate_registration max_offset past a quarter of the code",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g, max_offset=40), ("max_offset",)),
+        ("estimate_registration NaN measurement",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g * np.nan), ("nan",)),
+        ("estimate_registration flat measurement",
+         lambda: tc.io.estimate_registration(reg_sd, np.ones_like(reg_g)), ("texture",)),
+        ("estimate_registration on CASSI-VSI",
+         lambda: tc.io.estimate_registration(vsi, np.ones(vsi.measurement_shape)), ("movable",)),
         ("denoisers.wavelet sigma=nan", lambda: denoisers.wavelet(np.ones((4, 4, 2)), np.nan),
          ("sigma",)),
     ]:  # fmt: skip

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _backend as B
-from .matrices import _polish
+from .matrices import _polish, dct
 from .transforms import BlockDense
 
 __all__ = ["svd_basis", "tucker_bases", "unfolding_gram", "block_sizes", "block_hosvd"]
@@ -38,12 +38,52 @@ def svd_basis(matrix) -> np.ndarray:
     return _gram_basis(m @ m.T, "svd_basis: the matrix contains NaN or inf")
 
 
+#: Eigenvalues at or below this fraction of the largest are the Gram's numerical null space.
+NULL_SPACE_TOL = 1e-9
+
+
 def _gram_basis(gram, nonfinite: str) -> np.ndarray:
-    """Eigenvectors of a Gram matrix, strongest first, polished to orthonormal."""
+    """Eigenvectors of a Gram matrix, strongest first, polished to orthonormal.
+
+    Two choices make the basis a continuous function of the data, so that a
+    result does not jump when the data move by round-off (a measurement in
+    other units): each eigenvector's largest entry is positive, and the
+    numerical null space (eigenvalues ≤ :data:`NULL_SPACE_TOL` × the
+    largest), whose eigenvectors ``eigh`` returns in whatever rotation
+    round-off gives, is spanned by DCT atoms (lowest frequency first) with
+    the kept eigenvectors projected out.
+    """
     if not np.isfinite(gram).all():
         raise ValueError(nonfinite)
     vals, vecs = np.linalg.eigh(gram)
-    return _polish(vecs[:, ::-1])
+    vals, vecs = vals[::-1], vecs[:, ::-1]
+    top = float(vals[0]) if vals.size else 0.0
+    keep = int(np.sum(vals > NULL_SPACE_TOL * top)) if top > 0 else 0
+    kept = vecs[:, :keep]
+    lead = np.argmax(np.abs(kept), axis=0)
+    kept = kept * np.where(kept[lead, np.arange(keep)] < 0, -1.0, 1.0)
+    if keep < vecs.shape[1]:
+        kept = np.concatenate([kept, _completion(kept, vecs.shape[1] - keep)], axis=1)
+    return _polish(kept)
+
+
+def _completion(u: np.ndarray, k: int) -> np.ndarray:
+    """``k`` orthonormal vectors orthogonal to the columns of ``u``: DCT atoms, lowest frequency
+    first, with ``u`` and the vectors already taken projected out (twice, for round-off)."""
+    n = u.shape[0]
+    out: list[np.ndarray] = []
+    for atom in dct(n).T:
+        v = atom
+        for _ in range(2):
+            v = v - u @ (u.T @ v)
+            for w in out:
+                v = v - w * (w @ v)
+        norm = float(np.linalg.norm(v))
+        if norm > 1e-6:
+            out.append(v / norm)
+            if len(out) == k:
+                break
+    return np.stack(out, axis=1)
 
 
 #: Elements per block when :func:`unfolding_gram` streams a tensor (1/16 of a 256²×28 cube).

@@ -1,5 +1,7 @@
 """The reconstruction harness: registry, option checking, Result, regularised least squares."""
 
+import importlib.util
+
 import numpy as np
 import pytest
 
@@ -254,7 +256,9 @@ def test_labelled_and_lazy_measurements():
     np.testing.assert_array_equal(np.asarray(lazy), plain)
 
 
-CHEAP = ("otd", "gap_tv", "lsq", "wdct", "twist")
+CHEAP = ("otd", "gap_tv", "lsq", "wdct", "twist") + (
+    ("pnp_gap",) if importlib.util.find_spec("torch") else ()
+)
 
 
 @pytest.mark.parametrize("system", sorted(tc.systems.REGISTRY))

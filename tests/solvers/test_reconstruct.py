@@ -256,15 +256,16 @@ def test_labelled_and_lazy_measurements():
     np.testing.assert_array_equal(np.asarray(lazy), plain)
 
 
-CHEAP = ("otd", "gap_tv", "lsq", "wdct", "twist") + (
+CHEAP = ("otd", "gap_tv", "lsq", "wdct", "twist", "avsi", "dfa", "pnp_admm") + (
     ("pnp_gap",) if importlib.util.find_spec("torch") else ()
 )
 
 
 @pytest.mark.parametrize("system", sorted(tc.systems.REGISTRY))
 def test_every_imager_gives_the_same_cube_in_any_measurement_units(system):
-    """Every imager, with every cheap method written for it: a measurement ×1e±300 gives the
-    cube ×1e±300 within 1e-6 (dual-camera CASSI's OTD once moved by 22-25 %)."""
+    """Every imager, with every cheap method written for it (the thesis' A-VSI, DFA and PnP-ADMM
+    on their imagers): a measurement ×1e±300 gives the cube ×1e±300 within 1e-6 (dual-camera
+    CASSI's OTD once moved by 22-25 %)."""
     p = tc.studies.make_problem(system, "colorchecker", shape=(16, 16), n_bands=4, rng=0)
     g = np.asarray(p.measurement)
     for method in [m for m in tc.solvers.methods(p.system) if m in CHEAP]:

@@ -280,7 +280,10 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
             f"max_offset must be between 1 and a quarter of the code ({min(code.shape) // 4} "
             f"px), got {max_offset}"
         )
-    g = np.asarray(measurement, dtype=np.float64)
+    g = np.asarray(measurement)
+    if g.dtype.kind not in "biuf":
+        raise ValueError(f"the measurement must be real numbers, got {g.dtype}")
+    g = g.astype(np.float64)
     if g.shape != tuple(system.measurement_shape):
         raise ValueError(
             f"measurement of shape {g.shape}; the system measures {tuple(system.measurement_shape)}"
@@ -314,4 +317,4 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
     best_score = score(x, y)
     far = [v for (gr, gc), v in grid.items() if max(abs(gr - x), abs(gc - y)) >= 1.5]
     margin = best_score - (max(far) if far else -1.0)
-    return Registration(x, y, best_score, margin, grid)
+    return Registration(float(x), float(y), float(best_score), float(margin), grid)

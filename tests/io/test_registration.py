@@ -87,6 +87,8 @@ def test_only_movable_single_codes_and_the_right_measurement():
     g[0, 0] = np.nan
     with pytest.raises(ValueError, match="NaN"):
         estimate_registration(sd, g)
+    with pytest.raises(ValueError, match="real numbers"):
+        estimate_registration(sd, g.astype(str))
     vsi = tc.systems.REGISTRY["cassi_vsi"].example((16, 16, 4))
     with pytest.raises(ValueError, match="movable code"):
         estimate_registration(vsi, np.ones(vsi.measurement_shape))

@@ -181,11 +181,9 @@ class GatherMatrix:
             if weights is None
             else np.broadcast_to(np.asarray(weights, dtype=dtype), shape).reshape(-1)
         )
-        coo = sp.coo_matrix((vals, (rows, cols)), shape=(n_out, n_in))
-        self.matrix = coo.tocsr()
-        self.matrix.sum_duplicates()
+        # each (pixel, voxel) pair occurs once, so the conversion has nothing to sum
+        self.matrix = sp.coo_matrix((vals, (rows, cols)), shape=(n_out, n_in)).tocsr()
         self.order = tuple(order)
-        self.dtype = np.dtype(dtype)
 
     def forward(self, x: np.ndarray) -> np.ndarray:
         """``y`` for a cube ``x`` held in :attr:`order` (its buffer is read in place)."""

@@ -159,12 +159,7 @@ def _registered(system, g):
     what the bundle records; an estimate that does not stand out is an error, not a guess."""
     from ..io import estimate_registration
 
-    if not callable(getattr(system, "with_code", None)) or np.ndim(system.code) != 2:
-        raise ValueError(
-            f"--calibrate estimates where a single-shot code sits on the sensor; {system.name} "
-            "with this code has none to move"
-        )
-    reg = estimate_registration(system, g)
+    reg = estimate_registration(system, g)  # refuses imagers without a movable 2-D code
     line = (
         f"mask registration: rows {reg.row_offset:+.2f} px, columns {reg.col_offset:+.2f} px "
         f"(score {reg.score:.3f}, margin {reg.margin:.3f})"
@@ -175,10 +170,8 @@ def _registered(system, g):
             f"{reg.MIN_MARGIN}); reconstruct without --calibrate or check the mask file"
         )
     print(line)
-    record = {"registration": {"row_offset": float(reg.row_offset),
-                               "col_offset": float(reg.col_offset), "score": float(reg.score),
-                               "margin": float(reg.margin)}}  # fmt: skip
-    return reg.apply(system), record
+    keys = ("row_offset", "col_offset", "score", "margin")
+    return reg.apply(system), {"registration": {k: getattr(reg, k) for k in keys}}
 
 
 def _cube_and_wavelengths(spec, wavelengths):

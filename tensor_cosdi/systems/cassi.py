@@ -154,6 +154,9 @@ class SDCASSI(System):
         code = np.asarray(code)
         if code.shape != self.code.shape:
             raise ValueError(f"code of shape {code.shape}; this imager's is {self.code.shape}")
+        return self._with_any_code(code)
+
+    def _with_any_code(self, code) -> "SDCASSI":
         return SDCASSI(
             code, n_bands=self.cube_shape[2], shifts=self.shifts, wavelengths=self.wavelengths,
             colour=self.colour,
@@ -173,11 +176,7 @@ class SDCASSI(System):
         """The same imager on the cube window ``[x0, x1) × [y0, y1)`` and the measurement
         columns ``(m0, m1)`` it lands on (``[y0, y1 + S)``; the first and last ``S`` of them
         also hold light from outside the window)."""
-        sub = SDCASSI(
-            self.code[x0:x1, y0:y1], n_bands=self.cube_shape[2], shifts=self.shifts,
-            wavelengths=self.wavelengths, colour=self.colour,
-        )  # fmt: skip
-        return sub, (y0, y1 + self.window_spill)
+        return self._with_any_code(self.code[x0:x1, y0:y1]), (y0, y1 + self.window_spill)
 
     def matrix(self):
         nx, ny, nl = self.cube_shape

@@ -43,7 +43,6 @@ def test_docstring_examples(name):
     failures = []
     try:
         for test in tests:
-            test.globs = {**module.__dict__, **test.globs}
             result = runner.run(test, out=failures.append, clear_globs=True)
             assert result.attempted > 0
     finally:

@@ -29,6 +29,7 @@ __all__ = [
     "code_from_monochromator",
     "estimate_registration",
     "Registration",
+    "shift_code",
 ]
 
 

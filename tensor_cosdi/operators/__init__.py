@@ -27,7 +27,14 @@ from .layout import LAYOUTS, LightFieldLayout, Pad, Transpose
 from .modes import ModeProduct
 from .routing import Routing
 from .shear import Shear, parse_shifts, shear_bands, unshear_bands
-from .woodbury import Diagonal, FoldedBanded, PixelBlocks, RowBanded, conjugate_gradient
+from .woodbury import (
+    Diagonal,
+    FoldedBanded,
+    PixelBlocks,
+    RowBanded,
+    conjugate_gradient,
+    gram_eigenvalues,
+)
 
 __all__ = [
     "TensorOperator",
@@ -61,6 +68,7 @@ __all__ = [
     "check_structure",
     "probe_structure",
     "conjugate_gradient",
+    "gram_eigenvalues",
     "Routing",
     "vec",
     "unvec",

@@ -115,8 +115,8 @@ def provenance() -> dict:
             capture_output=True, text=True, check=True,
         ).stdout.strip()  # fmt: skip
         commit += "+changes" if dirty else ""
-    except (OSError, subprocess.CalledProcessError):
-        commit = "unknown"
+    except (OSError, subprocess.CalledProcessError):  # a copy without .git (another machine)
+        commit = os.environ.get("TENSOR_COSDI_COMMIT", "unknown")
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.system()}",

@@ -425,8 +425,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--loss", default="l1+ssim", help="l1+ssim (Eq. 152), l1 or ssim (Table 2's ablation)"
     )
     dc.add_argument(
-        "--mask", default="tsa", help="tsa (crops of the real TSA mask), random, or a .npy/.mat"
-    )
+        "--mask", default="tsa",
+        help="tsa (crops of the real TSA mask), random (Bernoulli ½ codes), mixed (TSA crops and "
+        "binary codes of density 0.3-0.7, half and half), or a .npy/.mat",
+    )  # fmt: skip
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
     dc.add_argument(
         "--lr", type=float, default=1e-3,

@@ -22,6 +22,11 @@ def _training_options(p, *, steps: int, batch: int):
     )
     p.add_argument("--force", action="store_true", help="overwrite OUT and start over")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--hold-out", type=int, default=-1, metavar="K",
+        help="leave fold K (0-3) of datasets.tune_folds(4) out of training, for validation "
+        "(default -1: train on every tuning scene)",
+    )  # fmt: skip
 
 
 def _run_training(args, train, cfg) -> int:
@@ -61,8 +66,9 @@ def run_train_denoiser(args) -> int:
         width=args.width,
         blocks=args.blocks,
         seed=args.seed,
+        hold_out=args.hold_out,
     )
-    return _run_training(args, train_denoiser, cfg)
+    return _run_training(args, train_denoiser, cfg.check())
 
 
 def run_train_dcosnet(args) -> int:
@@ -85,5 +91,6 @@ def run_train_dcosnet(args) -> int:
         lr=args.lr,
         lr_end=min(1e-5, args.lr),
         seed=args.seed,
+        hold_out=args.hold_out,
     )
     return _run_training(args, train_dcosnet, cfg.check())

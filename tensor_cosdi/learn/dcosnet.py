@@ -87,6 +87,15 @@ class Sensing:
                 raise ValueError("every system of a batch must have the same cube shape")
         if len(shape) < 3:
             raise ValueError(f"D-CoSNet needs a cube (rows, columns, channels…), got {shape}")
+        self.systems, self.ops = systems, [s.operator for s in systems]
+        self.cube_shape, self.measurement_shape = shape, mshape
+        self.channels = int(np.prod(shape[2:]))
+        self.dtype = dtype or torch.float32
+        self.device = torch.device(device or "cpu")
+        self.codes, self.offsets = None, _shared_offsets(systems)
+        if self.offsets is not None:  # single-shot SD-CASSI with a 2-D code: one batched shear
+            self._set_codes(np.stack([s.code for s in systems]))
+            return
         d = []
         for s in systems:
             gram = s.operator.gram_dual()
@@ -97,13 +106,40 @@ class Sensing:
                     f"without PSFs); {type(s).__name__} has structure {kind!r}"
                 )
             d.append(np.asarray(gram.d))
-        self.systems, self.ops = systems, [s.operator for s in systems]
-        self.cube_shape, self.measurement_shape = shape, mshape
-        self.channels = int(np.prod(shape[2:]))
-        self.dtype = dtype or torch.float32
-        self.device = torch.device(device or "cpu")
         self.d = torch.from_numpy(np.stack(d)).to(device=self.device, dtype=self.dtype)
         self.dbar = self.d.reshape(len(d), -1).mean(dim=1)
+
+    @classmethod
+    def coded_shear(cls, codes, offsets, *, device=None, dtype=None):
+        """What ``Sensing`` builds from single-shot SD-CASSI systems with the 2-D ``codes``
+        ``(B, H, W)`` and the whole-pixel per-band column ``offsets`` (one per band, the
+        systems' ``shifts``), without building the systems (a training batch)."""
+        torch = require_torch()
+        codes = np.asarray(codes)
+        offsets = tuple(int(o) for o in offsets)
+        if codes.ndim != 3 or not offsets or min(offsets) < 0:
+            raise ValueError(
+                f"need codes (B, H, W) and non-negative offsets, got {codes.shape}, {offsets}"
+            )
+        self = cls.__new__(cls)
+        self.systems = self.ops = None
+        h, w = codes.shape[1:]
+        self.cube_shape = (h, w, len(offsets))
+        self.measurement_shape = (h, w + max(offsets))
+        self.channels = len(offsets)
+        self.dtype = dtype or torch.float32
+        self.device = torch.device(device or "cpu")
+        self.offsets = offsets
+        self._set_codes(codes)
+        return self
+
+    def _set_codes(self, codes):
+        torch = require_torch()
+        self.codes = torch.from_numpy(np.ascontiguousarray(codes)).to(
+            device=self.device, dtype=self.dtype
+        )
+        self.d = self._shear_sum(self.codes[:, None] ** 2)
+        self.dbar = self.d.reshape(len(codes), -1).mean(dim=1)
 
     def _cube(self, x):
         return x.permute(1, 2, 0).reshape(self.cube_shape)
@@ -112,27 +148,67 @@ class Sensing:
         h, w = self.cube_shape[:2]
         return cube.reshape(h, w, self.channels).permute(2, 0, 1)
 
+    def _shear_sum(self, x):
+        """``Σₖ`` band ``k`` of ``x (B, C | 1, H, W)`` moved ``offsets[k]`` columns right."""
+        torch = require_torch()
+        width = self.measurement_shape[1]
+        pad = torch.nn.functional.pad
+        parts = [
+            pad(x[:, min(k, x.shape[1] - 1)], (o, width - x.shape[-1] - o))
+            for k, o in enumerate(self.offsets)
+        ]
+        return torch.stack(parts).sum(dim=0)
+
     def forward(self, x):
         """``A x`` for ``x (B, C, H, W)``."""
         torch = require_torch()
+        if self.codes is not None:
+            return self._shear_sum(x * self.codes[:, None])
         with tl.backend_context("pytorch"):
             return torch.stack([op.forward(self._cube(xi)) for op, xi in zip(self.ops, x)])
 
     def adjoint(self, y):
         """``Aᵀ y`` as ``(B, C, H, W)``."""
         torch = require_torch()
+        if self.codes is not None:
+            w = self.cube_shape[1]
+            return (
+                torch.stack([y[..., o : o + w] for o in self.offsets], dim=1) * self.codes[:, None]
+            )
         with tl.backend_context("pytorch"):
             return torch.stack([self._batch(op.adjoint(yi)) for op, yi in zip(self.ops, y)])
 
     def scale(self, g):
         """Per-sample ``s``: the 99.9th percentile of ``g / d`` where ``d > 0`` (``(B,)``)."""
         torch = require_torch()
-        out = []
-        for gi, di in zip(g, self.d):
-            v = (gi[di > 0] / di[di > 0]).abs().reshape(-1)
-            q = torch.quantile(v.float(), 0.999) if v.numel() else torch.tensor(0.0)
-            out.append(q if float(q) > 0 else v.max() if v.numel() else torch.tensor(1.0))
-        return torch.stack(out).to(device=g.device, dtype=g.dtype).clamp_min(1e-12)
+        d = self.d.to(device=g.device, dtype=torch.float32).reshape(len(g), -1)
+        ratio = g.float().reshape(len(g), -1).abs() / torch.where(d > 0, d, 1.0)
+        v = torch.where(d > 0, ratio, torch.nan)  # one batched quantile, no host round-trip
+        q = torch.nan_to_num(torch.nanquantile(v, 0.999, dim=1), nan=0.0)
+        top = torch.nan_to_num(v.nan_to_num(nan=-1.0).amax(dim=1).clamp_min(0), nan=0.0)
+        out = torch.where(q > 0, q, torch.where(top > 0, top, 1.0))
+        return out.to(dtype=g.dtype).clamp_min(1e-12)
+
+
+def _shared_offsets(systems):
+    """The per-band column offsets (Python ints) when every system is a single-shot SD-CASSI
+    with a 2-D code and the same whole-pixel shifts — ``A`` is then one batched shear of the
+    coded bands (:meth:`Sensing.forward`) — else ``None`` (each system's own operator)."""
+    from ..systems import SDCASSI
+
+    first = None
+    for s in systems:
+        if type(s) is not SDCASSI or s.colour or np.ndim(s.code) != 2:
+            return None
+        shifts = np.asarray(s.shifts, dtype=np.float64)
+        if not np.array_equal(shifts, np.round(shifts)):
+            return None
+        offsets = tuple(int(v) for v in shifts)
+        if first is None:
+            first = offsets
+        elif offsets != first:
+            return None
+    return first
 
 
 # ---- the network ------------------------------------------------------------------------------

@@ -26,7 +26,11 @@ class DCoSNetConfig:
 
     ``mask``: ``"tsa"`` (random crops of the real TSA 256×256 coded aperture
     in ``../shared/data/masks``), ``"random"`` (a fresh Bernoulli(½) code per
-    sample) or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    sample), ``"mixed"`` (per sample, a TSA crop or a fresh binary code of a
+    density drawn from 0.3–0.7, half and half: a network for any binary code)
+    or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    ``hold_out``: -1 trains on every tuning scene, ``k`` leaves fold ``k`` of
+    ``datasets.tune_folds(4)`` out for validation.
     ``prior``: ``"unet"`` (the thesis' per-stage U-Net, from scratch) or
     ``"spectral"`` (the learned subspace denoiser shared by the stages,
     starting from ``prior_weights``: ``"shipped"`` for the package's
@@ -56,6 +60,7 @@ class DCoSNetConfig:
     snr_max: float = 40.0
     seed: int = 0
     checkpoint_every: int = 100
+    hold_out: int = -1
 
     def check(self):
         if self.system not in TRAINABLE_SYSTEMS:
@@ -73,6 +78,9 @@ class DCoSNetConfig:
             ("n_bands", "shift", "stages", "width", "unet_width", "steps", "batch", "patch",
              "checkpoint_every"),
         )  # fmt: skip
+        from ._loop import training_scenes
+
+        training_scenes(self.hold_out)
         if not 2 <= self.n_bands <= 31:
             raise ValueError(f"n_bands must lie in 2..31 (the scenes have 31), got {self.n_bands}")
         if self.patch < 16 or self.patch % 4:
@@ -103,7 +111,7 @@ def _load_mask(spec, folder=None):
     ``"random"``."""
     if spec == "random":
         return None
-    if spec == "tsa":
+    if spec in ("tsa", "mixed"):
         from ..datasets import data_dir
 
         path = data_dir(folder).parent / "masks" / "tsa_mask256.mat"
@@ -135,23 +143,28 @@ def _load_mask(spec, folder=None):
 
 
 def _training_data(cfg: DCoSNetConfig, folder=None):
-    from ..datasets import KAIST_WAVELENGTHS, TUNE_SCENES, load_hsi
+    from ..datasets import KAIST_WAVELENGTHS, load_hsi
+    from ._loop import training_scenes
 
     wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
-    cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in TUNE_SCENES]
+    names = training_scenes(cfg.hold_out)
+    cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in names]
     code = _load_mask(cfg.mask, folder)
     need = (cfg.patch, cfg.patch + cfg.margin)
     if code is not None and (code.shape[0] < need[0] or code.shape[1] < need[1]):
         raise ValueError(f"the mask {code.shape} is smaller than a training crop {need}")
-    return cubes, code
+    offsets = None  # SD-CASSI: the batch's sensing is built from its codes alone
+    if cfg.system == "sd_cassi":
+        offsets = tuple(int(v) for v in cfg.make_system(np.ones(need)).shifts)
+    return cubes, code, offsets
 
 
 def _sample(rng, cfg: DCoSNetConfig, data):
-    """``(clean (B, p, p, L) float32, [system, …])`` from the random stream."""
-    cubes, code = data
+    """``(clean (B, p, p, L) float32, [code (p, p + margin), …])`` from the random stream."""
+    cubes, code, offsets = data
     p = cfg.patch
     clean = np.empty((cfg.batch, p, p, cfg.n_bands), dtype=np.float32)
-    systems = []
+    codes = []
     for i in range(cfg.batch):
         c = cubes[int(rng.integers(len(cubes)))]
         r0 = int(rng.integers(0, c.shape[0] - p + 1))
@@ -159,16 +172,26 @@ def _sample(rng, cfg: DCoSNetConfig, data):
         patch = np.rot90(c[r0 : r0 + p, c0 : c0 + p], int(rng.integers(4)))
         clean[i] = patch[::-1] if rng.random() < 0.5 else patch
         w = p + cfg.margin
-        if code is None:
-            crop = (rng.random((p, w)) < 0.5).astype(np.float64)
+        if cfg.mask == "mixed":  # the random stream is drawn from either way
+            density, fresh = rng.uniform(0.3, 0.7), rng.random() < 0.5
+        else:
+            density, fresh = 0.5, code is None
+        if fresh:
+            crop = (rng.random((p, w)) < density).astype(np.float64)
         else:
             r0 = int(rng.integers(0, code.shape[0] - p + 1))
             c0 = int(rng.integers(0, code.shape[1] - w + 1))
             crop = code[r0 : r0 + p, c0 : c0 + w]
             if rng.random() < 0.5:
                 crop = crop[::-1]
-        systems.append(cfg.make_system(np.ascontiguousarray(crop)))
-    return clean, systems
+        codes.append(np.ascontiguousarray(crop))
+    return clean, codes
+
+
+def _sensing(codes, offsets, cfg: DCoSNetConfig, dev):
+    if offsets is not None:
+        return Sensing.coded_shear(np.stack(codes), offsets, device=dev)
+    return Sensing([cfg.make_system(c) for c in codes], device=dev)
 
 
 def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
@@ -183,8 +206,8 @@ def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
 
 
 def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
-    clean_np, systems = _sample(rng, cfg, data)
-    sensing = Sensing(systems, device=dev)
+    clean_np, codes = _sample(rng, cfg, data)
+    sensing = _sensing(codes, data[2], cfg, dev)
     truth = torch.from_numpy(clean_np).to(dev).permute(0, 3, 1, 2)
     with torch.no_grad():
         g = sensing.forward(truth)

@@ -56,6 +56,8 @@ class TrainConfig:
     blocks: int = 4
     seed: int = 0
     checkpoint_every: int = 200
+    #: -1: train on every tuning scene; k: leave fold k of ``tune_folds(4)`` out (validation)
+    hold_out: int = -1
 
     def check(self):
         from ._loop import check_config
@@ -69,6 +71,9 @@ class TrainConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"{name} must be a number in [0, 1], got {v!r}")
+        from ._loop import training_scenes
+
+        training_scenes(self.hold_out)
         if not 0 < self.sigma_min < self.sigma_max:
             raise ValueError(
                 f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
@@ -76,12 +81,14 @@ class TrainConfig:
         return self
 
 
-def training_data(folder=None):
-    """The tuning scenes as float32 cubes: native bands and KAIST-resampled (a list)."""
-    from ..datasets import TUNE_SCENES, load_hsi
+def training_data(folder=None, hold_out: int = -1):
+    """The training scenes (every tuning scene, or all but fold ``hold_out`` of
+    ``datasets.tune_folds(4)``) as float32 cubes: native bands and KAIST-resampled (a list)."""
+    from ..datasets import load_hsi
+    from ._loop import training_scenes
 
     cubes = []
-    for name in TUNE_SCENES:
+    for name in training_scenes(hold_out):
         for wl in (None, "kaist"):
             cubes.append(load_hsi(name, wl, folder=folder, dtype="float32")[0])
     return cubes
@@ -225,7 +232,7 @@ def train_denoiser(
         out=out,
         config=config,
         config_cls=TrainConfig,
-        prepare=lambda cfg: training_data(folder),
+        prepare=lambda cfg: training_data(folder, cfg.hold_out),
         build=lambda torch, cfg, data: _build_net(torch, cfg.r_max, cfg.width, cfg.blocks),
         batch_loss=_denoiser_loss,
         weights_config=lambda cfg: {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},

@@ -1,6 +1,6 @@
 """D-CoSNet: sensing layers equal the system's operator, the untrained network is the exact
 Woodbury ADMM step, the SSIM loss equals scikit-image's, training resumes exactly for SD-CASSI
-and Mu-CoSDI, the shipped weights beat GAP-TV on a held-back real crop, clear errors."""
+and Mu-CoSDI, the shipped weights beat least squares on a held-back real crop, clear errors."""
 
 import importlib.util
 import sys
@@ -179,6 +179,65 @@ def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system, pr
 
 
 @needs_torch
+def test_sensing_from_codes_alone_is_the_sd_cassi_operator():
+    """Training batches build SD-CASSI's sensing from the codes (no systems): the same A, Aᵀ,
+    diag(AAᵀ) and scale as the systems' own operators (the per-system path, forced)."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing
+
+    rng = np.random.default_rng(3)
+    codes = (rng.random((3, 12, 10)) < 0.5).astype(np.float64)
+    systems = [tc.systems.SDCASSI(c, n_bands=6, shifts=[0, 1, 3, 4, 6, 9]) for c in codes]
+    fast = Sensing.coded_shear(codes, systems[0].shifts, dtype=torch.float64)
+    slow = Sensing(systems, dtype=torch.float64)
+    slow.codes = None  # the systems' operators on the TensorLy PyTorch backend
+    assert fast.measurement_shape == slow.measurement_shape == systems[0].measurement_shape
+    x = torch.from_numpy(rng.random((3, 6, 12, 10)))
+    y = torch.from_numpy(rng.random((3, *systems[0].measurement_shape)))
+    torch.testing.assert_close(fast.forward(x), slow.forward(x), rtol=1e-12, atol=0)
+    torch.testing.assert_close(fast.adjoint(y), slow.adjoint(y), rtol=1e-12, atol=0)
+    torch.testing.assert_close(fast.d, slow.d.double(), rtol=1e-12, atol=0)
+    torch.testing.assert_close(fast.scale(fast.forward(x)), slow.scale(slow.forward(x)))
+    # a zero measurement has unit scale, not a division by zero
+    assert fast.scale(torch.zeros_like(y)).tolist() == [1.0, 1.0, 1.0]
+    with pytest.raises(ValueError, match="non-negative offsets"):
+        Sensing.coded_shear(codes, [0, -1, 2, 3, 4, 5])
+
+
+@needs_torch
+def test_mixed_codes_and_a_held_out_fold():
+    """``mask="mixed"``: TSA crops and fresh binary codes of density 0.3-0.7, half and half;
+    ``hold_out=k`` keeps fold k of ``tune_folds(4)`` out of training."""
+    from tensor_cosdi.learn import _loop
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, _sample, _training_data
+
+    _real()
+    _tsa_crop()
+    cfg = DCoSNetConfig(mask="mixed", batch=64, patch=16, hold_out=2)
+    data = _training_data(cfg)
+    held = set(datasets.tune_folds(4)[2])
+    assert len(data[0]) == len(datasets.TUNE_SCENES) - len(held)
+    assert not held & set(_loop.training_scenes(2)) and len(_loop.training_scenes(-1)) == 28
+    _, codes = _sample(np.random.default_rng(0), cfg, data)
+    tsa = data[1]
+    from_tsa = [
+        any(
+            np.array_equal(c, tsa[r : r + 16, k : k + 16]) or
+            np.array_equal(c[::-1], tsa[r : r + 16, k : k + 16])
+            for r in range(241) for k in range(241)
+        )
+        for c in codes[:12]
+    ]  # fmt: skip
+    assert 2 <= sum(from_tsa) <= 10, from_tsa
+    fresh = [c.mean() for c, t in zip(codes, from_tsa) if not t]
+    assert all(0.1 < m < 0.9 for m in fresh)
+    for bad in (4, -2, True, 1.5):
+        with pytest.raises(ValueError, match="hold_out"):
+            DCoSNetConfig(hold_out=bad).check()
+
+
+@needs_torch
 def test_bad_inputs_are_clear_errors(tmp_path):
     import torch
 
@@ -232,15 +291,18 @@ def _tsa_crop(n=64):
 
 
 @needs_torch
-def test_shipped_weights_beat_least_squares_on_a_held_back_real_crop():
-    """The CPU-budget weights (3000 steps) learned a real correction to the least-squares start:
-    30.77 dB vs LSQ 28.98 on this crop — and still lose to GAP-TV (35.11)."""
+@pytest.mark.parametrize("code, snr, margin", [("random", 30, 5.0), ("tsa", None, 2.0)])
+def test_shipped_weights_beat_least_squares_on_a_held_back_real_crop(code, snr, margin):
+    """The shipped weights (any binary code: trained on TSA crops and random codes) learned a
+    real correction to the least-squares start on a report-scene crop: a seeded random code at
+    30 dB 36.90 dB vs LSQ 29.07; the TSA crop, noiseless, 32.96 vs 28.99 — both still under
+    GAP-TV (37.51, 36.13).  And they start PnP-GAP: 40.06 / 33.75 dB after 10 iterations."""
     cube = _real("real_and_fake_apples", (64, 64))
-    system = tc.systems.SDCASSI(_tsa_crop(), n_bands=28, shifts=2)
-    g = system.simulate(cube.astype(np.float64), snr_db=30, rng=0)
+    mask = _tsa_crop() if code == "tsa" else np.random.default_rng(0).random((64, 64)) < 0.5
+    system = tc.systems.SDCASSI(mask.astype(np.float64), n_bands=28, shifts=2)
+    g = system.simulate(cube.astype(np.float64), snr_db=snr, rng=0)
     lsq = metrics.psnr(cube, np.asarray(tc.reconstruct(system, g, "lsq").cube), data_range=1.0)
     net = metrics.psnr(cube, np.asarray(tc.reconstruct(system, g, "dcosnet").cube), data_range=1.0)
-    assert net > lsq + 1.0, (net, lsq)
-    # and it starts PnP-GAP (warm="dcosnet"): 33.3 dB here
+    assert net > lsq + margin, (net, lsq)
     warm = tc.reconstruct(system, g, "pnp_gap", warm="dcosnet", max_iter=10).cube
-    assert metrics.psnr(cube, np.asarray(warm), data_range=1.0) > net
+    assert metrics.psnr(cube, np.asarray(warm), data_range=1.0) > net + 0.5

@@ -106,6 +106,8 @@ def run(method: str, system, g, options: dict):
 def provenance() -> dict:
     """Date, machine, commit and command of this run (for every results file)."""
     try:
+        if os.environ.get("TENSOR_COSDI_COMMIT"):  # a copy run on another machine
+            raise OSError
         commit = subprocess.run(
             ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
             capture_output=True, text=True, check=True,
@@ -115,7 +117,7 @@ def provenance() -> dict:
             capture_output=True, text=True, check=True,
         ).stdout.strip()  # fmt: skip
         commit += "+changes" if dirty else ""
-    except (OSError, subprocess.CalledProcessError):  # a copy without .git (another machine)
+    except (OSError, subprocess.CalledProcessError):
         commit = os.environ.get("TENSOR_COSDI_COMMIT", "unknown")
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),

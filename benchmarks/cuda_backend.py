@@ -76,6 +76,14 @@ def protocol_problem():
     return system, cube, g, what
 
 
+def cpu_options(method):
+    if method == "dcosnet":
+        return {"device": "cpu"}
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    return {"denoiser": SpectralDenoiser(device="cpu")}
+
+
 def timed(torch, system, g, method, device, repeats, dev):
     secs, cube = [], None
     for _ in range(repeats):
@@ -87,8 +95,8 @@ def timed(torch, system, g, method, device, repeats, dev):
                 cube = tc.reconstruct(system, torch.from_numpy(g).to(dev), method).cube
             sync()
             cube = cube.cpu().numpy()
-        else:
-            cube = tc.reconstruct(system, g, method).cube
+        else:  # NumPy arrays, and the network on the CPU (its default would be the GPU)
+            cube = tc.reconstruct(system, g, method, **cpu_options(method)).cube
         secs.append(time.perf_counter() - t0)
     return float(np.median(secs)), np.asarray(cube)
 

@@ -148,7 +148,7 @@ def main(argv=None):
         "|---|---|---|---|",
     ]
     lines += [
-        f"| {m} | {dev if d == 'torch' else f'NumPy, CPU ({args.threads} torch threads)'} | "
+        f"| {m} | {dev if d == 'torch' else f'NumPy + network on CPU ({args.threads} threads)'} | "
         f"{s:.2f} | {p:.2f} |"
         for m, d, s, p in big
     ]

@@ -89,17 +89,42 @@ def report(args, store, cache):
         for snr, mk in conds:
             for m in methods:
                 store.ensure(scene, snr, mk, m, options.get(m, {}), cache=cache)
+    base = "plain_gap_tv" if "plain_gap_tv" in methods else None
     lines = [
-        "| code | SNR | method | PSNR dB | SSIM | SAM ° | median s | scenes |",
-        "|---|---|---|---|---|---|---|---|",
+        "| code | SNR | method | PSNR dB | SSIM | SAM ° | median s | scenes |"
+        + (" lead over plain_gap_tv, dB (min…max per scene) |" if base else ""),
+        "|---|---|---|---|---|---|---|---|" + ("---|" if base else ""),
     ]
+    leads = {}
     for snr, mk in conds:
         for m in methods:
             rs = [store.get(s, snr, mk, m, options.get(m, {})) for s in scenes]
-            lines.append(
+            row = (
                 f"| {mk} | {snr_label(snr)} | {m} | {_mean(rs, 'psnr'):.2f} | "
                 f"{_mean(rs, 'ssim'):.3f} | {_mean(rs, 'sam'):.2f} | "
                 f"{np.median([r['seconds'] for r in rs]):.2f} | {len(rs)} |"
+            )
+            if base:
+                ref = [store.get(s, snr, mk, base, options.get(base, {}))["psnr"] for s in scenes]
+                d = np.array([r["psnr"] for r in rs]) - np.array(ref)
+                leads.setdefault(m, []).extend(d.tolist())
+                spread = f"{d.mean():+.2f} ({d.min():+.2f}…{d.max():+.2f})"
+                row += " — |" if m == base else f" {spread} |"
+            lines.append(row)
+    if base:  # one computed line per method: where it stands against the reference
+        lines.append("")
+        for m, d in leads.items():
+            if m == base:
+                continue
+            d = np.array(d)
+            where = (
+                "above it in every case" if d.min() > 0
+                else "under it in every case" if d.max() < 0
+                else f"above it in {int((d > 0).sum())} of {d.size} cases"
+            )  # fmt: skip
+            lines.append(
+                f"* `{m}` against `{base}`, per scene and condition: {where} "
+                f"({d.min():+.2f} to {d.max():+.2f} dB, mean {d.mean():+.2f})."
             )
     head = (
         f"# Real spectra: {', '.join(scenes)}\n\nSD-CASSI 256×256×28 (KAIST bands), 2 px/band, "

@@ -405,6 +405,32 @@ class PlaneSupport(Prior):
         self.inner.update(x, iteration)
 
 
+class NonNegative(Prior):
+    """``x ≥ 0`` on top of any prior: ``inner``'s prox, then the projection onto the
+    non-negative orthant (a cube of light).  For a prior whose prox is separable in the
+    voxel domain this is the exact prox of the sum; for a transform-domain prior (a
+    dictionary, a wavelet) it is the usual projected step.  The objective is the inner
+    prior's (the indicator is 0 on the iterates it returns)."""
+
+    name = "nonneg"
+
+    def __init__(self, inner: Prior):
+        self.inner = inner
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        self.inner.setup(start, penalty=penalty, gain=gain)
+        self.penalty = self.inner.penalty
+
+    def prox(self, v):
+        return tl.clip(self.inner.prox(v), 0, None)
+
+    def objective(self, z) -> float:
+        return self.inner.objective(z)
+
+    def update(self, x, iteration: int) -> None:
+        self.inner.update(x, iteration)
+
+
 def plane_axis(system):
     """The depth-plane axis of ``system``'s cube (``"z"`` of a system whose depth is a plane
     index, e.g. CASSDI-DFA), or ``None``."""

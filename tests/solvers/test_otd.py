@@ -231,12 +231,27 @@ def test_progress_bar_on_request(capsys):
         ({"pan_iter": -1}, "pan_iter must be an integer ≥ 0"),
         ({"weights": np.ones((2, 2))}, r"weights must be finite, ≥ 0 and of shape \(8, 8, 4\)"),
         ({"colour": 1}, r"unknown option\(s\) \['colour'\] for method 'otd'"),
+        ({"nonneg": 1}, "option nonneg must be True or False"),
     ],
 )
 def test_bad_options_are_clear_errors(options, message):
     p = studies.make_problem("sd_cassi", "colorchecker", shape=(8, 8), n_bands=4)
     with pytest.raises(ValueError, match=message):
         tc.reconstruct(p.system, p.measurement, "otd", **options)
+
+
+@pytest.mark.parametrize("method", ["otd", "wdct"])
+def test_non_negativity_by_default_and_signed_cubes_on_request(method):
+    """A cube of light comes back non-negative (the z-step is projected); ``nonneg=False``
+    keeps a signed cube's negative values — a cube that is half negative is not clipped."""
+    p = studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=6, snr_db=30)
+    cube = tc.reconstruct(p.system, p.measurement, method, max_iter=10).cube
+    assert np.min(cube) >= 0
+    signed = np.asarray(p.cube) - np.mean(np.asarray(p.cube))
+    g = p.system.forward(signed)
+    free = tc.reconstruct(p.system, g, method, max_iter=10, nonneg=False).cube
+    assert np.mean(free < 0) > 0.25
+    assert np.corrcoef(np.ravel(free), np.ravel(signed))[0, 1] > 0.5
 
 
 def test_otd_runs_in_float32_and_keeps_the_dtype():

@@ -12,6 +12,7 @@ __all__ = [
     "add_noise",
     "snr_db",
     "estimate_sigma",
+    "frame_sigmas",
     "estimate_snr_db",
     "snr_db_from_sigma",
     "snr_schedule",
@@ -88,6 +89,46 @@ def estimate_sigma(measurement) -> float:
         raise ValueError("estimate_sigma: the measurement contains NaN or inf")
     frames = g.reshape(g.shape[:2] + (-1,))
     return float(np.mean([_mad_sigma(frames[..., k]) for k in range(frames.shape[2])]))
+
+
+def frame_sigmas(x, support=None) -> np.ndarray:
+    """:func:`estimate_sigma` of each frame of a stack ``x`` (axes after the first two),
+    each over the bounding box of its ``support`` (non-zero pixels of ``support``'s frame;
+    default ``x``): a frame padded with columns no light reaches (the panchromatic frame of
+    dual-camera CASSI, the views of Lytro-CASSI) is read where it holds data, without the
+    step where the data ends.  Frames with no support, or a support under 4×4 pixels, read
+    over the whole frame.  :func:`estimate_sigma` is the mean of such readings over the
+    whole frames.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> x = np.zeros((32, 40, 2)); x[:, :32, 1] = rng.normal(0, 0.1, (32, 32))
+    >>> x[..., 0] = rng.normal(0, 0.1, (32, 40))
+    >>> np.round(frame_sigmas(x), 2).tolist()
+    [0.1, 0.1]
+    """
+    from skimage.restoration import estimate_sigma as _mad_sigma
+
+    x = np.asarray(B.to_numpy(x), dtype=np.float64)
+    s = x if support is None else np.asarray(B.to_numpy(support))
+    if x.ndim < 2 or min(x.shape[:2]) < 4 or s.shape != x.shape:
+        raise ValueError(
+            f"frame_sigmas needs frames of at least 4×4 pixels and a support of the same shape, "
+            f"got {x.shape} and {s.shape}"
+        )
+    if not np.isfinite(x).all():
+        raise ValueError("frame_sigmas: the input contains NaN or inf")
+    fx, fs = x.reshape(x.shape[:2] + (-1,)), s.reshape(s.shape[:2] + (-1,))
+    out = []
+    for k in range(fx.shape[2]):
+        nz = fs[..., k] != 0
+        rows, cols = np.flatnonzero(nz.any(axis=1)), np.flatnonzero(nz.any(axis=0))
+        frame = fx[..., k]
+        if rows.size and rows[-1] - rows[0] >= 3 and cols[-1] - cols[0] >= 3:
+            frame = frame[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+        out.append(_mad_sigma(frame))
+    return np.asarray(out, dtype=np.float64)
 
 
 def snr_db_from_sigma(power: float, sigma: float) -> float:

@@ -150,7 +150,7 @@ def test_pnp_gap_auto_switches_off_acceleration_for_noisy_data(monkeypatch):
 
 
 @pytest.mark.parametrize(
-    "name", ["sd_cassi", "dd_cassi", "cassi_vsi", "mu_cosdi", "cassdi_dfa", "c3slfi"]
+    "name", ["sd_cassi", "dd_cassi", "cassi_vsi", "mu_cosdi", "cassdi_dfa", "c3slfi", "lytro_cassi"]
 )
 def test_fit_residual_does_not_read_a_random_code_as_noise(name):
     """A real scene through each system's seeded random code (64×64, 16 bands): the
@@ -175,3 +175,24 @@ def test_fit_residual_does_not_read_a_random_code_as_noise(name):
     )  # cached: the "auto" options of one reconstruction share one fit
     only = estimate_snr(p.system, p.measurement, fit=False)
     assert only.snr_db == only.from_measurement_db and np.isnan(only.from_residual_db)
+
+
+def test_frame_sigmas_read_each_frame_where_its_light_falls():
+    """Each frame of a stack is read on its own data (the second frame padded with dark
+    columns); the estimate takes the noisiest frame, so a frame whose noise the fit absorbed does
+    not make the whole measurement look clean as the mean over frames does."""
+    rng = np.random.default_rng(1)
+    x = np.zeros((48, 60, 2))
+    x[..., 0] = rng.normal(0, 0.2, (48, 60))
+    x[:, :40, 1] = rng.normal(0, 0.05, (48, 40))
+    sig = noise.frame_sigmas(x)
+    assert sig[0] == pytest.approx(0.2, rel=0.1) and sig[1] == pytest.approx(0.05, rel=0.1)
+    assert noise.estimate_sigma(x) == pytest.approx(np.mean(sig), rel=0.05)  # the mean: 0.125
+    # the support names where to look: a residual read where the measurement has light
+    r = np.where(x != 0, rng.normal(0, 0.01, x.shape), 0.0)
+    r[:, 40:, 1] = 0.0
+    assert noise.frame_sigmas(r, x)[1] == pytest.approx(0.01, rel=0.15)
+    with pytest.raises(ValueError, match="same shape"):
+        noise.frame_sigmas(x, x[..., :1])
+    with pytest.raises(ValueError, match="NaN or inf"):
+        noise.frame_sigmas(np.full((8, 8), np.nan))

@@ -8,7 +8,7 @@ K-SVD on *other* scenes.  :func:`tensor_cosdi.solvers.train_dictionary`
 learns one, and ``method="dl"`` reconstructs with it as the prior of GAP.
 Here: C3SLFI light fields (the 3-D lenslet form), a dictionary learned on
 four tuning scenes, scored on a held-back real scene (32×32, 8 bands,
-20 dB: DL 28.0 dB against WDCT 25.6 and OTD 24.7).  Without the research
+20 dB: DL 28.0 dB against WDCT 25.9 and OTD 26.5).  Without the research
 data it learns on photos and scores the colour checker, where it trails
 (20.7 dB against 21.8 and 22.0, least squares 20.5): a dictionary is only as good as its
 training scenes are like the scene.

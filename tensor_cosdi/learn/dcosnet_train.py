@@ -12,7 +12,14 @@ import numpy as np
 
 from .dcosnet import Sensing, _per_sample, build_dcosnet, ssim
 
-__all__ = ["DCoSNetConfig", "train_dcosnet", "TRAINABLE_SYSTEMS", "LOSSES"]
+__all__ = [
+    "DCoSNetConfig",
+    "train_dcosnet",
+    "training_data",
+    "sample_batch",
+    "TRAINABLE_SYSTEMS",
+    "LOSSES",
+]
 
 #: Systems :func:`train_dcosnet` builds from crops of a coded aperture.
 TRAINABLE_SYSTEMS = ("sd_cassi", "mu_cosdi")
@@ -142,7 +149,10 @@ def _load_mask(spec, folder=None):
     return code
 
 
-def _training_data(cfg: DCoSNetConfig, folder=None):
+def training_data(cfg: DCoSNetConfig, folder=None):
+    """``(cubes, code, offsets)``: the training scenes at ``cfg``'s bands, the training mask
+    (``None`` for ``"random"``) and, for SD-CASSI, the per-band column offsets a batch's sensing
+    is built from (:meth:`~tensor_cosdi.learn.dcosnet.Sensing.coded_shear`)."""
     from ..datasets import KAIST_WAVELENGTHS, load_hsi
     from ._loop import training_scenes
 
@@ -159,8 +169,9 @@ def _training_data(cfg: DCoSNetConfig, folder=None):
     return cubes, code, offsets
 
 
-def _sample(rng, cfg: DCoSNetConfig, data):
-    """``(clean (B, p, p, L) float32, [code (p, p + margin), …])`` from the random stream."""
+def sample_batch(rng, cfg: DCoSNetConfig, data):
+    """One batch ``(clean (B, p, p, L) float32, [code (p, p + margin), …])`` drawn from the
+    random stream ``rng`` and :func:`training_data`'s ``data``."""
     cubes, code, offsets = data
     p = cfg.patch
     clean = np.empty((cfg.batch, p, p, cfg.n_bands), dtype=np.float32)
@@ -206,7 +217,7 @@ def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
 
 
 def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
-    clean_np, codes = _sample(rng, cfg, data)
+    clean_np, codes = sample_batch(rng, cfg, data)
     sensing = _sensing(codes, data[2], cfg, dev)
     truth = torch.from_numpy(clean_np).to(dev).permute(0, 3, 1, 2)
     with torch.no_grad():
@@ -266,7 +277,7 @@ def train_dcosnet(
         out=out,
         config=config,
         config_cls=DCoSNetConfig,
-        prepare=lambda cfg: _training_data(cfg, folder),
+        prepare=lambda cfg: training_data(cfg, folder),
         build=build_network,
         batch_loss=_dcosnet_loss,
         weights_config=lambda cfg: {

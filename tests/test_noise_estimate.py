@@ -49,8 +49,10 @@ def test_auto_weights_rescue_otd_at_20db_on_a_real_scene_and_mask():
 
     With the panchromatic stage's TV weight tied to the start's maximum, OTD
     gave 16.86 dB at lam 0.1 and 21.98 with lam="auto".  With the robust
-    peak and pan_weight="auto" (the default) lam 0.1 gives 25.59 dB and
-    lam="auto" 26.30: the default is rescued, and lam="auto" still adds.
+    peak, pan_weight="auto" and the non-negative z-step (the defaults) lam 0.1
+    gives 27.99 dB and lam="auto" (0.3 here) 26.95: both rescued.  On this crop
+    0.1 is the better weight; over 12 tuning scenes at 256×256 the
+    cross-validation chose 0.3 at 20 dB (``benchmarks/results/nonneg.md``).
     """
 
     import scipy.io
@@ -69,8 +71,8 @@ def test_auto_weights_rescue_otd_at_20db_on_a_real_scene_and_mask():
         lam: tc.metrics.psnr(cube, tc.reconstruct(sd, g, "otd", lam=lam).cube, data_range=1.0)
         for lam in (0.1, "auto")
     }
-    assert psnr[0.1] > 24.0, psnr  # pan_weight="auto" alone (was 16.86)
-    assert psnr["auto"] > psnr[0.1] + 0.3, psnr
+    assert psnr[0.1] > 26.0, psnr  # pan_weight="auto" and nonneg (was 16.86)
+    assert psnr["auto"] > 26.0, psnr  # was 21.98
 
 
 def test_snr_schedule_is_log_linear_between_anchors_and_flat_beyond():

@@ -91,7 +91,7 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
     g_fit = B.as_tensor(g, "float64")  # in float64 whatever the measurement's precision
     x, _, _ = gap_tv(
         system, g_fit, max_iter=FIT_ITER, accelerate=False, tv_weight=0.1, tv_iter=5,
-        plane_support=False,
+        plane_support=False, nonneg=False,
     )  # fmt: skip
     r = g - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
     finite = np.isfinite(r).all()

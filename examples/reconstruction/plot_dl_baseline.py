@@ -10,7 +10,7 @@ Here: C3SLFI light fields (the 3-D lenslet form), a dictionary learned on
 four tuning scenes, scored on a held-back real scene (32×32, 8 bands,
 20 dB: DL 28.0 dB against WDCT 25.9 and OTD 26.5).  Without the research
 data it learns on photos and scores the colour checker, where it trails
-(20.7 dB against 21.8 and 22.0, least squares 20.5): a dictionary is only as good as its
+(20.7 dB against 22.0 and 22.2): a dictionary is only as good as its
 training scenes are like the scene.
 
 The thesis' other baseline, Lytro-CASSI, is another *architecture*: a

@@ -2,6 +2,7 @@
 band count, training with checkpoints and an exact resume, and PnP-GAP with it."""
 
 import importlib.util
+import json
 import sys
 
 import numpy as np
@@ -166,6 +167,17 @@ def test_cli_train_denoiser(tmp_path, capsys):
     assert out.exists()
     assert cli.main(args) == 2  # exists: refuses without --force
     assert "--force" in capsys.readouterr().err
+    # a held-out fold: the weights record the scenes they were trained on, the fold is not there
+    held = tmp_path / "held.pt"
+    hold = ["--out", str(held), "--hold-out", "1"]
+    assert cli.main(args[:1] + hold + args[3:]) == 0
+    import torch
+
+    scenes = json.loads(torch.load(held, weights_only=True)["summary"])["scenes"]
+    fold = tc.datasets.tune_folds(4)[1]
+    assert len(scenes) == 28 - len(fold) and not set(fold) & set(scenes)
+    assert cli.main(args[:1] + ["--out", str(tmp_path / "x.pt"), "--hold-out", "4"] + args[3:]) == 2
+    assert "hold_out must be -1" in capsys.readouterr().err
 
 
 @needs_torch

@@ -6,7 +6,7 @@ reconstructed with NumPy and again from the same measurement as a CUDA tensor
 (backend ``pytorch``); each method's cube must come back as a CUDA tensor, and
 the table gives the largest difference relative to the NumPy cube's peak and
 the two PSNRs.  Then the learned path at the protocol's size (256×256×28
-SD-CASSI, TSA-like random code, 2 px per band, a tuning scene when the
+SD-CASSI, the protocol's seeded random code, 2 px per band, a tuning scene when the
 research data is there, else a synthetic one): ``pnp_gap`` and ``dcosnet``
 times on the GPU (median of ``--repeats``) beside NumPy on the CPU with
 ``--threads`` threads.

@@ -281,7 +281,7 @@ def train_dictionary(
 def dictionary_admm(
     system, measurement, *, dictionary=None, sigma=0.05, sigma_end=0.01, max_iter=30,
     warm="gap_tv", warm_iter=20, accelerate="auto", eps="auto", splitting="gap", rho=0.15,
-    tol=1e-5, progress=False,
+    tol=1e-5, nonneg=True, progress=False,
 ):  # fmt: skip
     """GAP (or ADMM) with a K-SVD patch dictionary as its prior (registered as ``"dl"``).
 
@@ -291,7 +291,8 @@ def dictionary_admm(
     ``(AAᵀ + εI)⁻¹`` projection by ADMM's ``(AᵀA + ρI)⁻¹`` step (``ρ = rho``
     relative to the sensing gain), which does not amplify noise along the
     weak directions of an ill-conditioned ``A Aᵀ`` (Lytro-CASSI, κ ≈ 10⁸);
-    ``warm`` is ``"gap_tv"``, ``"otd"`` or ``"none"``.
+    ``warm`` is ``"gap_tv"``, ``"otd"`` or ``"none"``; ``nonneg`` (on) keeps each
+    denoised estimate non-negative (off for a signed cube).
     """
     from ._base import check_positive
     from .pnp_gap import gap_settings, warm_started_gap
@@ -309,9 +310,11 @@ def dictionary_admm(
     if splitting not in ("gap", "admm"):
         raise ValueError(f"splitting must be 'gap' or 'admm', got {splitting!r}")
     check_positive("rho", rho)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     dictionary._check(tuple(system.cube_shape))
     accelerate, eps, _ = gap_settings(system, measurement, accelerate, eps)
-    prior = Denoiser(dictionary, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=True)
+    prior = Denoiser(dictionary, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg)
     return warm_started_gap(
         system, measurement, prior, warm=warm, warm_iter=warm_iter, accelerate=accelerate,
         eps=eps, max_iter=max_iter, tol=tol, progress=progress,

@@ -240,7 +240,7 @@ def test_bad_options_are_clear_errors(options, message):
         tc.reconstruct(p.system, p.measurement, "otd", **options)
 
 
-@pytest.mark.parametrize("method", ["otd", "wdct", "gap_tv"])
+@pytest.mark.parametrize("method", ["otd", "wdct", "gap_tv", "twist"])
 def test_non_negativity_by_default_and_signed_cubes_on_request(method):
     """A cube of light comes back non-negative (the z-step is projected); ``nonneg=False``
     keeps a signed cube's negative values — a cube that is half negative is not clipped."""

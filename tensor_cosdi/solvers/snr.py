@@ -17,12 +17,13 @@ pixels the frame's light reaches): the fit can absorb one frame's noise
 (dual-camera CASSI's panchromatic frame read ≈ 50 dB at a true 30 dB), and
 averaging it with the others read the whole measurement as cleaner than it
 is (Lytro-CASSI +3.8 dB at 30 dB with the mean, −2.6 with the noisiest
-frame; dual-camera CASSI +10.5 → +5.9 dB, still over).  ``benchmarks/results/snr_estimate.md`` shows
-both readings on every system (noiseless through a random code, 64×64: SD-CASSI
-28.3 dB from the measurement, 37.9 with the fit; CASSI-VSI 16.1 → 38.3;
-C3SLFI 12.5 → 48.0), and where the fit still reads texture as noise (CS2LI's
-fringes).  The estimate is cached for the last few (system, measurement)
-pairs, so the ``"auto"`` options of one reconstruction share one fit.
+frame; dual-camera CASSI +10.5 → +5.9 dB, still over).
+``benchmarks/results/snr_estimate.md`` shows both readings on every system
+(noiseless through a random code, 64×64: SD-CASSI 28.3 dB from the
+measurement, 37.9 with the fit; CASSI-VSI 16.1 → 38.3; C3SLFI 12.2 → 47.3),
+and where the fit still reads texture as noise (CS2LI's fringes).  The
+estimate is cached for the last few (system, measurement) pairs, so the
+``"auto"`` options of one reconstruction share one fit.
 """
 
 from __future__ import annotations

@@ -28,6 +28,7 @@ __all__ = [
     "HSI_SCENES",
     "TUNE_SCENES",
     "REPORT_SCENES",
+    "training_scenes",
     "tune_folds",
     "data_dir",
     "data_file",
@@ -80,6 +81,42 @@ def tune_folds(k: int = 4, seed: int = 0) -> tuple[tuple[str, ...], ...]:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     order = np.random.default_rng(int(seed)).permutation(n)
     return tuple(tuple(TUNE_SCENES[i] for i in sorted(order[j :: int(k)])) for j in range(int(k)))
+
+
+#: Folds of :func:`tune_folds` that :func:`training_scenes`' ``hold_out`` picks from.
+HOLD_OUT_FOLDS = 4
+
+
+def training_scenes(hold_out: int = -1) -> tuple[str, ...]:
+    """The scenes a network is trained on: every one of :data:`TUNE_SCENES`, or all but fold
+    ``hold_out`` of ``tune_folds(4)``, which then stays unseen for choosing between trained
+    candidates (``tensor-cosdi train-denoiser … --hold-out K``).
+
+    Parameters
+    ----------
+    hold_out : int
+        ``-1`` (every tuning scene) or a fold index ``0 … 3``.
+
+    Returns
+    -------
+    tuple of str
+
+    Examples
+    --------
+    >>> len(training_scenes()), len(training_scenes(3)) + len(tune_folds(4)[3])
+    (28, 28)
+    """
+    if isinstance(hold_out, bool) or not isinstance(hold_out, (int, np.integer)):
+        raise ValueError(f"hold_out must be -1 or a fold index 0..3, got {hold_out!r}")
+    if hold_out == -1:
+        return TUNE_SCENES
+    if not 0 <= hold_out < HOLD_OUT_FOLDS:
+        raise ValueError(
+            f"hold_out must be -1 (train on every tuning scene) or a fold index "
+            f"0..{HOLD_OUT_FOLDS - 1}, got {hold_out}"
+        )
+    held = set(tune_folds(HOLD_OUT_FOLDS)[int(hold_out)])
+    return tuple(s for s in TUNE_SCENES if s not in held)
 
 
 def _roots() -> list[Path]:

@@ -21,28 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..datasets import TUNE_SCENES, tune_folds
+from ..datasets import training_scenes
 from . import require_torch
-
-#: Folds of :func:`tensor_cosdi.datasets.tune_folds` a training run's ``hold_out`` picks from.
-HOLD_OUT_FOLDS = 4
-
-
-def training_scenes(hold_out: int = -1) -> tuple[str, ...]:
-    """The tuning scenes a network is trained on: all of
-    :data:`~tensor_cosdi.datasets.TUNE_SCENES`, or (``hold_out`` = k ≥ 0) all but fold ``k`` of
-    ``tune_folds(4)``, which then stays unseen for choosing between trained candidates."""
-    if isinstance(hold_out, bool) or not isinstance(hold_out, (int, np.integer)):
-        raise ValueError(f"hold_out must be -1 or a fold index 0..3, got {hold_out!r}")
-    if hold_out == -1:
-        return TUNE_SCENES
-    if not 0 <= hold_out < HOLD_OUT_FOLDS:
-        raise ValueError(
-            f"hold_out must be -1 (train on every tuning scene) or a fold index "
-            f"0..{HOLD_OUT_FOLDS - 1}, got {hold_out}"
-        )
-    held = set(tune_folds(HOLD_OUT_FOLDS)[int(hold_out)])
-    return tuple(s for s in TUNE_SCENES if s not in held)
 
 
 def atomic_save(torch, obj, path: Path):

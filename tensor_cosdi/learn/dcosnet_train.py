@@ -85,7 +85,7 @@ class DCoSNetConfig:
             ("n_bands", "shift", "stages", "width", "unet_width", "steps", "batch", "patch",
              "checkpoint_every"),
         )  # fmt: skip
-        from ._loop import training_scenes
+        from ..datasets import training_scenes
 
         training_scenes(self.hold_out)
         if not 2 <= self.n_bands <= 31:
@@ -153,8 +153,7 @@ def training_data(cfg: DCoSNetConfig, folder=None):
     """``(cubes, code, offsets)``: the training scenes at ``cfg``'s bands, the training mask
     (``None`` for ``"random"``) and, for SD-CASSI, the per-band column offsets a batch's sensing
     is built from (:meth:`~tensor_cosdi.learn.dcosnet.Sensing.coded_shear`)."""
-    from ..datasets import KAIST_WAVELENGTHS, load_hsi
-    from ._loop import training_scenes
+    from ..datasets import KAIST_WAVELENGTHS, load_hsi, training_scenes
 
     wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
     names = training_scenes(cfg.hold_out)

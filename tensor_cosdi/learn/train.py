@@ -71,7 +71,7 @@ class TrainConfig:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"{name} must be a number in [0, 1], got {v!r}")
-        from ._loop import training_scenes
+        from ..datasets import training_scenes
 
         training_scenes(self.hold_out)
         if not 0 < self.sigma_min < self.sigma_max:
@@ -84,8 +84,7 @@ class TrainConfig:
 def training_data(folder=None, hold_out: int = -1):
     """The training scenes (every tuning scene, or all but fold ``hold_out`` of
     ``datasets.tune_folds(4)``) as float32 cubes: native bands and KAIST-resampled (a list)."""
-    from ..datasets import load_hsi
-    from ._loop import training_scenes
+    from ..datasets import load_hsi, training_scenes
 
     cubes = []
     for name in training_scenes(hold_out):

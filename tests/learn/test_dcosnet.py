@@ -209,7 +209,6 @@ def test_sensing_from_codes_alone_is_the_sd_cassi_operator():
 def test_mixed_codes_and_a_held_out_fold():
     """``mask="mixed"``: TSA crops and fresh binary codes of density 0.3-0.7, half and half;
     ``hold_out=k`` keeps fold k of ``tune_folds(4)`` out of training."""
-    from tensor_cosdi.learn import _loop
     from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, sample_batch, training_data
 
     _real()
@@ -218,7 +217,7 @@ def test_mixed_codes_and_a_held_out_fold():
     data = training_data(cfg)
     held = set(datasets.tune_folds(4)[2])
     assert len(data[0]) == len(datasets.TUNE_SCENES) - len(held)
-    assert not held & set(_loop.training_scenes(2)) and len(_loop.training_scenes(-1)) == 28
+    assert not held & set(datasets.training_scenes(2)) and len(datasets.training_scenes()) == 28
     _, codes = sample_batch(np.random.default_rng(0), cfg, data)
     tsa = data[1]
     from_tsa = [

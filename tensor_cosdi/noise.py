@@ -82,13 +82,19 @@ def estimate_sigma(measurement) -> float:
     """
     from skimage.restoration import estimate_sigma as _mad_sigma
 
-    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
-    if g.ndim < 2 or min(g.shape[:2]) < 4:
-        raise ValueError(f"estimate_sigma needs frames of at least 4×4 pixels, got shape {g.shape}")
-    if not np.isfinite(g).all():
-        raise ValueError("estimate_sigma: the measurement contains NaN or inf")
-    frames = g.reshape(g.shape[:2] + (-1,))
+    frames = _frames(measurement, "estimate_sigma")
     return float(np.mean([_mad_sigma(frames[..., k]) for k in range(frames.shape[2])]))
+
+
+def _frames(x, who: str) -> np.ndarray:
+    """``x`` as float64 frames ``(rows, columns, K)`` (axes after the first two folded), checked:
+    frames of at least 4×4 pixels, finite."""
+    g = np.asarray(B.to_numpy(x), dtype=np.float64)
+    if g.ndim < 2 or min(g.shape[:2]) < 4:
+        raise ValueError(f"{who} needs frames of at least 4×4 pixels, got shape {g.shape}")
+    if not np.isfinite(g).all():
+        raise ValueError(f"{who}: the input contains NaN or inf")
+    return g.reshape(g.shape[:2] + (-1,))
 
 
 def frame_sigmas(x, support=None) -> np.ndarray:
@@ -110,16 +116,17 @@ def frame_sigmas(x, support=None) -> np.ndarray:
     """
     from skimage.restoration import estimate_sigma as _mad_sigma
 
-    x = np.asarray(B.to_numpy(x), dtype=np.float64)
-    s = x if support is None else np.asarray(B.to_numpy(support))
-    if x.ndim < 2 or min(x.shape[:2]) < 4 or s.shape != x.shape:
-        raise ValueError(
-            f"frame_sigmas needs frames of at least 4×4 pixels and a support of the same shape, "
-            f"got {x.shape} and {s.shape}"
-        )
-    if not np.isfinite(x).all():
-        raise ValueError("frame_sigmas: the input contains NaN or inf")
-    fx, fs = x.reshape(x.shape[:2] + (-1,)), s.reshape(s.shape[:2] + (-1,))
+    fx = _frames(x, "frame_sigmas")
+    if support is None:
+        fs = fx
+    else:
+        s = np.asarray(B.to_numpy(support))
+        if s.shape != np.shape(x):
+            raise ValueError(
+                f"frame_sigmas: the support must have the input's shape {np.shape(x)}, "
+                f"got {s.shape}"
+            )
+        fs = s.reshape(fx.shape)
     out = []
     for k in range(fx.shape[2]):
         nz = fs[..., k] != 0

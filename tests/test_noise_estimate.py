@@ -194,7 +194,7 @@ def test_frame_sigmas_read_each_frame_where_its_light_falls():
     r = np.where(x != 0, rng.normal(0, 0.01, x.shape), 0.0)
     r[:, 40:, 1] = 0.0
     assert noise.frame_sigmas(r, x)[1] == pytest.approx(0.01, rel=0.15)
-    with pytest.raises(ValueError, match="same shape"):
+    with pytest.raises(ValueError, match="support must have the input.s shape"):
         noise.frame_sigmas(x, x[..., :1])
     with pytest.raises(ValueError, match="NaN or inf"):
         noise.frame_sigmas(np.full((8, 8), np.nan))

@@ -254,6 +254,17 @@ def test_non_negativity_by_default_and_signed_cubes_on_request(method):
     assert np.corrcoef(np.ravel(free), np.ravel(signed))[0, 1] > 0.5
 
 
+def test_nonneg_must_be_a_boolean_when_the_solvers_are_called_directly():
+    from tensor_cosdi.solvers.gap_tv import gap_tv
+    from tensor_cosdi.solvers.otd import online_tucker_admm, wdct_admm
+    from tensor_cosdi.solvers.twist import twist_tv
+
+    p = studies.make_problem("sd_cassi", "colorchecker", shape=(8, 8), n_bands=4)
+    for solve in (gap_tv, twist_tv, online_tucker_admm, wdct_admm):
+        with pytest.raises(ValueError, match="nonneg must be True or False, got 'yes'"):
+            solve(p.system, p.measurement, nonneg="yes", max_iter=2)
+
+
 def test_otd_runs_in_float32_and_keeps_the_dtype():
     p = studies.make_problem("cassi_vsi", "colorchecker", shape=(24, 24), n_bands=8)
     g = p.measurement.astype(np.float32)

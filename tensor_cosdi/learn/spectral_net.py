@@ -29,6 +29,7 @@ the shipped weights and the command that produced them are described in
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -37,7 +38,18 @@ import numpy as np
 from .. import _backend as B
 from . import require_torch
 
-__all__ = ["SubspaceDenoiserNet", "SpectralDenoiser", "subspace", "default_weights"]
+__all__ = [
+    "SubspaceDenoiserNet",
+    "SpectralDenoiser",
+    "subspace",
+    "default_weights",
+    "PRECISIONS",
+    "bfloat16_is_fast",
+]
+
+#: ``SpectralDenoiser(precision=…)``: the network's arithmetic.  ``"auto"`` is bfloat16 on a CPU
+#: with native bfloat16 instructions (:func:`bfloat16_is_fast`), float32 elsewhere.
+PRECISIONS = ("auto", "float32", "bfloat16")
 
 WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
 DEFAULT_WEIGHTS = WEIGHTS_DIR / "spectral_denoiser.pt"
@@ -142,6 +154,21 @@ def _robust_peak(t, q: float = 0.999) -> float:
     return p if p > 0 else float(flat.max())
 
 
+@functools.lru_cache(maxsize=1)
+def bfloat16_is_fast() -> bool:
+    """Whether this CPU runs bfloat16 convolutions natively (oneDNN with AVX512-BF16 or AMX).
+
+    Without such instructions bfloat16 is emulated and slower than float32, so
+    ``precision="auto"`` keeps float32 there.
+    """
+    torch = require_torch()
+    try:
+        native = torch.ops.mkldnn._is_mkldnn_bf16_supported()
+        return bool(torch.backends.mkldnn.is_available() and native)
+    except (AttributeError, RuntimeError):  # an older or a reduced build: no way to tell
+        return False
+
+
 class SpectralDenoiser:
     """The learned denoiser as a plug-in ``denoise(x, sigma) -> x``.
 
@@ -162,9 +189,21 @@ class SpectralDenoiser:
         four patterns into 64 channels gave 32.82 dB, per slice 36.95 dB
         (OTD alone 35.92): the 12-dimensional subspace cannot hold four
         differently modulated copies of the spectra.
+    precision : {"auto", "float32", "bfloat16"}
+        The network's arithmetic (the subspace, scaling and output stay
+        float32).  ``"auto"``: bfloat16 on a CPU with native bfloat16
+        instructions (:func:`bfloat16_is_fast`), else float32; on CUDA float32.
+        Measured on a 2-core AVX512-BF16 machine, 256×256 eigen-images: the
+        network takes 0.072 s in bfloat16 against 0.17 s in float32, and a
+        denoised real cube (``balloons``, σ 0.02 / 0.05 / 0.1) loses
+        0.02 dB (49.70 / 44.64 / 40.73 against 49.72 / 44.66 / 40.75 dB).  Use
+        ``"float32"`` for results that are the same on every machine.
     """
 
-    def __init__(self, weights=None, *, rank: int | None = None, device=None, joint=False):
+    def __init__(
+        self, weights=None, *, rank: int | None = None, device=None, joint=False,
+        precision: str = "auto",
+    ):  # fmt: skip
         torch = require_torch()
         path = Path(weights) if weights is not None else default_weights()
         if not path.is_file():
@@ -188,9 +227,27 @@ class SpectralDenoiser:
         if rank > self.r_max:
             raise ValueError(f"rank {rank} exceeds the network's r_max {self.r_max}")
         self.rank = int(rank)
+        if precision not in PRECISIONS:
+            raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
         self.device = device
         self.path = path
         self.joint = bool(joint)
+        self.precision = precision
+        self._half = None  # the bfloat16 copy of the network, made on first use
+
+    def _network(self, dev):
+        """``(net, dtype)`` the eigen-images go through on ``dev``."""
+        torch = require_torch()
+        half = self.precision == "bfloat16" or (
+            self.precision == "auto" and dev.type == "cpu" and bfloat16_is_fast()
+        )
+        if not half:
+            return self.net.to(dev), torch.float32
+        if self._half is None:
+            import copy
+
+            self._half = copy.deepcopy(self.net).to(torch.bfloat16)
+        return self._half.to(dev), torch.bfloat16
 
     def _device(self, x):
         torch = require_torch()
@@ -225,13 +282,13 @@ class SpectralDenoiser:
         scale = _robust_peak(t)
         if scale <= 0 or not np.isfinite(scale):
             return x
-        self.net.to(dev)
+        net, net_dtype = self._network(dev)
         flat = (t / scale).reshape(1, shape[0] * shape[1], -1)
         with torch.no_grad():
             y, u = subspace(flat, self.rank, self.r_max)
             y = y.reshape(1, self.r_max, shape[0], shape[1])
-            s = torch.tensor([sigma / scale], dtype=work_dtype, device=dev)
-            clean = y - self.net(y, s)
+            s = torch.tensor([sigma / scale], dtype=net_dtype, device=dev)
+            clean = y - net(y.to(net_dtype), s).to(work_dtype)
             k = u.shape[-1]
             out = torch.matmul(clean[:, :k].reshape(1, k, -1).transpose(1, 2), u.transpose(1, 2))
         out = (out.reshape(shape) * scale).to(dtype=t.dtype)

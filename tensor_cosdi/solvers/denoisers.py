@@ -251,15 +251,16 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
 _NETS: dict = {}
 
 
-def spectral_net(x, sigma: float, *, weights=None, rank=None):
+def spectral_net(x, sigma: float, *, weights=None, rank=None, precision="auto"):
     """The learned spectral denoiser (:class:`tensor_cosdi.learn.spectral_net.SpectralDenoiser`,
     needs torch): a small CNN on the eigen-images of the cube's spectral subspace, for any band
-    count, noise ``sigma``.  ``weights`` default: the shipped ones (loaded once)."""
+    count, noise ``sigma``.  ``weights`` default: the shipped ones (loaded once);
+    ``precision`` as the class's (``"auto"``: bfloat16 on a CPU that runs it natively)."""
     from ..learn.spectral_net import SpectralDenoiser
 
-    key = (None if weights is None else str(weights), rank)
+    key = (None if weights is None else str(weights), rank, precision)
     if key not in _NETS:
-        _NETS[key] = SpectralDenoiser(weights, rank=rank)
+        _NETS[key] = SpectralDenoiser(weights, rank=rank, precision=precision)
     return _NETS[key](x, sigma)
 
 

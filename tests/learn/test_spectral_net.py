@@ -208,3 +208,29 @@ def test_cubes_with_more_axes_are_denoised_one_slice_at_a_time():
     for t in range(3):
         np.testing.assert_allclose(out[..., t], den(x[..., t], 0.05), rtol=1e-5, atol=1e-6)
     assert np.abs(joint(x, 0.05) - out).max() > 1e-3  # folding the patterns is another denoiser
+
+
+@needs_torch
+def test_bfloat16_denoises_as_well_as_float32_and_auto_follows_the_cpu(monkeypatch):
+    import torch
+
+    from tensor_cosdi.learn import spectral_net
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    clean = _real("face")
+    noisy = clean + 0.05 * np.random.default_rng(5).standard_normal(clean.shape)
+    noisy = noisy.astype(np.float32)
+    f32 = SpectralDenoiser(precision="float32")(noisy, 0.05)
+    b16 = SpectralDenoiser(precision="bfloat16")(noisy, 0.05)
+    assert b16.dtype == np.float32 and np.abs(b16 - f32).max() > 0  # another arithmetic …
+    p32 = metrics.psnr(clean, f32, data_range=1.0)
+    p16 = metrics.psnr(clean, b16, data_range=1.0)
+    assert abs(p16 - p32) < 0.1, (p16, p32)  # … within a tenth of a dB
+    for fast, want in ((False, f32), (True, b16)):
+        monkeypatch.setattr(spectral_net, "bfloat16_is_fast", lambda fast=fast: fast)
+        auto = SpectralDenoiser()(noisy, 0.05)
+        np.testing.assert_array_equal(auto, want)
+    assert isinstance(spectral_net.bfloat16_is_fast(), bool)
+    with pytest.raises(ValueError, match="precision must be one of"):
+        SpectralDenoiser(precision="float16")
+    assert torch.get_default_dtype() == torch.float32  # nothing global was changed

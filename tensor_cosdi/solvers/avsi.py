@@ -79,6 +79,7 @@ def avsi(
     tol: float = 1e-4,
     wavelet_name: str = "sym8",
     wavelet_level="auto",
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """A-VSI (thesis Algorithm 1) for a :class:`~tensor_cosdi.systems.CASSIVSI`.  Registered as
@@ -98,6 +99,11 @@ def avsi(
     wavelet_name, wavelet_level
         The spatial wavelet of ``Ψ`` and its depth (:func:`tensor_cosdi.bases.wavelet`;
         default as deep as the periodised transform allows).
+    nonneg : bool
+        Project ``f`` after each ``f``-step and ``z`` after each ``z``-step
+        onto ``≥ 0`` (a cube of light; an addition to the printed algorithm,
+        see ``benchmarks/results/nonneg_methods.md``); ``False`` runs Alg. 1
+        as printed.
     max_iter, tol, progress
         Iteration cap, relative-change stop, tqdm bar.
 
@@ -118,6 +124,8 @@ def avsi(
     tol = check_positive("tol", tol)
     max_iter = _check_int("max_iter", max_iter, 1)
     inner_iter = _check_int("inner_iter", inner_iter, 1)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     g = measurement
     H = system.operator
     HT, HR = system.arms
@@ -164,8 +172,12 @@ def avsi(
         ):  # a few CG steps per ADMM iteration is the design (inexact ADMM)
             warnings.simplefilter("ignore", RuntimeWarning)
             f_new = conjugate_gradient(normal_f, eta1, x0=f, rtol=1e-6, maxiter=inner_iter)
+        if nonneg:
+            f_new = tl.clip(f_new, 0, None)
         eta2 = hpg + s2 * psi_z.synthesis(theta_z - chi2) + s3 * (D.apply(f_new) + chi3)
         z = HP.solve_normal(eta2, s2 + s3)
+        if nonneg:
+            z = tl.clip(z, 0, None)
         az, af = psi_z.analysis(z), psi_f.analysis(f_new)  # each transform once per iteration
         theta_z = soft(az + chi2, thr_z)
         theta_f = soft(af + chi1, thr_f)

@@ -16,16 +16,19 @@ __all__ = ["dcosnet"]
 _LOADED: dict = {}
 
 
-def dcosnet(system, measurement, *, weights=None, device=None):
+def dcosnet(system, measurement, *, weights=None, device=None, nonneg: bool = True):
     """One pass of a trained D-CoSNet (thesis §7.2).  Registered as ``"dcosnet"``.
 
     ``weights``: a file written by ``tensor-cosdi train-dcosnet`` (default:
     the shipped weights for the system's kind — SD-CASSI, 28 bands, 2 px per
     band).  The weights must match the system's kind, channel count and
     shift (a ``ValueError`` says what to train otherwise).  ``device``:
-    ``"cpu"``, ``"cuda"``… (default CUDA when available).  Not iterative:
-    the history has one entry.
+    ``"cpu"``, ``"cuda"``… (default CUDA when available).  ``nonneg`` (on: a
+    cube of light) clips the network's output at 0.  Not iterative: the
+    history has one entry.
     """
+    if not isinstance(nonneg, bool):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     from ..learn import require_torch
 
     require_torch()
@@ -37,6 +40,8 @@ def dcosnet(system, measurement, *, weights=None, device=None):
         _LOADED[key] = DCoSNet(weights, device=device)
     t0 = time.perf_counter()
     cube = _LOADED[key](system, measurement)
+    if nonneg:
+        cube = tl.clip(cube, 0, None)
     res = relative_residual(system, cube, measurement)
     history = {
         "objective": [0.5 * (res * float(tl.norm(measurement))) ** 2],

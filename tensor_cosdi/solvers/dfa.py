@@ -88,6 +88,7 @@ def multiresolution_dfa(
     max_iter: int = 60,
     tv_weight: float = 0.05,
     tol: float = 1e-4,
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """Multiresolution DFA (thesis Algorithm 2-4) for a :class:`~tensor_cosdi.systems.CASSDIDFA`.
@@ -97,6 +98,10 @@ def multiresolution_dfa(
     ----------
     max_iter, tv_weight, tol
         Per stage, as in :func:`fista_tv`.
+    nonneg : bool
+        Clip the grayscale and spectral stages' estimates at 0 (a cube of
+        light).  The focal stack is clipped either way: the depth weights
+        ``ff / Σ_z ff`` are a partition of unity only for a non-negative stack.
 
     Returns
     -------
@@ -114,6 +119,8 @@ def multiresolution_dfa(
     require_system("dfa", system)
     tv_weight, tol = (check_positive(n, v) for n, v in (("tv_weight", tv_weight), ("tol", tol)))
     max_iter = _check_int("max_iter", max_iter, 1)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     g = measurement
     op = system.operator
     nx, ny, nl, nz = system.cube_shape
@@ -129,7 +136,8 @@ def multiresolution_dfa(
         1e-2 * float(tl.norm(a_g.apply(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny),
     )
     fg, h, c1 = fista_tv(a_g, g, fg0, desc="DFA fg", **kw)
-    fg = tl.clip(fg, 0, None)
+    if nonneg:
+        fg = tl.clip(fg, 0, None)
     add(h)
     # 2. focal stack tied to fg
     lift_f = (1.0 / nl) * Replicate((nx, ny, nz), 2, nl)
@@ -152,7 +160,8 @@ def multiresolution_dfa(
 
     fs0 = Replicate((nx, ny), 2, nl).apply(fg / nl)
     fs, h, c3 = fista_tv(op @ lift_s, g, fs0, project=tie_bands, desc="DFA fs", **kw)
-    fs = tl.clip(fs, 0, None)
+    if nonneg:
+        fs = tl.clip(fs, 0, None)
     add(h)
     cube = lift_s.apply(fs)
     hist["residual"][-1] = relative_residual(system, cube, g)

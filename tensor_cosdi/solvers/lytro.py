@@ -73,7 +73,7 @@ def lytro_dictionary(
 def lytro_cassi(
     system, measurement, *, dictionary=None, n_patches: int = 10_000, n_iter: int = 10,
     rho: float = 0.15, sigma: float = 0.05, sigma_end: float = 0.01, max_iter: int = 30,
-    warm: str = "otd", tol: float = 1e-5, rng=0, progress: bool = False,
+    warm: str = "otd", tol: float = 1e-5, rng=0, nonneg: bool = True, progress: bool = False,
 ):  # fmt: skip
     """Lytro-CASSI reconstruction: ADMM with the RGB-learned ⊗ DCT dictionary (``"lytro"``).
 
@@ -81,7 +81,8 @@ def lytro_cassi(
     path) skips the training; otherwise :func:`lytro_dictionary` learns it
     from ``measurement`` with ``n_patches`` patches and ``n_iter`` K-SVD
     iterations.  ``rho``, ``sigma``, ``sigma_end``, ``max_iter``, ``warm``,
-    ``tol`` are those of the ``"dl"`` method (:func:`~.dictionary.dictionary_admm`).
+    ``tol`` and ``nonneg`` (on: each dictionary step projected onto ``≥ 0``) are those of
+    the ``"dl"`` method (:func:`~.dictionary.dictionary_admm`).
     """
     require_system("lytro", system)
     if dictionary is None:
@@ -90,7 +91,8 @@ def lytro_cassi(
         )
     return dictionary_admm(
         system, measurement, dictionary=dictionary, sigma=sigma, sigma_end=sigma_end,
-        max_iter=max_iter, warm=warm, splitting="admm", rho=rho, tol=tol, progress=progress,
+        max_iter=max_iter, warm=warm, splitting="admm", rho=rho, tol=tol, nonneg=nonneg,
+        progress=progress,
     )  # fmt: skip
 
 

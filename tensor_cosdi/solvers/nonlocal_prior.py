@@ -36,7 +36,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .. import _backend as B
-from .priors import Prior, annealed, robust_peak
+from .priors import NonNegative, Prior, annealed, robust_peak
 
 __all__ = ["NonlocalTucker", "block_match", "group_low_rank", "nonlocal_tucker"]
 
@@ -211,6 +211,7 @@ def nonlocal_tucker(
     accelerate="auto",
     eps="auto",
     tol: float = 1e-5,
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """GAP with the :class:`NonlocalTucker` prior.  Registered as ``"otd_nl"``.
@@ -225,7 +226,9 @@ def nonlocal_tucker(
     :func:`~tensor_cosdi.solvers.pnp_gap.pnp_gap` (``"auto"`` from the
     estimated SNR: accelerated GAP on clean data, plain GAP with a larger
     ``ε`` on noisy data; at 30 dB on the tuning scenes balloons and clay
-    that is 27.28 dB against OTD's 26.96).  Experimental.
+    that is 27.28 dB against OTD's 26.96).  ``nonneg`` (on: a cube of light)
+    projects each prior step onto ``≥ 0``
+    (:class:`~tensor_cosdi.solvers.priors.NonNegative`).  Experimental.
     """
     from . import engine
     from ._base import check_positive
@@ -247,6 +250,8 @@ def nonlocal_tucker(
         ("regroup_every", regroup_every, 1),
     ):
         engine.check_int(name, v, low)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     from .pnp_gap import gap_settings, warm_started_gap
 
     accelerate, eps, _ = gap_settings(system, measurement, accelerate, eps)
@@ -270,6 +275,8 @@ def nonlocal_tucker(
     )
     if len(shape) > 3:  # fold extra axes into the band axis for the prior
         prior = _Folded(prior, shape)
+    if nonneg:
+        prior = NonNegative(prior)
     return warm_started_gap(
         system,
         g,

@@ -55,6 +55,7 @@ def pnp_admm_operator(
     tol: float = 1e-4,
     start=None,
     tie=None,
+    nonneg: bool = False,
     progress: bool = False,
     desc: str = "PnP-ADMM",
 ):
@@ -66,7 +67,8 @@ def pnp_admm_operator(
     strength) relative to the robust peak (99.9th percentile) of the start.  ``tie`` =
     ``(T, t, weight)`` adds ``weight/2 ‖T x − t‖²`` (the hierarchical
     coupling); then the x-step runs on the stacked normal equations by
-    warm-started CG.  Returns ``(x, history, converged)``.
+    warm-started CG.  ``nonneg`` projects each denoiser step onto ``≥ 0``.  Returns
+    ``(x, history, converged)``.
     """
     normal_solve = None
     if tie is not None:
@@ -87,7 +89,7 @@ def pnp_admm_operator(
     return engine.admm(
         op,
         g,
-        Denoiser(denoiser, sigma=sigma),
+        Denoiser(denoiser, sigma=sigma, nonneg=nonneg),
         rho=rho,
         start=start,
         max_iter=max_iter,
@@ -109,10 +111,15 @@ def hierarchical_pnp(
     tie_weight: float = 0.5,
     tol: float = 1e-4,
     n_steps: int | None = None,
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """Algorithm 6 for a system whose cube is ``(Nx, Ny, Nλ, Nt)``.
     Returns ``(P, history, converged, depth)``.
+
+    ``nonneg`` projects both stages' denoiser steps onto ``≥ 0`` and clips
+    the reflectance ``F``; the fringe images ``Z`` are clipped either way
+    (the modulation ``Nt · Z_t / Σ_t Z_t`` needs them non-negative).
 
     ``depth`` is the wrapped phase ``(Nx, Ny, n_freq)`` of the fringe images
     when ``n_steps`` (``K``) divides ``Nt`` (frequency-major patterns,
@@ -133,6 +140,7 @@ def hierarchical_pnp(
         sigma=sigma,
         max_iter=max_iter,
         tol=tol,
+        nonneg=nonneg,
         progress=progress,
         desc="PnP-ADMM Z",
     )
@@ -154,10 +162,12 @@ def hierarchical_pnp(
         max_iter=max_iter,
         tol=tol,
         tie=tie,
+        nonneg=nonneg,
         progress=progress,
         desc="PnP-ADMM F",
     )
-    f = tl.clip(f, 0, None)
+    if nonneg:
+        f = tl.clip(f, 0, None)
     cube = mod.apply(f)
     hist = History()
     hist.extend(h1)  # stage residuals: ‖G − A_stage x‖/‖G‖ of each stage's model …
@@ -189,6 +199,7 @@ def pnp_admm(
     tie_weight: float = 0.5,
     tol: float = 1e-4,
     n_steps: int | None = 4,
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """Hierarchical PnP-ADMM (thesis Algorithm 6) for CS2LI and Mu-CoSDI.
@@ -209,6 +220,9 @@ def pnp_admm(
         Phase steps ``K`` per frequency; the result's ``depth`` is then the
         wrapped phase per frequency ``(Nx, Ny, Nt / K)`` (turn it into height
         with :mod:`tensor_cosdi.depth`).
+    nonneg : bool
+        Project each denoiser step onto ``≥ 0`` (a cube of light; see
+        :func:`hierarchical_pnp`); ``False`` for signed cubes.
     max_iter, tol
         Per stage.
 
@@ -228,6 +242,8 @@ def pnp_admm(
     )
     check_positive("tol", tol)
     max_iter = _check_int("max_iter", max_iter, 1)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     resolve(denoiser)
     if len(system.cube_shape) == 4:
         return hierarchical_pnp(
@@ -240,6 +256,7 @@ def pnp_admm(
             tie_weight=tie_weight,
             tol=tol,
             n_steps=n_steps,
+            nonneg=nonneg,
             progress=progress,
         )
     cube, hist, conv = pnp_admm_operator(
@@ -250,6 +267,7 @@ def pnp_admm(
         sigma=sigma,
         max_iter=max_iter,
         tol=tol,
+        nonneg=nonneg,
         progress=progress,
     )
     return cube, hist, conv

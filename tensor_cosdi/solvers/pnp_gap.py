@@ -28,6 +28,8 @@ any registered denoiser or callable ``(x, sigma) -> x`` work without it.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..noise import snr_schedule
@@ -119,6 +121,7 @@ def pnp_gap(
     tol: float = 1e-5,
     guard=1.3,
     ensemble="auto",
+    precision: str = "float32",
     progress: bool = False,
 ):
     """Plug-and-play GAP / ADMM (see the module).  Registered as ``"pnp_gap"``.
@@ -170,6 +173,13 @@ def pnp_gap(
         costs that many denoiser calls per iteration.  ``"auto"``: 2 with
         acceleration (clean data; tuning split 30.71 → 31.01 dB), else 1 (on
         a noisy 64×64 test crop 2 lost 0.12 dB).
+    precision : {"float32", "bfloat16", "auto"}
+        The learned denoiser's arithmetic
+        (:class:`~tensor_cosdi.learn.spectral_net.SpectralDenoiser`):
+        ``"bfloat16"`` runs the network about twice as fast on a CPU with
+        native bfloat16 instructions, ``"auto"`` uses it only there.  The
+        float32 default gives the same cube on every machine and in any
+        measurement units.  Only for ``denoiser="spectral_net"``.
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` has risen three
         iterations in a row to above ``guard`` times its lowest value, and
@@ -223,6 +233,17 @@ def pnp_gap(
         from ..learn import require_torch
 
         require_torch()
+        from ..learn.spectral_net import PRECISIONS
+
+        if precision not in PRECISIONS:
+            raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
+        if precision != "float32":
+            den = functools.partial(spectral_net, precision=precision)
+    elif precision != "float32":
+        raise ValueError(
+            f"precision={precision!r} is an option of the learned denoiser 'spectral_net'; "
+            f"the denoiser here is {denoiser!r}"
+        )
     if isinstance(ensemble, str):
         if ensemble != "auto":
             raise ValueError(

@@ -23,6 +23,8 @@ prior                      prox
                            (online Tucker dictionary, ``"otd"``, thesis Alg. 5)
 :class:`TV`                2-D isotropic total variation per slice (``"gap_tv"``, DFA)
 :class:`Denoiser`          any registered denoiser at a fixed σ (``"pnp_admm"``)
+:class:`Ridge`             ``v ρ / (ρ + λ)`` (``"lsq"`` with ``nonneg=True``)
+:class:`NonNegative`       another prior's prox, then ``max(·, 0)`` (a cube of light)
 =========================  ============================================================
 """
 
@@ -42,6 +44,8 @@ __all__ = [
     "FixedBasis",
     "TV",
     "Denoiser",
+    "Ridge",
+    "NonNegative",
     "PlaneSupport",
     "plane_axis",
     "with_plane_support",
@@ -403,6 +407,27 @@ class PlaneSupport(Prior):
 
     def update(self, x, iteration: int) -> None:
         self.inner.update(x, iteration)
+
+
+class Ridge(Prior):
+    """``(λ/2)‖x‖²`` with ``λ = mu · s`` relative to the sensing gain ``s``: the regulariser of
+    ``"lsq"`` as an engine prior (prox ``v ρ / (ρ + λ)``), so that :class:`NonNegative` around it
+    is the exact prox of the non-negative ridge problem."""
+
+    name = "ridge"
+
+    def __init__(self, mu: float):
+        self.mu = float(mu)
+
+    def setup(self, start, *, penalty: float, gain: float) -> None:
+        self.penalty = float(penalty)
+        self.lam = self.mu * float(gain)
+
+    def prox(self, v):
+        return v * (self.penalty / (self.penalty + self.lam))
+
+    def objective(self, z) -> float:
+        return 0.5 * self.lam * float(tl.norm(z)) ** 2
 
 
 class NonNegative(Prior):

@@ -70,6 +70,7 @@ def split_tv(
     rho2: float = 0.05,
     tv_steps: int = 10,
     tol: float = 1e-5,
+    nonneg: bool = True,
     progress: bool = False,
 ):
     """ADMM-TV for a :class:`~tensor_cosdi.systems.CASSDIDFA` with (4-D) PSFs, every step in
@@ -85,6 +86,9 @@ def split_tv(
         gain ``‖H 1‖² / ‖1‖²``.
     tv_steps : int
         Chambolle steps per iteration (the dual is carried over).
+    nonneg : bool
+        ``z ← max(TV-denoise(w + u₂), 0)`` (a cube of light) and the
+        returned cube clipped at 0; ``False`` for signed cubes.
     max_iter, tol, progress
         Iteration cap, relative-change stop, tqdm bar.
 
@@ -110,6 +114,8 @@ def split_tv(
         for n, v in (("tv_weight", tv_weight), ("rho1", rho1), ("rho2", rho2), ("tol", tol))
     )
     max_iter = engine.check_int("max_iter", max_iter, 1)
+    if not isinstance(nonneg, (bool, np.bool_)):
+        raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     tv = WarmTV(engine.check_int("tv_steps", tv_steps, 1))
     g = measurement
     nx, ny, nl, nz = system.cube_shape
@@ -141,6 +147,8 @@ def split_tv(
         rhs = r1 * conv(v + u1, adjoint=True) + r2 * (z - u2)
         w = B.irfftn(B.rfftn(rhs, s=pad, axes=(0, 1)) / (r1 * power + r2), s=pad, axes=(0, 1))
         z = tv(w + u2, tau / r2)
+        if nonneg:
+            z = tl.clip(z, 0, None)
         cw = conv(w)  # used by this dual step and the next v-step
         u1 = u1 + v - cw
         u2 = u2 + w - z
@@ -155,6 +163,8 @@ def split_tv(
             prior_term=0.0,
         ):
             break
+    if nonneg:  # a new array, not a view of the padded grid
+        return tl.clip(cube, 0, None), loop.history, loop.converged
     return tl.copy(cube), loop.history, loop.converged  # not a view of the padded grid
 
 

@@ -97,7 +97,7 @@ def test_spectral_prior_is_the_shipped_denoiser_and_trains():
 
     cfg = DCoSNetConfig(n_bands=6, stages=2, width=4, prior="spectral")
     net = build_network(torch, cfg, None)
-    ref = SpectralDenoiser(precision="float32")  # the stages run in float32
+    ref = SpectralDenoiser()
     x = _real("face", (24, 24), np.linspace(420, 680, 6)).transpose(2, 0, 1)[None]
     x = torch.from_numpy(x + 0.05 * np.random.default_rng(0).standard_normal(x.shape))
     x = x.float().requires_grad_()

@@ -18,7 +18,8 @@ def test_registry_lists_methods_and_rejects_unknown_ones():
         tc.reconstruct(sd, g, method="nope")
     with pytest.raises(
         ValueError,
-        match=r"unknown option\(s\) \['iters'\] for method 'lsq'; valid options: \['mu'\]",
+        match=r"unknown option\(s\) \['iters'\] for method 'lsq'; valid options: "
+        r"\['max_iter', 'mu', 'nonneg', 'tol'\]",
     ):
         tc.reconstruct(sd, g, method="lsq", iters=3)
     with pytest.raises(
@@ -58,7 +59,8 @@ def test_lsq_equals_the_dense_tikhonov_solution(system):
     res = tc.reconstruct(system, g, method="lsq", mu=1e-2)
     assert isinstance(res, tc.Result)
     np.testing.assert_allclose(vec(res.cube), ref, rtol=1e-7, atol=1e-9 * np.abs(ref).max())
-    assert res.options == {"mu": 1e-2} and res.method == "lsq" and res.converged
+    want = {"mu": 1e-2, "nonneg": False, "max_iter": 100, "tol": 1e-5}  # every option recorded
+    assert res.options == want and res.method == "lsq" and res.converged
     assert res.iterations == 1 and set(res.history) == {
         "objective",
         "residual",

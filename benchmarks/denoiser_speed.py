@@ -1,0 +1,97 @@
+"""The learned spectral denoiser's arithmetic: float32 against bfloat16, time and quality.
+
+One call of :class:`tensor_cosdi.learn.spectral_net.SpectralDenoiser` on a
+256×256×28 cube (the report protocol's size) in each ``precision``, with 1
+and with all CPU threads (median of ``--repeats`` calls after a warm-up);
+and what bfloat16 costs: PSNR of a real tuning scene (``balloons``, KAIST
+bands) denoised at three noise levels, in both precisions.  The ratio is
+computed in the same run.  bfloat16 only pays on CPUs with native bfloat16
+instructions (``bfloat16_is_fast`` is printed).
+
+    python benchmarks/denoiser_speed.py [--repeats 7] [--scene balloons]
+
+Never asserts anything; read the numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _protocol import RESULTS, write_results  # noqa: E402
+
+from tensor_cosdi import datasets, metrics  # noqa: E402
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--scene", default="balloons", help="a tuning scene (not a report scene)")
+    ap.add_argument("--out", default=str(RESULTS))
+    args = ap.parse_args(argv)
+    if args.scene in datasets.REPORT_SCENES:
+        raise SystemExit(f"--scene {args.scene} is a report scene; pick a tuning scene")
+    try:
+        cube = datasets.load_hsi(args.scene, "kaist", dtype="float32")[0]
+    except FileNotFoundError as exc:
+        raise SystemExit(f"denoiser_speed.py needs the research scenes: {exc}") from None
+    import torch
+
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser, bfloat16_is_fast
+
+    nets = {p: SpectralDenoiser(precision=p) for p in ("float32", "bfloat16")}
+    rng = np.random.default_rng(0)
+    threads = sorted({1, os.cpu_count() or 1})
+    lines = [
+        "# The learned denoiser in float32 and bfloat16",
+        "",
+        f"CPU runs bfloat16 natively (`bfloat16_is_fast`): {bfloat16_is_fast()}.  ",
+        f"One call on a 256×256×28 cube, median of {args.repeats} (s):",
+        "",
+        "| threads | float32 | bfloat16 | float32 / bfloat16 |",
+        "|---|---|---|---|",
+    ]
+    x = (cube + 0.05 * rng.standard_normal(cube.shape)).astype(np.float32)
+    saved = torch.get_num_threads()
+    for n in threads:
+        torch.set_num_threads(n)
+        med = {}
+        for p, net in nets.items():
+            net(x, 0.05)  # warm-up
+            times = []
+            for _ in range(args.repeats):
+                t0 = time.perf_counter()
+                net(x, 0.05)
+                times.append(time.perf_counter() - t0)
+            med[p] = float(np.median(times))
+        lines.append(
+            f"| {n} | {med['float32']:.3f} | {med['bfloat16']:.3f} | "
+            f"{med['float32'] / med['bfloat16']:.2f} |"
+        )
+    torch.set_num_threads(saved)
+    lines += [
+        "",
+        f"PSNR (dB) of `{args.scene}` with white noise σ, denoised:",
+        "",
+        "| σ | noisy | float32 | bfloat16 | bfloat16 − float32 |",
+        "|---|---|---|---|---|",
+    ]
+    for sigma in (0.02, 0.05, 0.1):
+        noisy = (cube + sigma * rng.standard_normal(cube.shape)).astype(np.float32)
+        p = {k: metrics.psnr(cube, net(noisy, sigma), data_range=1.0) for k, net in nets.items()}
+        lines.append(
+            f"| {sigma} | {metrics.psnr(cube, noisy, data_range=1.0):.2f} | {p['float32']:.2f} | "
+            f"{p['bfloat16']:.2f} | {p['bfloat16'] - p['float32']:+.3f} |"
+        )
+    write_results(Path(args.out) / "denoiser_speed.md", lines)
+
+
+if __name__ == "__main__":
+    main()

@@ -278,7 +278,13 @@ def run_info(args) -> int:
 
     path = Path(args.file)
     suffix = files.cube_suffix(path)
-    print(f"{path} ({path.stat().st_size if path.is_file() else 0} bytes)")
+    if not path.exists():
+        raise FileNotFoundError(f"file not found: {path}")
+    if path.is_dir():  # a Zarr store: the files it holds (links are refused when read)
+        size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file() and not f.is_symlink())
+        print(f"{path} (Zarr store, {size} bytes)")
+    else:
+        print(f"{path} ({path.stat().st_size if path.is_file() else 0} bytes)")
     if suffix == ".hdr":
         cube, wl = files.read_cube(path)
         entries = {"cube": (cube.shape, cube.dtype, None)}

@@ -103,3 +103,49 @@ def atomic_write_many(items, *, overwrite: bool = False) -> list[Path]:
                 os.unlink(tmp)
         raise
     return [p for p, _ in items]
+
+
+def atomic_write_folder(path, write, *, overwrite: bool = False) -> Path:
+    """Write the folder ``path`` (a Zarr store) through ``write(tmp_folder)`` atomically.
+
+    ``write`` fills a fresh temporary folder beside the target; it is then
+    renamed into place.  Without ``overwrite`` an existing ``path`` is a
+    ``FileExistsError``; with it, an existing *folder* is moved aside, the
+    new one renamed in and the old one removed only then (a failure puts the
+    old one back).  An existing file of that name is never replaced by a
+    folder.
+    """
+    import shutil
+
+    p = Path(path)
+    if not p.parent.is_dir():
+        raise FileNotFoundError(f"output folder {p.parent} does not exist")
+    if p.exists() and not overwrite:
+        raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
+    if p.exists() and (p.is_symlink() or not p.is_dir()):
+        raise FileExistsError(f"{p} exists and is not a folder; a Zarr store is a folder")
+    tmp = Path(tempfile.mkdtemp(dir=p.parent, prefix=f".{p.name}."))
+    old = None
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; a saved folder follows the umask
+        if p.exists():
+            old = Path(tempfile.mkdtemp(dir=p.parent, prefix=f".{p.name}.old."))
+            os.rmdir(old)
+            os.rename(p, old)
+        try:
+            os.rename(tmp, p)  # fails if a folder of that name appeared meanwhile
+        except OSError:
+            if old is not None:
+                os.rename(old, p)
+                old = None
+            raise FileExistsError(
+                f"{p} exists; pass overwrite=True (CLI: --force) to replace it"
+            ) from None
+        _fsync_path(p.parent)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return p

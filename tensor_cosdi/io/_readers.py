@@ -4,6 +4,7 @@ for a file its format library cannot parse.  Used by :mod:`tensor_cosdi.io.files
 
 from __future__ import annotations
 
+import os
 import struct
 import zlib
 from pathlib import Path
@@ -265,6 +266,196 @@ def _entries_tiff(path, max_bytes=MAX_ARRAY_BYTES):
     return {"array": (shape, dtype, load)}
 
 
+#: Codecs a Zarr array may use (serialiser, filters, compressors, checksums).  Anything else —
+#: a pickle or JSON object codec, a plug-in — is refused before a byte is decoded.
+ZARR_CODECS = frozenset(
+    {"bytes", "zstd", "gzip", "zlib", "blosc", "lz4", "bz2", "lzma", "crc32c", "transpose",
+     "shuffle", "delta", "fletcher32", "adler32"}
+)  # fmt: skip
+#: At most this many files and folders in a Zarr store, and metadata documents of at most this
+#: many bytes each.
+ZARR_MAX_ENTRIES = 100_000
+ZARR_MAX_METADATA_BYTES = 1 << 24
+_ZARR_METADATA = {"zarr.json", ".zarray", ".zgroup", ".zattrs", ".zmetadata"}
+
+
+def _zarr_codec_name(codec) -> str:
+    name = getattr(codec, "codec_id", None) or getattr(codec, "codec_name", None)
+    if not name:
+        name = type(codec).__name__.removesuffix("Codec")
+    return str(name).lower().rsplit(".", 1)[-1]
+
+
+def _zarr_tree(path: Path) -> None:
+    """Every entry of the store is a regular file or a folder inside it (no link to elsewhere,
+    no device or FIFO), there are at most :data:`ZARR_MAX_ENTRIES`, and no metadata document
+    is larger than :data:`ZARR_MAX_METADATA_BYTES`."""
+    count, stack = 0, [path]
+    while stack:
+        with os.scandir(stack.pop()) as entries:
+            for e in entries:
+                count += 1
+                if count > ZARR_MAX_ENTRIES:
+                    raise Refused(f"{path}: more than {ZARR_MAX_ENTRIES} entries in the store")
+                if e.is_symlink():
+                    raise UnsafeFile(
+                        f"{path}: {e.path} is a symbolic link; a Zarr store is read from its own "
+                        "files only"
+                    )
+                if e.is_dir(follow_symlinks=False):
+                    stack.append(e.path)
+                elif not e.is_file(follow_symlinks=False):
+                    raise UnsafeFile(f"{path}: {e.path} is not a regular file (a device or FIFO)")
+                elif e.name in _ZARR_METADATA and e.stat().st_size > ZARR_MAX_METADATA_BYTES:
+                    raise Refused(
+                        f"{path}: metadata {e.path} is {e.stat().st_size} bytes, above "
+                        f"{ZARR_MAX_METADATA_BYTES}"
+                    )
+
+
+def _zstd_bound(data: bytes) -> int | None:
+    """An upper bound of what Zstandard frames ``data`` decode to, without decoding: each
+    frame's declared content size (which the decoder enforces), else the sum over its blocks
+    (raw and RLE blocks give their size, a compressed block at most 128 KiB); ``None`` for
+    anything that is not a sequence of plain Zstandard frames."""
+    total, i, n = 0, 0, len(data)
+    while i < n:
+        if data[i : i + 4] != b"\x28\xb5\x2f\xfd" or i + 6 > n:
+            return None
+        fhd = data[i + 4]
+        single = bool(fhd & 0x20)
+        fcs_size = {0: 1 if single else 0, 1: 2, 2: 4, 3: 8}[fhd >> 6]
+        i += 5 + (0 if single else 1) + (0, 1, 2, 4)[fhd & 3]
+        fcs = int.from_bytes(data[i : i + fcs_size], "little") if fcs_size else None
+        if fcs_size == 2:
+            fcs += 256
+        i += fcs_size
+        blocks = 0
+        while True:
+            if i + 3 > n:
+                return None
+            header = int.from_bytes(data[i : i + 3], "little")
+            last, kind, size = header & 1, (header >> 1) & 3, header >> 3
+            if kind == 3:
+                return None
+            blocks += size if kind in (0, 1) else 1 << 17
+            i += 3 + (1 if kind == 1 else size)
+            if last:
+                break
+        total += blocks if fcs is None else min(fcs, blocks)
+        i += 4 if fhd & 0x04 else 0  # content checksum
+    return total if i == n else None
+
+
+def _stream_bound(decompressor, data: bytes, limit: int) -> int | None:
+    """Decoded size of ``data`` through a stdlib streaming ``decompressor`` (``decompress(d,
+    max_length)``), counted without keeping it and stopped past ``limit``."""
+    total, chunk = 0, data
+    while True:
+        out = decompressor.decompress(chunk, 1 << 20)
+        total += len(out)
+        if total > limit:
+            return total
+        if decompressor.eof or (not out and not getattr(decompressor, "unconsumed_tail", b"")
+                                and getattr(decompressor, "needs_input", True)):  # fmt: skip
+            return total
+        chunk = getattr(decompressor, "unconsumed_tail", b"")
+
+
+def _decoded_bound(codec: str, data: bytes, limit: int) -> int | None:
+    """At most how many bytes ``data`` decodes to through ``codec`` (``None``: cannot tell)."""
+    import bz2
+    import lzma
+
+    if codec == "zstd":
+        return _zstd_bound(data)
+    if codec == "blosc":  # the header's uncompressed size, which Blosc allocates
+        return int.from_bytes(data[4:8], "little") if len(data) >= 16 else None
+    if codec == "lz4":  # numcodecs' LZ4 prefixes the uncompressed size
+        return int.from_bytes(data[:4], "little") if len(data) >= 4 else None
+    maker = {
+        "gzip": lambda: zlib.decompressobj(16 + zlib.MAX_WBITS),
+        "zlib": lambda: zlib.decompressobj(),
+        "bz2": bz2.BZ2Decompressor,
+        "lzma": lzma.LZMADecompressor,
+    }[codec]
+    return _stream_bound(maker(), data, limit)
+
+
+#: Checksums appended to a chunk: bytes they add at the end.
+_ZARR_CHECKSUMS = {"crc32c": 4, "fletcher32": 4, "adler32": 4}
+_ZARR_COMPRESSORS = ("zstd", "gzip", "zlib", "blosc", "lz4", "bz2", "lzma")
+
+
+def _zarr_chunks_bounded(path: Path, name: str, folder: Path, bytes_codecs, chunk_bytes: int):
+    """Refuse before decoding when a chunk file of the array in ``folder`` would decode to more
+    than a chunk's ``chunk_bytes`` (a compression bomb): each bytes-to-bytes codec, last one
+    first, is bounded without inflating."""
+    for root, dirs, files in os.walk(folder):
+        dirs[:] = [d for d in dirs if not (Path(root, d) / "zarr.json").exists()
+                   and not (Path(root, d) / ".zarray").exists()]  # fmt: skip  (other arrays)
+        for f in files:
+            if f in _ZARR_METADATA:
+                continue
+            data = Path(root, f).read_bytes()
+            size = len(data)
+            for codec in reversed(bytes_codecs):
+                if codec in _ZARR_CHECKSUMS:
+                    size -= _ZARR_CHECKSUMS[codec]
+                    data = data[: max(size, 0)] if codec == "crc32c" else data
+                    continue
+                bound = _decoded_bound(codec, data, chunk_bytes)
+                if bound is None:
+                    raise Refused(f"{path}: chunk {Path(root, f)} of {name!r} is not valid {codec}")
+                size = bound
+            if size > chunk_bytes + 64:  # a checksum filter may add a few bytes
+                raise Refused(
+                    f"{path}: chunk {Path(root, f)} of {name!r} decodes to more than its "
+                    f"{chunk_bytes} bytes (a compression bomb?); not read"
+                )
+
+
+def _entries_zarr(path, max_bytes):
+    try:
+        import zarr
+    except ImportError:
+        raise ImportError(
+            "reading Zarr needs zarr ≥ 3 (Python ≥ 3.11): pip install 'tensor_cosdi[zarr]'"
+        ) from None
+    _zarr_tree(path)
+    try:  # the arrays' own metadata, never a consolidated copy that may disagree with it
+        node = zarr.open_group(str(path), mode="r", use_consolidated=False)
+        arrays = [(k, v, path / k) for k, v in node.members(max_depth=None)
+                  if isinstance(v, zarr.Array)]  # fmt: skip
+    except (zarr.errors.GroupNotFoundError, zarr.errors.ContainsArrayError):  # one array
+        arrays = [("array", zarr.open_array(str(path), mode="r"), path)]
+    out = {}
+    for name, arr, folder in arrays:
+        codecs = [*arr.filters, *([arr.serializer] if arr.serializer is not None else [])]
+        for codec in codecs + list(arr.compressors):
+            cname = _zarr_codec_name(codec)
+            if cname not in ZARR_CODECS:
+                raise Refused(
+                    f"{path}: array {name!r} uses the codec {cname!r}, which is not decoded "
+                    f"(allowed: {', '.join(sorted(ZARR_CODECS))})"
+                )
+        squeezers = [_zarr_codec_name(c) for c in arr.compressors]
+        if sum(c in _ZARR_COMPRESSORS for c in squeezers) > 1:
+            raise Refused(f"{path}: array {name!r} chains compressors {squeezers}; not read")
+        dtype = np.dtype(arr.dtype)
+        if dtype.kind not in "biufc":
+            raise Refused(f"{path}: array {name!r} holds {dtype} values; only numbers are read")
+        chunk = int(np.prod(arr.chunks, dtype=np.int64)) * dtype.itemsize
+        if chunk > max_bytes:
+            raise Refused(
+                f"{path}: array {name!r} declares chunks {tuple(arr.chunks)} of {chunk} bytes, "
+                f"above the {max_bytes}-byte limit (pass max_bytes= to allow it)"
+            )
+        _zarr_chunks_bounded(path, name, folder, squeezers, chunk)
+        out[name] = (tuple(arr.shape), dtype, (lambda a=arr: np.asarray(a[...])))
+    return out
+
+
 _READERS = {
     ".npy": ("NumPy .npy", _entries_npy),
     ".npz": ("NumPy .npz", _entries_npz),
@@ -274,6 +465,7 @@ _READERS = {
     ".nc": ("NetCDF-4 (HDF5)", _entries_h5),  # NetCDF-4 is HDF5: the same hardened reader
     ".tif": ("TIFF", _entries_tiff),
     ".tiff": ("TIFF", _entries_tiff),
+    ".zarr": ("Zarr", _entries_zarr),
 }
 
 
@@ -298,7 +490,10 @@ def array_entries(path: Path, suffix: str, max_bytes: int = MAX_ARRAY_BYTES):
     """The arrays a file of type ``suffix`` holds, as ``{name: (shape, dtype, third)}`` (the
     third item is the format reader's own); any format library's failure becomes one clear
     error naming the file."""
-    if not path.is_file():
+    if suffix == ".zarr":
+        if not path.is_dir():
+            raise FileNotFoundError(f"Zarr store (a folder) not found: {path}")
+    elif not path.is_file():
         raise FileNotFoundError(f"file not found: {path}")
     try:
         return _READERS[suffix][1](path, max_bytes)

@@ -356,6 +356,8 @@ def bundle_document(path) -> dict | None:
     from .files import _require_h5py
 
     p = Path(path)
+    if p.suffix.lower() == ".zarr" and p.is_dir():
+        return None  # a bundle is one file; a Zarr store is a cube
     if not p.is_file():
         raise FileNotFoundError(f"file not found: {p}")
     try:

@@ -15,6 +15,10 @@ extension                 read (:func:`read_array`, cube)    write (:func:`write
                                                              coordinate in nm
 ``.hdr`` (ENVI)           ``spectral`` (extra ``.[envi]``)   ``spectral``
 ``.tif``, ``.tiff``       tifffile (pages = bands)           tifffile (one page per band)
+``.zarr`` (a folder)      zarr ≥ 3 (extra ``.[zarr]``; its   xarray + zarr: as NetCDF
+                          own regular files only, numeric    (``cube``, ``wavelength``);
+                          arrays, standard codecs only)      written to a temporary folder
+                                                             and renamed
 ========================  =================================  ===============================
 
 ``key`` picks a variable (a MATLAB variable, an NPZ member, an HDF5 dataset
@@ -39,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
-from ._atomic import atomic_write
+from ._atomic import atomic_write, atomic_write_folder
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
     _load,
@@ -62,7 +66,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 #: Extensions :func:`read_array` / :func:`read_cube` / :func:`write_cube` know.
-CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".nc", ".npy", ".npz", ".hdr", ".tif", ".tiff")
+CUBE_SUFFIXES = (".mat", ".h5", ".hdf5", ".nc", ".npy", ".npz", ".hdr", ".tif", ".tiff", ".zarr")
 #: Variable names taken as the band centres of a cube (case-insensitive).
 WAVELENGTH_KEYS = ("wavelengths", "wavelengths_nm", "wavelength", "wl", "lambda", "bands_nm")
 
@@ -308,6 +312,11 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
 
     if suffix == ".nc":
         _netcdf_libraries()  # before anything is written
+    if suffix == ".zarr":
+        _zarr_libraries()
+        return atomic_write_folder(
+            path, lambda tmp: _write_zarr(tmp, cube, wl, meta_json), overwrite=overwrite
+        )
     if suffix == ".npy" and (wl is not None or metadata):
         raise ValueError(f"{path}: .npy holds the cube only; use .npz or .h5 to keep wavelengths")
     if suffix == ".hdr":
@@ -326,17 +335,42 @@ def _netcdf_libraries():
     return xarray
 
 
-def _write_netcdf(tmp, cube, wl, meta_json):
-    """``cube`` as a NetCDF-4 variable with dims ``rows, columns, wavelength`` (extra axes
-    ``axis3…``), the wavelengths in nm as the coordinate, the metadata as a JSON attribute."""
-    xarray = _netcdf_libraries()
+def _labelled(xarray, cube, wl, meta_json):
+    """The cube as an xarray Dataset: variable ``cube`` with dims ``rows, columns, wavelength``
+    (extra axes ``axis3…``), the wavelengths in nm as the coordinate, the metadata as a JSON
+    attribute."""
     dims = ["rows", "columns", "wavelength", *(f"axis{i}" for i in range(3, cube.ndim))]
     coords = {} if wl is None else {"wavelength": ("wavelength", wl, {"units": "nm"})}
-    da = xarray.DataArray(cube, dims=dims, coords=coords, name="cube")
-    ds = da.to_dataset()
+    ds = xarray.DataArray(cube, dims=dims, coords=coords, name="cube").to_dataset()
     ds.attrs["metadata"] = meta_json
+    return ds
+
+
+def _write_netcdf(tmp, cube, wl, meta_json):
+    ds = _labelled(_netcdf_libraries(), cube, wl, meta_json)
     encoding = {"cube": {"compression": "gzip", "shuffle": True}}
     ds.to_netcdf(tmp, engine="h5netcdf", encoding=encoding)
+
+
+def _zarr_libraries():
+    try:
+        import xarray
+        import zarr
+    except ImportError:
+        raise ImportError(
+            "writing Zarr needs xarray and zarr ≥ 3 (Python ≥ 3.11): "
+            "pip install 'tensor_cosdi[zarr]'"
+        ) from None
+    if int(zarr.__version__.split(".")[0]) < 3:
+        raise ImportError(f"Zarr support needs zarr ≥ 3, found {zarr.__version__}")
+    return xarray
+
+
+def _write_zarr(folder, cube, wl, meta_json):
+    """A Zarr v3 store in ``folder`` (empty, made by the caller): the dataset of
+    :func:`_labelled`, without consolidated metadata (the reader ignores it)."""
+    ds = _labelled(_zarr_libraries(), cube, wl, meta_json)
+    ds.to_zarr(folder, mode="a", consolidated=False, zarr_format=3)
 
 
 def _write_envi_atomic(path: Path, cube, wl, metadata, overwrite):

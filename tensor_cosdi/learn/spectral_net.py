@@ -193,10 +193,10 @@ class SpectralDenoiser:
         The network's arithmetic (the subspace, scaling and output stay
         float32).  ``"auto"``: bfloat16 on a CPU with native bfloat16
         instructions (:func:`bfloat16_is_fast`), else float32; on CUDA float32.
-        Measured on a 2-core AVX512-BF16 machine, 256×256 eigen-images: the
-        network takes 0.072 s in bfloat16 against 0.17 s in float32, and a
-        denoised real cube (``balloons``, σ 0.02 / 0.05 / 0.1) loses
-        0.02 dB (49.70 / 44.64 / 40.73 against 49.72 / 44.66 / 40.75 dB).
+        ``benchmarks/results/denoiser_speed.md`` (a 2-core AVX512-BF16
+        machine, 256×256×28): one call 0.077 s in bfloat16 against 0.174 s
+        in float32 on 2 threads, and a denoised real cube loses 0.015 to
+        0.022 dB.
         The default is float32: the same results on every machine, and a
         reconstruction that does not move when the measurement is rescaled
         (bfloat16's rounding turns a 1e-16 change of the input into a 1e-3

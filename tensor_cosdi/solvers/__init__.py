@@ -31,7 +31,7 @@ from .lytro import lytro_cassi, lytro_dictionary
 from .nonlocal_prior import nonlocal_tucker
 from .otd import online_tucker_admm, tucker_admm, wdct_admm
 from .pnp import pnp_admm, pnp_admm_operator
-from .pnp_gap import pnp_gap
+from .pnp_gap import pnp_fast, pnp_gap
 from .split_blur import split_tv
 from .tiled import reconstruct_tiled
 from .twist import twist_tv
@@ -60,6 +60,7 @@ __all__ = [
     "pnp_admm",
     "pnp_admm_operator",
     "pnp_gap",
+    "pnp_fast",
     "split_tv",
     "dcosnet",
     "twist_tv",

@@ -32,3 +32,26 @@ def test_import_is_lazy_and_quiet():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stderr == ""
+
+
+def test_the_top_level_help_imports_no_registry_and_the_sub_command_help_lists_them():
+    """``tensor-cosdi --help`` builds every sub-parser but imports neither TensorLy nor the
+    registries (their lists are made when a sub-command's help is shown)."""
+    code = (
+        "import sys\n"
+        "from tensor_cosdi.cli import main\n"
+        "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = [m for m in ('tensorly', 'tensor_cosdi.solvers', 'tensor_cosdi.systems', "
+        "'tensor_cosdi.io') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert "reconstruct" in out.stdout and "train-dcosnet" in out.stdout
+    shown = "from tensor_cosdi.cli import main\nmain(['reconstruct', '--help'])\n"
+    sub = subprocess.run([sys.executable, "-c", shown], capture_output=True, text=True)
+    text = " ".join(sub.stdout.split())
+    assert sub.returncode == 0, sub.stderr
+    for name in list(tc.systems.REGISTRY.names()) + list(tc.solvers.methods()):
+        assert name in text, name
+    assert "pnp_admm (cs2li/mu_cosdi only)" in text

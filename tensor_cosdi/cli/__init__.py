@@ -43,7 +43,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.triggers import LockedError
 from .demo import demo_cases, run_demo
 from .files import (
     _reconstruct_direct,
@@ -54,7 +53,14 @@ from .files import (
     write_preview,
 )
 from .train import _training_options, run_train_dcosnet, run_train_denoiser
-from .util import _method_defaults, _option_value, _positive_int, done_line, run_metadata
+from .util import (
+    LazyHelp,
+    _method_defaults,
+    _option_value,
+    _positive_int,
+    done_line,
+    run_metadata,
+)
 
 __all__ = ["main", "build_parser"]
 
@@ -215,6 +221,22 @@ def _reconstruct(args) -> int:
 
 
 
+def _systems_help() -> str:
+    from ..systems import REGISTRY
+
+    return f"direct path: the imager, one of {', '.join(REGISTRY.names())}"
+
+
+def _methods_help() -> str:
+    from ..solvers import METHODS, methods
+
+    listed = ", ".join(
+        f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n
+        for n in methods()
+    )
+    return f"reconstruction method (default otd): {listed}"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tensor-cosdi", description="Compressive spectral and spectral-depth imaging"
@@ -299,12 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "frames", nargs="*", help="frame files or a folder, in the system's frame order"
     )
-    from ..solvers import methods
-    from ..systems import REGISTRY
-
-    rec.add_argument(
-        "--system", help=f"direct path: the imager, one of {', '.join(REGISTRY.names())}"
-    )
+    rec.add_argument("--system", help=LazyHelp(_systems_help))
     rec.add_argument("--mask", help="direct path: coded aperture file[:variable]")
     rec.add_argument("--measurement", help="direct path: measurement file[:variable]")
     rec.add_argument("--bands", type=_positive_int, help="direct path: number of bands")
@@ -323,15 +340,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument(
         "--out", required=True, help="bundle to write: .h5 (HDF5) or .npz (bundle path: .npz)"
     )
-    from ..solvers import METHODS
-
-    listed = ", ".join(
-        f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n
-        for n in methods()
-    )
-    rec.add_argument(
-        "--method", default="otd", help=f"reconstruction method (default otd): {listed}"
-    )
+    rec.add_argument("--method", default="otd", help=LazyHelp(_methods_help))
     rec.add_argument(
         "--option", action="append", type=_option_value, help="method option key=value (repeat)"
     )
@@ -445,7 +454,11 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, KeyError, OSError, ImportError, LockedError) as exc:
+    except Exception as exc:
+        from ..io.triggers import LockedError  # here: --help imports no I/O stack
+
+        if not isinstance(exc, (ValueError, KeyError, OSError, ImportError, LockedError)):
+            raise
         # KeyError: a variable missing from a file (its message, not its quoted repr); OSError:
         # a folder given as an output, a missing port, a full disk — one line, no traceback
         msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc

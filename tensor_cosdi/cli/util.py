@@ -5,6 +5,20 @@ from __future__ import annotations
 import argparse
 
 
+class LazyHelp(str):
+    """An option's help text made by ``make()`` only when argparse shows it (that sub-command's
+    ``--help``): building the parser then imports no registry, and ``tensor-cosdi --help``
+    stays light.  (argparse fills a help text in with ``help % params``.)"""
+
+    def __new__(cls, make):
+        self = super().__new__(cls, "(listed by the sub-command's --help)")
+        self._make = make
+        return self
+
+    def __mod__(self, params):
+        return self._make().replace("%", "%%") % params
+
+
 def _option_value(text: str):
     import json
 

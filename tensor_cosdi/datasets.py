@@ -33,6 +33,8 @@ __all__ = [
     "data_dir",
     "data_file",
     "scene_or",
+    "stand_in",
+    "FALLBACK_ENV",
     "load_hsi",
     "cave",
 ]
@@ -158,20 +160,54 @@ def data_dir(path=None) -> Path:
     )
 
 
-def scene_or(name: str, fallback: str) -> tuple[str, str | None]:
-    """``(name, None)`` when the research scenes are here, else ``(fallback, why)``: how an
-    example runs on a plain install and says so.
+#: The environment variable that lets the gallery examples run on seeded stand-ins where the
+#: research data are absent (``TENSOR_COSDI_ALLOW_FALLBACK=1``); without it they stop.
+FALLBACK_ENV = "TENSOR_COSDI_ALLOW_FALLBACK"
+
+
+def stand_in(err: Exception, instead: str) -> str:
+    """What an example says when it runs on ``instead`` because the research data are missing
+    (``err``, the ``FileNotFoundError`` of :func:`data_dir` / :func:`data_file`) — only where
+    :data:`FALLBACK_ENV` is ``1``.  Otherwise a ``FileNotFoundError`` saying what is missing,
+    how to point to the data and how to allow the stand-in: nothing falls back unasked.
 
     Examples
     --------
+    >>> import os
+    >>> os.environ[FALLBACK_ENV] = "1"
+    >>> stand_in(FileNotFoundError("no hsi_train folder"), "the ColorChecker")
+    'no hsi_train folder; using the ColorChecker instead'
+    >>> del os.environ[FALLBACK_ENV]
+    >>> stand_in(FileNotFoundError("no hsi_train folder"), "the ColorChecker")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: no hsi_train folder — set TENSOR_COSDI_DATA ... to run on the ColorChecker...
+    """
+    if os.environ.get(FALLBACK_ENV, "").strip() != "1":
+        raise FileNotFoundError(
+            f"{err} — set TENSOR_COSDI_DATA to the research data, or {FALLBACK_ENV}=1 to run "
+            f"on {instead} instead"
+        )
+    return f"{err}; using {instead} instead"
+
+
+def scene_or(name: str, fallback: str) -> tuple[str, str | None]:
+    """``(name, None)`` when the research scenes are here; else ``(fallback, note)`` where
+    :data:`FALLBACK_ENV` allows it (:func:`stand_in`), and a ``FileNotFoundError`` otherwise.
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ[FALLBACK_ENV] = "1"
     >>> scene, note = scene_or("cave.face", "colorchecker")
     >>> scene in ("cave.face", "colorchecker")
     True
+    >>> del os.environ[FALLBACK_ENV]
     """
     try:
         data_dir()
     except FileNotFoundError as exc:
-        return fallback, f"no hsi_train folder ({exc}); using {fallback!r} instead"
+        return fallback, stand_in(f"no hsi_train folder ({exc})", repr(fallback))
     return name, None
 
 

@@ -267,11 +267,17 @@ def test_examples_reach_the_research_data_only_through_datasets():
 def test_example_runs_from_a_plain_install_without_the_research_data(
     path, monkeypatch, tmp_path, capsys
 ):
-    """With the research data absent (as after ``pip install``), the example falls back to
-    seeded stand-ins, says so, and still computes what it shows."""
+    """With the research data absent (as after ``pip install``) the example stops with a
+    message naming ``TENSOR_COSDI_DATA`` and the opt-in; with the opt-in it falls back to seeded
+    stand-ins, says so, and still computes what it shows."""
     from tensor_cosdi import datasets
 
     monkeypatch.setattr(datasets, "_roots", lambda: [tmp_path])
+    monkeypatch.delenv("TENSOR_COSDI_DATA", raising=False)
+    monkeypatch.delenv(datasets.FALLBACK_ENV, raising=False)
+    with pytest.raises(FileNotFoundError, match="TENSOR_COSDI_DATA.*TENSOR_COSDI_ALLOW_FALLBACK=1"):
+        _run(path, monkeypatch)
+    monkeypatch.setenv(datasets.FALLBACK_ENV, "1")
     ns = _run(path, monkeypatch)
     out = capsys.readouterr().out
     assert str(tmp_path) in out, f"{path.name} does not say the data are missing"

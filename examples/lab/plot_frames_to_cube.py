@@ -33,11 +33,12 @@ from tensor_cosdi import datasets, io
 
 def research_data(relative):
     """The project's research-use data (not shipped): under $TENSOR_COSDI_DATA, else ../shared/data
-    next to a source checkout; None (and a message) where it is absent."""
+    next to a source checkout.  Where it is absent the example stops, unless
+    TENSOR_COSDI_ALLOW_FALLBACK=1 lets it go on with a seeded stand-in (None)."""
     try:
         return datasets.data_file(relative)
     except FileNotFoundError as err:
-        print(f"{err}: a seeded stand-in is used")
+        print(datasets.stand_in(err, "a seeded stand-in"))
         return None
 
 

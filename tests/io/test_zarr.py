@@ -87,7 +87,7 @@ def test_a_pickle_codec_or_object_values_are_refused_before_decoding(tmp_path):
 
 
 def test_a_compression_bomb_is_refused_before_it_inflates(tmp_path):
-    bomb = zlib.compress(b"\0" * (64 << 20), 9)  # 64 MiB of zeros in ≈ 64 KiB
+    bomb = zlib.compress(b"\0" * (2 << 20), 9)  # 2 MiB of zeros in ≈ 2 KiB, for 32 bytes
     store = _v2_store(tmp_path / "b.zarr", compressor={"id": "zlib", "level": 9}, chunk=bomb)
     with pytest.raises(ValueError, match="compression bomb"):
         read_array(store)
@@ -130,3 +130,25 @@ def test_the_cli_shows_and_previews_a_store(tmp_path, capsys):
     assert (tmp_path / "c.png").stat().st_size > 0
     assert cli.main(["info", str(tmp_path / "none.zarr")]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+def test_shuffled_and_checksummed_stores_read_and_an_oversized_chunk_file_is_refused(tmp_path):
+    from zarr.codecs.numcodecs import Shuffle
+
+    with pytest.warns(UserWarning, match="not in the Zarr version 3 specification"):
+        shuffle = Shuffle(elementsize=8)
+    z = zarr.create_array(
+        tmp_path / "s.zarr", shape=(64,), dtype="f8", filters=None,
+        compressors=[shuffle, zarr.codecs.ZstdCodec(), zarr.codecs.Crc32cCodec()],
+    )  # fmt: skip
+    z[:] = np.arange(64.0)
+    with pytest.warns(UserWarning, match="not in the Zarr version 3"):  # zarr's, on opening
+        back = read_array(tmp_path / "s.zarr")
+    np.testing.assert_array_equal(back, np.arange(64.0))
+    raw = zarr.create_array(tmp_path / "r.zarr", shape=(8,), dtype="f8", compressors=None)
+    raw[:] = 1.0
+    files = (tmp_path / "r.zarr").rglob("*")
+    chunk = next(p for p in files if p.is_file() and p.name != "zarr.json")
+    chunk.write_bytes(b"\0" * (1 << 20))  # 1 MiB stored for a 64-byte chunk
+    with pytest.raises(ValueError, match="on disk for a chunk of 64"):
+        read_array(tmp_path / "r.zarr")

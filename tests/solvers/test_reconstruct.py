@@ -140,12 +140,17 @@ def test_results_do_not_depend_on_the_measurement_units(method):
     if method == "dl":  # needs a dictionary: one learned on another scene
         other = tc.scenes.scene_cube("coffee", (16, 16), p.system.wavelengths)
         opts["dictionary"] = tc.solvers.train_dictionary([other], patch=4, n_iter=2)
-    ref = np.asarray(tc.reconstruct(p.system, g, method, **opts).cube)
-    for scale in (1e-300, 1e-5, 1e300):
-        cube = np.asarray(tc.reconstruct(p.system, g * scale, method, **opts).cube)
-        assert np.isfinite(cube).all()
-        rel = np.linalg.norm(cube / scale - ref) / np.linalg.norm(ref)
-        assert rel < 1e-6, (method, scale, rel)
+    runs = [(opts, 1e-6)]
+    if method == "pnp_fast":  # bfloat16 where native: its rounding, not the units, moves the
+        # cube (measured 1.6e-3); in float32 the units do not matter either
+        runs = [({"precision": "auto"}, 1e-2), ({"precision": "float32"}, 1e-6)]
+    for opts, tolerance in runs:
+        ref = np.asarray(tc.reconstruct(p.system, g, method, **opts).cube)
+        for scale in (1e-300, 1e-5, 1e300):
+            cube = np.asarray(tc.reconstruct(p.system, g * scale, method, **opts).cube)
+            assert np.isfinite(cube).all()
+            rel = np.linalg.norm(cube / scale - ref) / np.linalg.norm(ref)
+            assert rel < tolerance, (method, opts, scale, rel)
 
 
 def test_zero_constant_and_overflowing_measurements_are_clear_errors():

@@ -587,6 +587,16 @@ def hostile_file_cases(folder: Path):
     ] + [
         (f"a {what} named .npy", lambda k=key: read_array(hf[k]), ("file",))
         for key, what in (("fifo", "FIFO"), ("dev_zero", "link to /dev/zero")) if key in hf
+    ] + [
+        (f"Zarr {what}", lambda k=key: read_array(hf[k]), words)
+        for key, what, words in (
+            ("zarr_link", "chunk linked to another file", ("symbolic link",)),
+            ("zarr_fifo", "chunk that is a FIFO", ("regular file",)),
+            ("zarr_pickle", "pickle filter", ("pickle",)),
+            ("zarr_object", "object values", ("vlen", "only numbers")),
+            ("zarr_bomb", "chunk inflating past its size", ("compression bomb",)),
+            ("zarr_big_chunk", "chunks past max_bytes", ("declares chunks",)),
+        ) if key in hf
     ]:  # fmt: skip
         out.append(Case("io.hostile", name, call, words))
     out.append(

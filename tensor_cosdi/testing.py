@@ -246,7 +246,8 @@ def hostile_files(folder) -> dict:
     (3 wavelengths for 4 bands), ``tiff_mixed`` (pages of two shapes),
     ``tiff_rgb`` (a 12×16 RGB image, values ``rgb_values(0)``), and on POSIX
     ``fifo`` (a FIFO named ``.npy``) and ``dev_zero`` (a link to ``/dev/zero``
-    named ``.npy``).  Shared by the tests and ``benchmarks/robustness.py``.
+    named ``.npy``), and the Zarr stores of :func:`_hostile_zarr` where zarr is installed.
+    Shared by the tests and ``benchmarks/robustness.py``.
     """
     import os
     import struct
@@ -302,6 +303,47 @@ def hostile_files(folder) -> dict:
     if os.path.exists("/dev/zero"):
         out["dev_zero"] = folder / "zero.npy"
         os.symlink("/dev/zero", out["dev_zero"])
+    out.update(_hostile_zarr(folder, secret))
+    return out
+
+
+def _hostile_zarr(folder, secret) -> dict:
+    """Zarr stores a reader must refuse (only where ``zarr`` is installed): ``zarr_link`` (a
+    chunk that is a link to another file), ``zarr_fifo`` (a FIFO as a chunk, POSIX),
+    ``zarr_pickle`` (a pickle filter), ``zarr_object`` (object values), ``zarr_bomb`` (2 MiB
+    of zeros in a chunk declared 32 bytes), ``zarr_big_chunk`` (chunks of 8 GB declared)."""
+    import importlib.util
+    import json
+    import os
+    import zlib
+
+    if importlib.util.find_spec("zarr") is None:
+        return {}
+
+    def v2(name, chunk=b"", dtype="<f8", filters=None, compressor=None, chunks=(4,)):
+        store = folder / f"{name}.zarr"
+        store.mkdir()
+        meta = {"zarr_format": 2, "shape": [4], "chunks": list(chunks), "dtype": dtype,
+                "compressor": compressor, "fill_value": 0, "order": "C", "filters": filters}
+        (store / ".zarray").write_text(json.dumps(meta))
+        (store / "0").write_bytes(chunk)
+        return store
+
+    out = {
+        "zarr_pickle": v2("zarr_pickle", b"\x80\x04K\x01.", filters=[{"id": "pickle"}]),
+        "zarr_object": v2("zarr_object", dtype="|O", filters=[{"id": "vlen-utf8"}]),
+        "zarr_bomb": v2("zarr_bomb", zlib.compress(b"\0" * (2 << 20), 9),
+                        compressor={"id": "zlib", "level": 9}),
+        "zarr_big_chunk": v2("zarr_big_chunk", zlib.compress(b"\0" * 32),
+                             compressor={"id": "zlib", "level": 1}, chunks=(10**9,)),
+        "zarr_link": v2("zarr_link"),
+    }  # fmt: skip
+    (out["zarr_link"] / "0").unlink()
+    os.symlink(secret, out["zarr_link"] / "0")
+    if hasattr(os, "mkfifo"):
+        out["zarr_fifo"] = v2("zarr_fifo")
+        (out["zarr_fifo"] / "0").unlink()
+        os.mkfifo(out["zarr_fifo"] / "0")
     return out
 
 

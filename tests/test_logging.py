@@ -22,6 +22,11 @@ def test_reconstruct_and_reads_log_under_the_package_logger(caplog, tmp_path):
     assert any("lsq on SDCASSI (16, 16, 4)" in r.getMessage() for r in caplog.records)
 
 
+def _python(code: str):
+    """``code`` run by a fresh interpreter (nothing imported yet): its completed process."""
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+
+
 def test_import_is_lazy_and_quiet():
     code = (
         "import sys, tensor_cosdi as tc; "
@@ -29,7 +34,7 @@ def test_import_is_lazy_and_quiet():
         "tc.systems; assert 'tensor_cosdi.systems' in sys.modules; "
         "import logging; assert logging.getLogger('tensor_cosdi').handlers"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    out = _python(code)
     assert out.returncode == 0, out.stderr
     assert out.stderr == ""
 
@@ -45,11 +50,10 @@ def test_the_top_level_help_imports_no_registry_and_the_sub_command_help_lists_t
         "'tensor_cosdi.io') if m in sys.modules]\n"
         "assert not heavy, heavy\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    out = _python(code)
     assert out.returncode == 0, out.stderr
     assert "reconstruct" in out.stdout and "train-dcosnet" in out.stdout
-    shown = "from tensor_cosdi.cli import main\nmain(['reconstruct', '--help'])\n"
-    sub = subprocess.run([sys.executable, "-c", shown], capture_output=True, text=True)
+    sub = _python("from tensor_cosdi.cli import main\nmain(['reconstruct', '--help'])\n")
     text = " ".join(sub.stdout.split())
     assert sub.returncode == 0, sub.stderr
     for name in list(tc.systems.REGISTRY.names()) + list(tc.solvers.methods()):

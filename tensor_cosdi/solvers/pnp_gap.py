@@ -326,10 +326,20 @@ def pnp_fast(
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
     and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
-    ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  The options here are
-    :func:`pnp_gap`'s of the same names; every other one keeps its default there (call
-    ``"pnp_gap"`` to change it).  It needs torch (``pip install "tensor_cosdi[torch]"``), like
-    the learned denoiser it calls: ``tc.reconstruct(system, g, "pnp_fast")``.
+    ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch
+    (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:
+    ``tc.reconstruct(system, g, "pnp_fast")``.
+
+    Parameters
+    ----------
+    max_iter, ensemble, precision, warm, nonneg, progress
+        As in :func:`pnp_gap`, with the defaults above; every other option of
+        :func:`pnp_gap` keeps its default there (call ``"pnp_gap"`` to change it).
+
+    Returns
+    -------
+    cube, history, converged
+        As :func:`pnp_gap`.
     """
     return pnp_gap(
         system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,

@@ -9,6 +9,9 @@
   ``(Nx, Ny, Nλ, Nz)`` cube of CASSDI-DFA;
 * :func:`light_field` — a spectral light field ``(Nx, Ny, Nλ, U, V)``
   rendered from a cube and a disparity map (per-view shifts);
+  :func:`layered_light_field` — views of textured, slanted planes that
+  occlude each other, with their true disparity (ground truth for
+  light-field depth);
 * :func:`structured_light` — a seeded height map, its deformed fringe phase
   and a reflectance, ready for :func:`tensor_cosdi.systems.fringe_cube`;
 * :func:`cave` — a *real* hyperspectral scene (CAVE, 31 measured bands) of
@@ -43,6 +46,8 @@ __all__ = [
     "depth_planes",
     "depth_layers",
     "light_field",
+    "LightFieldLayer",
+    "layered_light_field",
     "structured_light",
     "StructuredLightScene",
     "SCENES",
@@ -316,6 +321,143 @@ def light_field(cube, disparity, views=(5, 5)):
                     c[:, :, band], coords, order=1, mode="nearest"
                 )
     return out
+
+
+@dataclass(frozen=True)
+class LightFieldLayer:
+    """One textured plane of :func:`layered_light_field`.
+
+    Attributes
+    ----------
+    texture : ndarray (H, W) or (H, W, C)
+        What the centre view sees of the plane, in centre-view pixels.
+    disparity : float or (float, float, float)
+        ``d`` or ``(d, gy, gx)``: the plane's disparity (pixels per view
+        step) at the image centre and its gradient along the two spatial
+        axes (per pixel): ``d(y, x) = d + gy·(y − yc) + gx·(x − xc)``.
+    mask : ndarray (H, W) of bool, optional
+        Where the plane is, in centre-view pixels (``None``: everywhere, and
+        beyond the image border; a background).
+    """
+
+    texture: np.ndarray
+    disparity: float | tuple = 0.0
+    mask: np.ndarray | None = None
+
+
+def layered_light_field(layers, views=(5, 5), *, supersample: int = 3):
+    """Views of planes that occlude each other, and the centre view's true disparity.
+
+    Every plane (:class:`LightFieldLayer`) is drawn in every view where the
+    convention of :func:`tensor_cosdi.depth.disparity_from_views` puts it,
+    ``I[u, v](y − (u − uc)·d, x − (v − vc)·d) = I[uc, vc](y, x)``, solved
+    exactly for a slanted plane; where planes overlap the one of larger
+    disparity (the nearer) hides the others.  Each pixel is the mean of
+    ``supersample × supersample`` samples (edges blend as a camera's pixels
+    do); the disparity is the visible plane's at the pixel centre.
+
+    Parameters
+    ----------
+    layers : sequence of LightFieldLayer
+        All of one spatial shape and channel count; the first is usually a
+        background (``mask=None``).  A pixel no plane covers is an error.
+    views : (U, V)
+    supersample : int
+        Odd, ≥ 1: samples per pixel and axis.
+
+    Returns
+    -------
+    views : ndarray (U, V, H, W, C)
+    disparity : ndarray (H, W)
+        Of the centre view ``(U // 2, V // 2)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> back = LightFieldLayer(rng.random((24, 24)), (-0.5, 0.0, 0.02))
+    >>> disc = np.hypot(*np.mgrid[-12:12, -12:12]) < 6
+    >>> front = LightFieldLayer(rng.random((24, 24)), 1.0, disc)
+    >>> lf, d = layered_light_field([back, front], views=(3, 3))
+    >>> lf.shape, float(d[12, 12]), round(float(d[12, 0]), 2)
+    ((3, 3, 24, 24, 1), 1.0, -0.73)
+    """
+    from scipy import ndimage
+
+    from .validate import integer
+
+    U, V = validate_shape(views, "views")
+    s = integer("supersample", supersample, low=1)
+    if s % 2 == 0:
+        raise ValueError(f"supersample must be odd (a sample at each pixel centre), got {s}")
+    layers = list(layers)
+    if not layers or not all(isinstance(a, LightFieldLayer) for a in layers):
+        raise ValueError("layers must be a non-empty sequence of LightFieldLayer")
+    tex = []
+    for i, layer in enumerate(layers):
+        t = np.asarray(layer.texture, dtype=np.float64)
+        t = t[..., None] if t.ndim == 2 else t
+        if t.ndim != 3 or not np.isfinite(t).all():
+            raise ValueError(f"layer {i}: texture must be a finite (H, W) or (H, W, C) array")
+        tex.append(t)
+    H, W, C = tex[0].shape
+    if any(t.shape != (H, W, C) for t in tex):
+        raise ValueError(f"every layer's texture must have the shape {(H, W, C)}")
+    planes, masks = [], []
+    for i, layer in enumerate(layers):
+        d = np.atleast_1d(np.asarray(layer.disparity, dtype=np.float64))
+        if d.shape not in ((1,), (3,)) or not np.isfinite(d).all():
+            raise ValueError(
+                f"layer {i}: disparity must be d or (d, gy, gx), got {layer.disparity!r}"
+            )
+        planes.append(np.concatenate([d, [0.0, 0.0]]) if d.size == 1 else d)
+        if layer.mask is not None:
+            m = np.asarray(layer.mask)
+            if m.shape != (H, W) or m.dtype != bool:
+                raise ValueError(f"layer {i}: mask must be a boolean array of shape {(H, W)}")
+        masks.append(layer.mask)
+    centre = np.array([(H - 1) / 2, (W - 1) / 2])
+    sub = (np.arange(s) - (s - 1) / 2) / s  # sample offsets within a pixel
+    py = (np.arange(H)[:, None] + sub[None, :]).reshape(-1)
+    px = (np.arange(W)[:, None] + sub[None, :]).reshape(-1)
+    PY, PX = np.meshgrid(py - centre[0], px - centre[1], indexing="ij")
+    out = np.empty((U, V, H, W, C))
+    truth = None
+    for u in range(U):
+        for v in range(V):
+            o = np.array([u - U // 2, v - V // 2], dtype=np.float64)
+            best = np.full(PY.shape, -np.inf)
+            colour = np.zeros(PY.shape + (C,))
+            for (a, gy, gx), t, m in zip(planes, tex, masks):
+                den = 1.0 - (gy * o[0] + gx * o[1])
+                if den <= 0.05:
+                    raise ValueError("a layer's disparity slope is too steep for these views")
+                wy, wx = PY + o[0] * a, PX + o[1] * a  # q = w + o (g·w) / (1 − g·o)
+                k = (gy * wy + gx * wx) / den
+                qy, qx = wy + o[0] * k + centre[0], wx + o[1] * k + centre[1]
+                d = a + gy * (qy - centre[0]) + gx * (qx - centre[1])
+                if m is None:
+                    cover = np.ones(PY.shape, bool)
+                else:
+                    iy, ix = np.rint(qy).astype(int), np.rint(qx).astype(int)
+                    inside = (iy >= 0) & (iy < H) & (ix >= 0) & (ix < W)
+                    cover = np.zeros(PY.shape, bool)
+                    cover[inside] = m[iy[inside], ix[inside]]
+                win = cover & (d > best)
+                if not win.any():
+                    continue
+                best[win] = d[win]
+                coords = [qy[win], qx[win]]
+                for c in range(C):
+                    colour[win, c] = ndimage.map_coordinates(
+                        t[..., c], coords, order=1, mode="nearest"
+                    )
+            if not np.isfinite(best).all():
+                raise ValueError(f"view {(u, v)}: some pixels see no layer (add a background)")
+            out[u, v] = colour.reshape(H, s, W, s, C).mean(axis=(1, 3))
+            if u == U // 2 and v == V // 2:
+                truth = best[s // 2 :: s, s // 2 :: s]
+    return out, truth
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,9 @@
   :func:`heterodyne_unwrap` / :func:`temporal_unwrap` (Eq. 22-24), :func:`decode_gray_code` +
   :func:`unwrap_gray_code`, :func:`spatial_unwrap` (scikit-image), :func:`phase_to_height`,
   :func:`calibrate_phase_to_height`.
-* Light field: :func:`disparity_from_views` (cost volume, sub-pixel), :func:`depth_from_disparity`.
+* Light field: :func:`disparity_from_views` (occlusion-aware cost volume, guided-filter
+  aggregation, sub-pixel), :func:`occlusion_cost_volume`, :func:`guided_filter`,
+  :func:`depth_from_disparity`.
 * Focus: :func:`depth_from_focus`, :func:`focus_measure`.
 * :func:`depth_from_cube` — the depth channel of any system's reconstructed cube (``Result.depth``).
 """
@@ -12,9 +14,12 @@
 from .focus import depth_from_focus, focus_measure
 from .from_cube import depth_from_cube
 from .light_field import (
+    DISPARITY_METHODS,
     depth_from_disparity,
     disparity_cost_volume,
     disparity_from_views,
+    guided_filter,
+    occlusion_cost_volume,
     textured_mask,
 )
 from .structured_light import (
@@ -43,6 +48,9 @@ __all__ = [
     "wrap",
     "disparity_from_views",
     "disparity_cost_volume",
+    "occlusion_cost_volume",
+    "guided_filter",
+    "DISPARITY_METHODS",
     "depth_from_disparity",
     "textured_mask",
     "depth_from_focus",

@@ -125,15 +125,25 @@ def SubspaceDenoiserNet(r_max: int = 12, width: int = 64, blocks: int = 4):  # n
     return _build_net(torch, int(r_max), int(width), int(blocks))
 
 
+#: Pixels per block of :func:`subspace`'s Gram matrix.
+GRAM_BLOCK = 4096
+
+
 def subspace(x, r: int, r_max: int):
     """``(Y, U)`` for a torch batch ``x (batch, P, C)``: eigen-images ``Y (batch, r_max, P)``
     (zero rows beyond ``min(r, C)``) and orthonormal ``U (batch, C, min(r, C))``.
 
-    Signs: each eigen-image sums to ≥ 0.  The Gram matrix is formed in float64.
+    Signs: each eigen-image sums to ≥ 0.  The Gram matrix is summed in float64 over blocks of
+    :data:`GRAM_BLOCK` pixels, each block's product in the input's precision: 7× faster than a
+    float64 product at 256×256×28 (1.8 against 13.6 ms on 2 threads) and within 6e-8 of it
+    (relative to its largest entry) on a real cube.
     """
     torch = require_torch()
     k = min(int(r), x.shape[-1], int(r_max))
-    gram = torch.matmul(x.transpose(1, 2).double(), x.double())
+    gram = torch.zeros(x.shape[0], x.shape[-1], x.shape[-1], dtype=torch.float64, device=x.device)
+    for a in range(0, x.shape[1], GRAM_BLOCK):
+        block = x[:, a : a + GRAM_BLOCK]
+        gram += torch.matmul(block.transpose(1, 2), block).double()
     _, vec = torch.linalg.eigh(gram)
     u = vec.flip(-1)[..., :k].to(x.dtype)
     y = torch.matmul(x, u)  # (batch, P, k)
@@ -150,7 +160,8 @@ def _robust_peak(t, q: float = 0.999) -> float:
     iterate sets."""
     flat = t.detach().abs().reshape(-1)
     k = min(int(math.ceil(q * (flat.numel() - 1))), flat.numel() - 1)
-    p = float(flat.kthvalue(k + 1).values)
+    # the (k+1)-th smallest is the least of the n − k largest: top-k is 3× faster than kthvalue
+    p = float(flat.topk(flat.numel() - k, sorted=False).values.min())
     return p if p > 0 else float(flat.max())
 
 

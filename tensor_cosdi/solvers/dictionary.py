@@ -50,7 +50,7 @@ def omp(D, Y, *, n_nonzero, tol=None, G=None, chunk: int = 512):
     K, N = D.shape[1], Y.shape[1]
     X = np.zeros((K, N))
     for lo in range(0, N, chunk):
-        y = Y[:, lo:lo + chunk]
+        y = Y[:, lo : lo + chunk]
         b0 = D.T @ y  # (K, n)
         n = y.shape[1]
         alpha = b0.copy()
@@ -280,7 +280,7 @@ def train_dictionary(
 
 def dictionary_admm(
     system, measurement, *, dictionary=None, sigma=0.05, sigma_end=0.01, max_iter=30,
-    warm="gap_tv", warm_iter=20, accelerate="auto", eps="auto", splitting="gap", rho=0.15,
+    warm="gap_tv", warm_iter="auto", accelerate="auto", eps="auto", splitting="gap", rho=0.15,
     tol=1e-5, nonneg=True, progress=False,
 ):  # fmt: skip
     """GAP (or ADMM) with a K-SVD patch dictionary as its prior (registered as ``"dl"``).
@@ -291,7 +291,8 @@ def dictionary_admm(
     ``(AAᵀ + εI)⁻¹`` projection by ADMM's ``(AᵀA + ρI)⁻¹`` step (``ρ = rho``
     relative to the sensing gain), which does not amplify noise along the
     weak directions of an ill-conditioned ``A Aᵀ`` (Lytro-CASSI, κ ≈ 10⁸);
-    ``warm`` is ``"gap_tv"``, ``"otd"`` or ``"none"``; ``nonneg`` (on) keeps each
+    ``warm`` is ``"gap_tv"``, ``"otd"`` or ``"none"``, ``warm_iter`` the start's iterations
+    (``"auto"``: 20 of GAP-TV, OTD's own; see :func:`~.pnp_gap.pnp_gap`); ``nonneg`` (on) keeps each
     denoised estimate non-negative (off for a signed cube).
     """
     from ._base import check_positive
@@ -316,7 +317,9 @@ def dictionary_admm(
     accelerate, eps, _ = gap_settings(system, measurement, accelerate, eps)
     prior = Denoiser(dictionary, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg)
     return warm_started_gap(
-        system, measurement, prior, warm=warm, warm_iter=warm_iter, accelerate=accelerate,
+        system, measurement, prior, warm=warm,
+        warm_iter=20 if warm == "gap_tv" and warm_iter == "auto" else warm_iter,
+        accelerate=accelerate,
         eps=eps, max_iter=max_iter, tol=tol, progress=progress,
         desc="K-SVD dictionary " + splitting.upper(), rho=rho if splitting == "admm" else None,
     )  # fmt: skip

@@ -282,7 +282,7 @@ def nonlocal_tucker(
         g,
         prior,
         warm=warm,
-        warm_iter=20,
+        warm_iter=20 if warm == "gap_tv" else "auto",
         accelerate=accelerate,
         eps=eps,
         max_iter=max_iter,

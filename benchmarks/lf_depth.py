@@ -8,8 +8,9 @@ views, 3×3 samples per pixel; the disparity of the centre view is known
 exactly.  Geometry is seeded (background −1.5 … −0.5 px per view step,
 shapes −0.3 … 1.5, slopes up to ±0.8 px across the image).
 
-* ``tune``: textures from scikit-image's photographs (what the defaults
-  of :func:`tensor_cosdi.depth.disparity_from_views` were chosen on);
+* ``tune``: textures from scikit-image's photographs and eight CAVE tuning
+  scenes (what the defaults of :func:`tensor_cosdi.depth.disparity_from_views`
+  were chosen on; needs the research data);
 * ``report``: textures from the report split's real CAVE scenes (three
   band groups as channels; needs the research data), never tuned on.
 
@@ -63,16 +64,28 @@ def tune_textures(size):
         img = img / img.max()
         img = np.repeat(img[..., None], 3, axis=2) if img.ndim == 2 else img[..., :3]
         out.append(img)
-    return out, size
+    return out
 
 
-def report_textures(size):
+#: CAVE tuning scenes whose textures join the photographs in the tuning set.
+CAVE_TUNE = ("balloons", "cd", "cloth", "feathers", "flowers", "paints", "sponges", "clay")
+
+
+def cave_textures(names):
     out = []
-    for name in tc.datasets.REPORT_SCENES:
+    for name in names:
         cube, _ = tc.datasets.load_hsi(name)
         groups = np.array_split(np.arange(cube.shape[2]), 3)
         out.append(np.stack([cube[..., g].mean(axis=2) for g in groups], -1))
-    return out, size
+    return out
+
+
+def textures(which, size):
+    """The texture pool of a set: ``"tune"`` (photographs and CAVE tuning scenes) or
+    ``"report"`` (the CAVE report scenes)."""
+    if which == "tune":
+        return tune_textures(size) + cave_textures(CAVE_TUNE), size
+    return cave_textures(tc.datasets.REPORT_SCENES), size
 
 
 def _crop(img, rng, size):
@@ -141,16 +154,16 @@ def main(argv=None):
     for s in sets:
         if s not in ("tune", "report"):
             raise SystemExit(f"--sets: unknown set {s!r} (tune, report)")
-    if "report" in sets:
+    if sets:
         try:
             tc.datasets.data_dir()
         except FileNotFoundError as exc:
-            raise SystemExit(f"the report set needs the research data ({exc})") from None
+            raise SystemExit(f"the texture sets need the research data ({exc})") from None
     rows = []
     for which in sets:
-        textures, size = (tune_textures if which == "tune" else report_textures)(args.size)
+        pool, size = textures(which, args.size)
         for seed in seeds:
-            lf, truth = make_scene(textures, seed, size)
+            lf, truth = make_scene(pool, seed, size)
             for label, opts in METHODS.items():
                 t0 = time.perf_counter()
                 est = depth.disparity_from_views(lf, max_disparity=2.0, **opts)

@@ -493,6 +493,7 @@ def structured_light(
     phase_per_height: float = 2.0,
     n_bumps: int = 3,
     photo_name: str = "coffee",
+    fringe_axis: int = 1,
     rng=0,
 ) -> StructuredLightScene:
     """A seeded structured-light scene: smooth height map, deformed fringe phase, reflectance.
@@ -505,11 +506,18 @@ def structured_light(
     :func:`photo` ``photo_name``.  Feed ``reflectance`` and ``phase`` to
     :func:`tensor_cosdi.systems.fringe_cube` for the CS2LI cube.
 
+    ``fringe_axis`` is the axis the fringe phase runs along: 1 (default,
+    ``y`` above) is the axis CASSI disperses along, 0 runs it along ``x``
+    (``2πν·x/Nx``), fringes across the dispersion.
+
     Examples
     --------
     >>> scene = structured_light((16, 16), [500, 600], frequencies=(2.0, 3.0))
     >>> scene.reflectance.shape, scene.phase.shape
     ((16, 16, 2), (16, 16, 2))
+    >>> flat = structured_light((16, 16), [500], n_bumps=1, phase_per_height=1e-9, fringe_axis=0)
+    >>> bool(np.ptp(flat.phase[:, 0, 0]) > 5 and np.ptp(flat.phase[0, :, 0]) < 1e-6)
+    True
     """
     from ._backend import default_rng
 
@@ -529,7 +537,12 @@ def structured_light(
         height += gen.uniform(0.5, 1.0) * np.exp(
             -((xx - cx) ** 2 + (yy - cy) ** 2) / (2 * width**2)
         )
-    ref = 2 * np.pi * np.arange(ny)[None, :] / ny
+    if isinstance(fringe_axis, bool) or fringe_axis not in (0, 1):
+        raise ValueError(f"fringe_axis must be 0 or 1, got {fringe_axis!r}")
+    if fringe_axis == 1:
+        ref = 2 * np.pi * np.arange(ny)[None, :] / ny
+    else:
+        ref = 2 * np.pi * np.arange(nx)[:, None] / nx
     phase = np.stack([f * ref + phase_per_height * (f / freqs[0]) * height for f in freqs], axis=-1)
     phase = np.broadcast_to(phase, (nx, ny, len(freqs))).copy()
     reflectance = photo(photo_name, (nx, ny), wavelengths)

@@ -211,3 +211,84 @@ def test_spatial_unwrap_masks_non_finite_phase_instead_of_hanging():
     np.testing.assert_allclose(out[ok], true[ok], atol=1e-9)
     with pytest.raises(ValueError, match="every pixel"):
         spatial_unwrap(np.full((4, 4), np.nan))
+
+
+def _occluding_scene(n=64):
+    """A slanted photo background and a nearer, slanted disc of another photo (5×5 views)."""
+    wl = [450.0, 550.0, 650.0]
+    yy, xx = np.indices((n, n))
+    disc = (yy - n / 2) ** 2 + (xx - n / 2.5) ** 2 < (n / 5) ** 2
+    layers = [
+        scenes.LightFieldLayer(scenes.photo("astronaut", (n, n), wl), (-0.8, 0.004, -0.003)),
+        scenes.LightFieldLayer(scenes.photo("coffee", (n, n), wl), (0.9, 0.0, 0.002), disc),
+    ]
+    return scenes.layered_light_field(layers, views=(5, 5)), disc
+
+
+def test_layered_light_field_follows_the_disparity_convention():
+    tex = np.random.default_rng(0).random((20, 24, 2))
+    lf, d = scenes.layered_light_field([scenes.LightFieldLayer(tex, 1.0)], views=(3, 3))
+    assert lf.shape == (3, 3, 20, 24, 2) and np.all(d == 1.0)
+    # I[u, v](y − (u − uc)·d, x − (v − vc)·d) = I[uc, vc](y, x), d = 1 px per view step
+    np.testing.assert_allclose(lf[2, 1, 2:-3], lf[1, 1, 3:-2], atol=1e-12)
+    np.testing.assert_allclose(lf[1, 0, :, 3:-2], lf[1, 1, :, 2:-3], atol=1e-12)
+
+
+def test_layered_light_field_hides_the_far_plane_behind_the_near_one():
+    (lf, d), disc = _occluding_scene(48)
+    assert np.allclose(d[disc], 0.9 + 0.002 * (np.indices(d.shape)[1][disc] - 23.5))
+    assert np.all(d[~disc] < 0)
+    # the near disc moves further between views than the background behind it
+    centre, right = lf[2, 2, ..., 0], lf[2, 3, ..., 0]
+    row = int(np.argmax(disc.sum(axis=1)))
+    assert not np.allclose(centre[row], right[row])
+
+
+@pytest.mark.parametrize(
+    "layers, kw, match",
+    [
+        ([], {}, "non-empty"),
+        ([scenes.LightFieldLayer(np.zeros((4, 4)))], {"supersample": 2}, "odd"),
+        ([scenes.LightFieldLayer(np.zeros((4, 4)), 1.0, np.ones((4, 4), bool))], {}, "no layer"),
+        ([scenes.LightFieldLayer(np.zeros((4, 4)), (0.0, 1.0, 0.0))], {}, "too steep"),
+        ([scenes.LightFieldLayer(np.zeros((4, 4)), 0.0, np.ones((3, 4), bool))], {}, "mask"),
+        ([scenes.LightFieldLayer(np.full((4, 4), np.nan))], {}, "finite"),
+        ([scenes.LightFieldLayer(np.zeros((4, 4)), (1.0, 2.0))], {}, "disparity"),
+    ],
+)
+def test_layered_light_field_errors(layers, kw, match):
+    with pytest.raises(ValueError, match=match):
+        scenes.layered_light_field(layers, views=(3, 3), **kw)
+
+
+def test_occlusion_aware_disparity_beats_plain_ssd_at_occlusions():
+    (lf, d), disc = _occluding_scene()
+    errs = {}
+    for method in ("occlusion", "ssd"):
+        est = depth.disparity_from_views(lf, max_disparity=1.5, method=method)
+        errs[method] = np.abs(est - d)[8:-8, 8:-8]
+    # measured: occlusion-aware 0.022 px MAE, 3.8 % off by > 0.07 px; plain SSD 0.095, 14.6 %
+    assert errs["occlusion"].mean() < 0.05 and (errs["occlusion"] > 0.07).mean() < 0.08
+    assert errs["occlusion"].mean() < 0.5 * errs["ssd"].mean()
+
+
+def test_disparity_options_are_checked():
+    lf = np.zeros((3, 3, 8, 8))
+    with pytest.raises(ValueError, match="method"):
+        depth.disparity_from_views(lf, method="sad")
+    with pytest.raises(ValueError, match="half_ratio"):
+        depth.disparity_from_views(lf, half_ratio=0)
+    with pytest.raises(ValueError, match="radius"):
+        depth.disparity_from_views(lf, radius=-1)
+    with pytest.raises(ValueError, match="max_disparity"):
+        depth.disparity_from_views(lf, max_disparity=True)
+
+
+def test_guided_filter_keeps_an_edge_of_the_guide():
+    guide = np.zeros((16, 16))
+    guide[:, 8:] = 1.0
+    src = guide + np.random.default_rng(0).normal(0, 0.05, guide.shape)
+    out = depth.guided_filter(guide, src, radius=3, eps=1e-3)
+    assert abs(out[:, :7].mean()) < 0.02 and abs(out[:, 9:].mean() - 1) < 0.02
+    assert out[:, 7].mean() < 0.1 and out[:, 8].mean() > 0.9  # no blur across the edge
+    assert np.std(out[:, :7]) < 0.5 * np.std(src[:, :7])  # smoothed within a side

@@ -29,7 +29,8 @@ est = depth.disparity_from_views(views, max_disparity=1.5)
 ssd = depth.disparity_from_views(views, max_disparity=1.5, method="ssd")
 for name, e in (("occlusion-aware", est), ("plain SSD", ssd)):
     err = np.abs(e - d)[8:-8, 8:-8]
-    print(f"{name:16s} mean |error| {err.mean():.3f} px, {100 * (err > 0.07).mean():.1f} % > 0.07 px")
+    bad = 100 * (err > 0.07).mean()
+    print(f"{name:16s} mean |error| {err.mean():.3f} px, {bad:.1f} % off by > 0.07 px")
 
 # %%
 # From compressed measurements: C3SLFI, 4 complementary snapshots, 4×4 views, OTD

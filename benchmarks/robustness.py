@@ -476,7 +476,66 @@ def misc_cases(folder: Path):
         out.append(
             Case("io.frames", f"read_frame {name}", lambda n=name: read_frame(folder / n), words)
         )
-    return out
+    return out + depth_cases()
+
+
+def depth_cases():
+    """Light-field depth and the scenes it is measured on."""
+    from tensor_cosdi import depth, scenes
+
+    lf = np.random.default_rng(6).random((3, 3, 12, 12))
+    tex = np.random.default_rng(7).random((8, 8))
+    Layer = scenes.LightFieldLayer
+    cases = {
+        "disparity_from_views method='sad'": (
+            lambda: depth.disparity_from_views(lf, method="sad"), ("method",)),
+        "disparity_from_views half_ratio=0": (
+            lambda: depth.disparity_from_views(lf, half_ratio=0), ("half_ratio",)),
+        "disparity_from_views half_ratio=True": (
+            lambda: depth.disparity_from_views(lf, half_ratio=True), ("half_ratio",)),
+        "disparity_from_views radius=1.5": (
+            lambda: depth.disparity_from_views(lf, radius=1.5), ("radius",)),
+        "disparity_from_views eps=nan": (
+            lambda: depth.disparity_from_views(lf, eps=np.nan), ("eps",)),
+        "disparity_from_views max_disparity='2'": (
+            lambda: depth.disparity_from_views(lf, max_disparity="2"), ("max_disparity",)),
+        "disparity_from_views order=0": (
+            lambda: depth.disparity_from_views(lf, order=0), ("order",)),
+        "disparity_from_views NaN views": (
+            lambda: depth.disparity_from_views(lf * np.nan), ("nan",)),
+        "disparity_from_views one view": (
+            lambda: depth.disparity_from_views(lf[:1, :1]), ("view",)),
+        "guided_filter shape mismatch": (
+            lambda: depth.guided_filter(tex, np.ones((2, 7, 8))), ("guide", "src")),
+        "occlusion_cost_volume decreasing candidates": (
+            lambda: depth.occlusion_cost_volume(lf, [1.0, 0.0, -1.0]), ("disparities",)),
+        "layered_light_field no layers": (
+            lambda: scenes.layered_light_field([]), ("layers",)),
+        "layered_light_field a plain array": (
+            lambda: scenes.layered_light_field([tex]), ("layers", "LightFieldLayer")),
+        "layered_light_field supersample=2": (
+            lambda: scenes.layered_light_field([Layer(tex)], supersample=2), ("supersample",)),
+        "layered_light_field supersample=True": (
+            lambda: scenes.layered_light_field([Layer(tex)], supersample=True), ("supersample",)),
+        "layered_light_field inf disparity": (
+            lambda: scenes.layered_light_field([Layer(tex, np.inf)]), ("disparity",)),
+        "layered_light_field integer mask": (
+            lambda: scenes.layered_light_field([Layer(tex, 0.0, np.ones((8, 8), int))]),
+            ("mask",)),
+        "layered_light_field no background": (
+            lambda: scenes.layered_light_field([Layer(tex, 1.0, np.ones((8, 8), bool))]),
+            ("layer", "background")),
+        "layered_light_field textures of two shapes": (
+            lambda: scenes.layered_light_field([Layer(tex), Layer(tex[:4])]), ("shape",)),
+        "layered_light_field views=(0, 3)": (
+            lambda: scenes.layered_light_field([Layer(tex)], views=(0, 3)), ("views",)),
+        "structured_light fringe_axis=2": (
+            lambda: scenes.structured_light((8, 8), [550.0], fringe_axis=2), ("fringe_axis",)),
+        "structured_light fringe_axis=True": (
+            lambda: scenes.structured_light((8, 8), [550.0], fringe_axis=True),
+            ("fringe_axis",)),
+    }  # fmt: skip
+    return [Case("depth", label, call, words) for label, (call, words) in cases.items()]
 
 
 class Worker:
@@ -648,6 +707,16 @@ def option_cases():
             problems[name] = (p.system, np.asarray(p.measurement, dtype=np.float64))
         return problems[name]
 
+    for method, opt in (("pnp_gap", "warm_iter"), ("pnp_fast", "warm_iter"), ("dl", "warm_iter"),
+                        ("otd", "admm_iter")):  # "auto" or a count: not caught by type below
+        if method not in tc.reconstruct.methods():
+            continue
+        system, g = problem_for(method)
+        extra = (NEEDS[method],) if method in NEEDS else ()
+        for v in (True, "0.5", float("inf"), 0, "many"):
+            out.append(Case("options", f"{method} {opt}={v!r}",
+                            lambda m=method, o=opt, v=v, s=system, g=g:
+                            tc.reconstruct(s, g, m, **{o: v}), (opt, *extra)))  # fmt: skip
     for method in tc.reconstruct.methods():
         system, g = problem_for(method)
         # a method that needs an argument names it first, whatever else is wrong

@@ -297,8 +297,11 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     -----
     An ``xarray.DataArray`` measurement gives a ``DataArray`` cube (dims the
     system's :attr:`~tensor_cosdi.systems.System.axes`, the band centres in
-    nm as the ``"λ"`` coordinate); a dask array is computed first (every
-    method needs the whole measurement).
+    nm as the ``"λ"`` coordinate).  A dask array is refused with a message: every
+    method needs the whole measurement in memory; compute it
+    (``measurement.compute()``) or give it to
+    :func:`~tensor_cosdi.solvers.tiled.reconstruct_tiled`, which computes one
+    tile's window at a time.
     A float16 (or bfloat16) measurement is promoted to float32 first: its
     three significant digits cost every method 1-4 dB in its own precision.
     Every method runs on the measurement divided by its peak ``max|g|`` and
@@ -325,9 +328,12 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     labelled = _is_data_array(measurement)
     if labelled:  # an xarray.DataArray: its values, and the cube comes back labelled
         measurement = measurement.values
-    elif hasattr(measurement, "__dask_graph__"):  # a dask array: every method needs it whole
-        log.info("computing the dask measurement %s", getattr(measurement, "shape", ""))
-        measurement = measurement.compute()
+    elif hasattr(measurement, "__dask_graph__"):  # a dask array: no method works in pieces
+        raise ValueError(
+            f"the measurement is a lazy dask array {tuple(measurement.shape)}: every method needs "
+            "it whole in memory — pass measurement.compute(), or use reconstruct_tiled, which "
+            "computes one tile's window at a time (SD-/DD-CASSI)"
+        )
     g = system.check_measurement(measurement, "reconstruct")  # shape, dtype, NaN/inf
     if B.real_dtype_name(g) in HALF_PRECISION:  # 3 significant digits: every method loses 1-4 dB
         g = tl.tensor(g, **{**_context(g), "dtype": B.dtype("float32")})

@@ -65,7 +65,12 @@ def reconstruct_tiled(
     Parameters
     ----------
     system : SDCASSI or DDCASSI (:data:`TILED_SYSTEMS`)
-    measurement : tensor of ``system.measurement_shape``
+    measurement : tensor of ``system.measurement_shape``, or a dask array
+        A dask array stays lazy: each tile's window of it is computed when
+        that tile is solved (serially, one window in memory at a time; with
+        ``client``, as the tiles are sent), so a capture larger than memory
+        can be read from a chunked store (``dask.array.from_zarr``).  The
+        cube comes back as a NumPy array.
     method : str
         Any registered method (:func:`tensor_cosdi.reconstruct`), run on each tile with
         ``options``.
@@ -112,10 +117,18 @@ def reconstruct_tiled(
         )
     tile, overlap = check_int("tile", tile, 8), check_int("overlap", overlap, 0)
     t0 = time.perf_counter()
-    g = np.asarray(B.to_numpy(measurement))
-    if g.dtype not in (np.float32, np.float64):  # raw counts: blend in float64
+    lazy = hasattr(measurement, "__dask_graph__")
+    if lazy:  # a dask array: each tile's window is computed when its tile is solved
+        g = measurement
+        if not np.issubdtype(np.dtype(g.dtype), np.number) or np.issubdtype(
+            np.dtype(g.dtype), np.complexfloating
+        ):
+            raise ValueError(f"measurement must hold real numbers, got dtype {g.dtype}")
+    else:
+        g = np.asarray(B.to_numpy(measurement))
+    if np.dtype(g.dtype) not in (np.float32, np.float64):  # raw counts: blend in float64
         g = g.astype(np.float64)
-    if g.shape != tuple(system.measurement_shape):
+    if tuple(g.shape) != tuple(system.measurement_shape):
         raise ValueError(
             f"measurement has shape {g.shape}; {system.name} expects {system.measurement_shape}"
         )
@@ -132,7 +145,7 @@ def reconstruct_tiled(
     def job(i):  # built when needed: sixteen sub-systems at once cost a cube of memory
         x0, x1, y0, y1 = places[i][0]
         sub, (m0, m1) = system.window(x0, x1, y0, y1)
-        return sub, g[x0:x1, m0:m1]
+        return sub, np.asarray(g[x0:x1, m0:m1])  # (a dask window: computed here, alone)
 
     if client is None:
         from tqdm import tqdm
@@ -154,12 +167,13 @@ def reconstruct_tiled(
         index = {f.key: i for i, f in enumerate(futures)}
         results = ((index[f.key], c) for f, c in as_completed(futures, with_results=True))
     # one cube-sized array in the measurement's dtype: the weighted sum, divided in place
-    out, wsum = np.zeros((nx, ny, nl), g.dtype), np.zeros((nx, ny), g.dtype)
+    dtype = np.dtype(g.dtype)
+    out, wsum = np.zeros((nx, ny, nl), dtype), np.zeros((nx, ny), dtype)
     for i, cube in results:
         (x0, x1, y0, y1), (a0, a1, b0, b1) = places[i]
         wx = _ramp(x1 - x0, a0 - x0, x1 - a1)
         wy = _ramp(y1 - y0, b0 - y0, y1 - b1, min(s, b0 - y0), min(s, y1 - b1))
-        w = np.outer(wx, wy).astype(g.dtype)
+        w = np.outer(wx, wy).astype(dtype)
         if cube.flags.writeable:  # (arrays from worker processes may arrive read-only)
             cube *= w[:, :, None]
         else:
@@ -168,7 +182,7 @@ def reconstruct_tiled(
         wsum[x0:x1, y0:y1] += w
         del cube
     out /= wsum[:, :, None]
-    if not isinstance(measurement, np.ndarray):
+    if not isinstance(measurement, np.ndarray) and not lazy:
         out = B.tensor_like(out, measurement)
     return Result(
         cube=out,

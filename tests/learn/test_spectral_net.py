@@ -262,11 +262,11 @@ def test_pnp_fast_is_pnp_gap_with_fewer_cheaper_calls_and_still_beats_gap_tv():
     system = tc.systems.SDCASSI(code, n_bands=28, shifts=2)
     g = system.simulate(cube.astype(np.float64), snr_db=30, rng=0)
     fast = tc.reconstruct(system, g, "pnp_fast", precision="float32")
-    same = tc.reconstruct(system, g, "pnp_gap", max_iter=40, ensemble=1)
+    same = tc.reconstruct(system, g, "pnp_gap", max_iter=40, ensemble=1, warm_iter=20)
     np.testing.assert_array_equal(np.asarray(fast.cube), np.asarray(same.cube))
     assert fast.options["max_iter"] == 40 and fast.options["precision"] == "float32"
     tv = tc.reconstruct(system, g, "gap_tv").cube
     p_tv = metrics.psnr(cube, np.asarray(tv), data_range=1.0)
     auto = np.asarray(tc.reconstruct(system, g, "pnp_fast").cube)  # bfloat16 where native
     p_fast = metrics.psnr(cube, auto, data_range=1.0)
-    assert p_fast > p_tv + 6.0, (p_fast, p_tv)  # measured 46.24 against 38.35 (pnp_gap 47.22)
+    assert p_fast > p_tv + 6.0, (p_fast, p_tv)  # measured 46.31 against 38.35 (pnp_gap 47.22)

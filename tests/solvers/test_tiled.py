@@ -55,6 +55,30 @@ def test_a_dask_cluster_gives_the_serial_result():
     np.testing.assert_allclose(par.cube, serial.cube, rtol=1e-6, atol=1e-7)
 
 
+def test_a_dask_measurement_is_read_one_window_at_a_time():
+    da = pytest.importorskip("dask.array")
+    s, cube, g = problem("sd", n=48)
+    serial = tc.reconstruct_tiled(s, g, "gap_tv", tile=24, overlap=8, max_iter=8)
+    reads = []
+
+    def counted(block, block_info=None):
+        reads.append(block_info[0]["array-location"])
+        return block
+
+    lazy = da.from_array(np.asarray(g), chunks=(8, 8)).map_blocks(counted, dtype=g.dtype)
+    res = tc.reconstruct_tiled(s, lazy, "gap_tv", tile=24, overlap=8, max_iter=8)
+    np.testing.assert_array_equal(res.cube, serial.cube)
+    assert isinstance(res.cube, np.ndarray) and len(res.history["tiles"]) == 4
+    # each tile computed only the chunks under its window: the corner chunks once, the
+    # shared ones (overlap and shear) by more tiles, and fewer reads than 4 whole measurements
+    n_chunks = int(np.prod(lazy.numblocks))
+    counts = [reads.count(r) for r in reads]
+    assert n_chunks < len(reads) < 4 * n_chunks, (len(reads), n_chunks)
+    assert min(counts) == 1
+    with pytest.raises(ValueError, match="real numbers"):
+        tc.reconstruct_tiled(s, da.from_array(np.asarray(g) + 0j, chunks=8))
+
+
 def test_tiled_errors():
     s, cube, g = problem("sd", n=32)
     with pytest.raises(ValueError, match="supports"):

@@ -22,7 +22,8 @@ algorithms).
    same light, same number of frames).  The height error of a pixel is its
    wrapped-phase error divided by the phase-per-height calibration (perfect
    unwrapping assumed for both, so only the reconstruction is compared);
-   depth PSNR uses the true height's range.
+   depth PSNR uses the true height's range.  Both fringe orientations: the
+   phase running along the axis CASSI shears, and across it.
 4. C3SLFI Table 1 (Sec. 5.3.2): ``studies.c3slfi_table`` — OTD and WDCT on
    the 3-D and 5-D forms, K = 2, 3 snapshots of 31 bands, 15 / 20 / 50 dB,
    on the real scenes and on two photo-derived ones; ``table1_dl``: the

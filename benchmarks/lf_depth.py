@@ -175,7 +175,7 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     (out / "lf_depth.json").write_text(json.dumps({"rows": rows, **provenance()}, indent=1))
     lines = [
-        "### Light-field depth on rendered occluding planes",
+        "# Light-field depth on rendered occluding planes",
         "",
         f"{args.size}×{args.size}, 5×5 views, seeds {args.seeds}; MAE in px per view step, "
         f"bad-0.07 / bad-0.3 = share of pixels off by more (border of {BORDER} px left out); "

@@ -46,7 +46,7 @@ GAP_TV_WARM_ITER = 80
 #: :func:`pnp_fast`'s ``warm_iter``: OTD's ADMM stage cut from 45 iterations to 20.  Four
 #: tuning scenes (cloth, balloons, clay, feathers; TSA mask, 256×256×28): 30.47 → 30.36 dB
 #: noiseless, 29.14 → 29.07 dB at 30 dB; with the start's ADMM stage dropped altogether 29.89
-#: and 25.42 dB (ADMM on noisy data needs the better start).
+#: and 25.42 dB.
 FAST_WARM_ITER = 20
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give

@@ -173,7 +173,7 @@ def main(argv=None):
                 rows.append(row)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "lf_depth.json").write_text(json.dumps({"rows": rows, **provenance()}, indent=1))
+    prov = provenance()  # before either results file is rewritten: the commit as it ran
     lines = [
         "# Light-field depth on rendered occluding planes",
         "",
@@ -201,6 +201,7 @@ def main(argv=None):
     }  # fmt: skip
     lines += ["", "Lowest MAE: " + "; ".join(f"{w}: {m}" for w, m in best.items()) + "."]
     write_results(out / "lf_depth.md", lines)
+    (out / "lf_depth.json").write_text(json.dumps({"rows": rows, **prov}, indent=1))
 
 
 if __name__ == "__main__":

@@ -179,7 +179,7 @@ def main(argv=None):
         "",
         f"{args.size}×{args.size}, 5×5 views, seeds {args.seeds}; MAE in px per view step, "
         f"bad-0.07 / bad-0.3 = share of pixels off by more (border of {BORDER} px left out); "
-        "means over seeds (per-seed MAE in brackets).",
+        "means over seeds, and each seed's MAE.",
         "",
         "| set | method | MAE px | bad-0.07 % | bad-0.3 % | s / scene | per-seed MAE |",
         "|---|---|---|---|---|---|---|",

@@ -71,32 +71,17 @@ def disparity_cost_volume(
     """
     L = _views(views)
     U, V, H, W, C = L.shape
-    uc, vc = U // 2, V // 2
     d = _check_candidates(disparities)
+    order = _check_order(order)
     if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")
-    centre = L[uc, vc]
-    yy, xx = np.meshgrid(
-        np.arange(H, dtype=np.float64), np.arange(W, dtype=np.float64), indexing="ij"
-    )
+    centre = L[U // 2, V // 2]
     cost = np.zeros((d.size, H, W))
-    for u in range(U):
-        for v in range(V):
-            if u == uc and v == vc:
-                continue
-            img = L[u, v]
-            coeffs = [
-                ndimage.spline_filter(img[..., c], order=order) if order > 1 else img[..., c]
-                for c in range(C)
-            ]
-            for i, di in enumerate(d):
-                coords = [yy - (u - uc) * di, xx - (v - vc) * di]
-                # I[u, v](y − (u − uc)d, x − (v − vc)d) should equal the centre view at (y, x)
-                for c in range(C):
-                    w = ndimage.map_coordinates(
-                        coeffs[c], coords, order=order, mode="nearest", prefilter=False
-                    )
-                    cost[i] += (w - centre[..., c]) ** 2
+    for (u, v), (oy, ox) in _offsets(U, V):
+        coeffs = _spline(L[u, v], order)
+        for i, di in enumerate(d):
+            # I[u, v](y − (u − uc)d, x − (v − vc)d) should equal the centre view at (y, x)
+            cost[i] += ((_shift(coeffs, (oy * di, ox * di), order) - centre) ** 2).sum(axis=-1)
     if window > 1:
         cost = ndimage.uniform_filter(cost, size=(1, window, window), mode="nearest")
         if shiftable:

@@ -267,7 +267,7 @@ def test_occlusion_aware_disparity_beats_plain_ssd_at_occlusions():
     for method in ("occlusion", "ssd"):
         est = depth.disparity_from_views(lf, max_disparity=1.5, method=method)
         errs[method] = np.abs(est - d)[8:-8, 8:-8]
-    # measured: occlusion-aware 0.022 px MAE, 3.8 % off by > 0.07 px; plain SSD 0.095, 14.6 %
+    # measured: occlusion-aware 0.033 px MAE, 6.7 % off by > 0.07 px; plain SSD 0.095, 14.6 %
     assert errs["occlusion"].mean() < 0.05 and (errs["occlusion"] > 0.07).mean() < 0.08
     assert errs["occlusion"].mean() < 0.5 * errs["ssd"].mean()
 

@@ -64,17 +64,12 @@ def main(argv=None):
         torch.set_num_threads(n)
         med = {}
         for p, net in nets.items():
-            net(x, 0.05)  # warm-up
-            times = []
-            for _ in range(args.repeats):
-                t0 = time.perf_counter()
-                net(x, 0.05)
-                times.append(time.perf_counter() - t0)
-            med[p] = float(np.median(times))
+            med[p] = _median_call(lambda net=net: net(x, 0.05), args.repeats)
         lines.append(
             f"| {n} | {med['float32']:.3f} | {med['bfloat16']:.3f} | "
             f"{med['float32'] / med['bfloat16']:.2f} |"
         )
+    lines += _layout_table(torch, nets, args.repeats)
     torch.set_num_threads(saved)
     lines += [
         "",
@@ -91,6 +86,43 @@ def main(argv=None):
             f"{p['bfloat16']:.2f} | {p['bfloat16'] - p['float32']:+.3f} |"
         )
     write_results(Path(args.out) / "denoiser_speed.md", lines)
+
+
+def _median_call(f, repeats: int) -> float:
+    f()  # warm-up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def _layout_table(torch, nets, repeats: int) -> list:
+    """The network alone on 12 eigen-images at 256×256, its weights in the default (contiguous)
+    layout against channels-last, which the denoiser uses on a CPU; every thread."""
+    import copy
+
+    lines = [
+        "",
+        f"The network alone (12 eigen-images, 256×256, {torch.get_num_threads()} threads), "
+        f"median of {repeats} (ms):",
+        "",
+        "| precision | contiguous | channels-last | contiguous / channels-last |",
+        "|---|---|---|---|",
+    ]
+    for p, den in nets.items():
+        fast, dtype = den._network(torch.device("cpu"))
+        plain = copy.deepcopy(fast).to(memory_format=torch.contiguous_format)
+        y = torch.rand(1, 12, 256, 256, generator=torch.Generator().manual_seed(0)).to(dtype)
+        s = torch.tensor([0.05], dtype=dtype)
+        with torch.no_grad():
+            t = {
+                k: _median_call(lambda n=n: n(y, s), repeats)
+                for k, n in (("c", plain), ("l", fast))
+            }
+        lines.append(f"| {p} | {1e3 * t['c']:.1f} | {1e3 * t['l']:.1f} | {t['c'] / t['l']:.2f} |")
+    return lines
 
 
 if __name__ == "__main__":

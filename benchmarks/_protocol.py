@@ -165,23 +165,40 @@ def key(scene, snr, mask, method, options) -> str:
 
 
 class Store:
-    """Runs appended to a JSON file as they finish; a killed run resumes where it stopped."""
+    """Runs appended to a JSON file as they finish; a killed run resumes where it stopped.
 
-    def __init__(self, path: Path):
+    A stored row is reused only while its method is not in ``fresh`` (method names, or
+    ``{"all"}``): a fresh row replaces the stored one.  Each new row records the commit it was
+    computed at; :meth:`commits` says which commits the rows a run used came from, so a table
+    rendered from stored rows never passes them off as the current code's.
+    """
+
+    def __init__(self, path: Path, *, fresh=()):
         self.path = Path(path)
         self.runs = json.loads(self.path.read_text())["runs"] if self.path.exists() else []
         self.index = {
             key(r["scene"], r["snr_db"], r["mask"], r["method"], r["options"]): r
             for r in self.runs
         }
+        self.fresh, self.used, self.commit = set(fresh), {}, provenance()["commit"]
 
     def get(self, scene, snr, mask_kind, method, options):
         return self.index.get(key(scene, snr, mask_kind, method, options))
 
+    def commits(self) -> str:
+        """``"abc1234 (12 rows), def5678 (3 rows)"``: where this run's rows were computed."""
+        counts: dict = {}
+        for row in self.used.values():
+            c = row.get("commit", "not recorded")
+            counts[c] = counts.get(c, 0) + 1
+        return ", ".join(f"{c} ({n} row{'s' * (n != 1)})" for c, n in counts.items())
+
     def ensure(self, scene, snr, mask_kind, method, options, *, cache):
-        """The run's row, computing it (and saving) when missing."""
+        """The run's row, computing it (and saving) when missing or asked fresh."""
+        k = key(scene, snr, mask_kind, method, options)
         row = self.get(scene, snr, mask_kind, method, options)
-        if row is not None:
+        if row is not None and (k in self.used or not self.fresh & {method, "all"}):
+            self.used[k] = row
             return row
         pk = (scene, snr, mask_kind)
         if pk not in cache:
@@ -191,10 +208,11 @@ class Store:
         est, sec = run(method, system, g, options)
         row = {
             "scene": scene, "snr_db": snr, "mask": mask_kind, "method": method,
-            "options": options, "seconds": sec, **score(cube, est),
+            "options": options, "seconds": sec, **score(cube, est), "commit": self.commit,
         }  # fmt: skip
-        self.runs.append(row)
-        self.index[key(scene, snr, mask_kind, method, options)] = row
+        old = self.index.get(k)
+        self.runs = [r for r in self.runs if r is not old] + [row]
+        self.index[k] = self.used[k] = row
         tmp = self.path.with_name(self.path.name + ".tmp")
         tmp.write_text(json.dumps({"runs": self.runs}, indent=1))
         os.replace(tmp, self.path)

@@ -1,14 +1,17 @@
-"""Two spectral-denoiser weight files compared inside ``pnp_gap`` on tuning scenes.
+"""Two spectral-denoiser weight files compared inside ``pnp_gap`` (or ``pnp_fast``) on tuning
+scenes.
 
 Whether a retrained denoiser should replace the shipped one is decided here,
 on tuning scenes both were trained on (never the report scenes): the
 protocol of ``benchmarks/_protocol.py`` (256×256×28 SD-CASSI, 2 px per band,
-``--mask`` code, PSNR with data range 1), ``pnp_gap`` at its defaults with
-each weight file's denoiser, noiseless and at 30 dB.  The verdict line is
+``--mask`` code, PSNR with data range 1), ``--method`` at its defaults with
+each weight file's denoiser (``pnp_fast``: its settings with the denoiser in ``precision="auto"``),
+noiseless and at 30 dB.  The verdict line is
 computed from the means.
 
     python benchmarks/denoiser_weights.py CANDIDATE.pt [--reference shipped]
         [--scenes balloons,cd,clay,feathers] [--snr none,30] [--mask tsa] [--threads 1]
+        [--method pnp_gap|pnp_fast]
         [--out benchmarks/results/denoiser_weights.md]
 
 Never asserts anything; read the numbers.
@@ -37,6 +40,24 @@ from _protocol import (  # noqa: E402
 import tensor_cosdi as tc  # noqa: E402
 
 
+def _in_pnp_gap(system, g, den):
+    return tc.reconstruct(system, g, "pnp_gap", denoiser=den).cube
+
+
+def _in_pnp_fast(system, g, den):
+    """``pnp_fast`` with another denoiser: ``pnp_gap`` with ``pnp_fast``'s own settings."""
+    import inspect
+
+    from tensor_cosdi.solvers.pnp_gap import pnp_fast
+
+    fast = {
+        k: p.default
+        for k, p in inspect.signature(pnp_fast).parameters.items()
+        if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
+    }
+    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **fast).cube
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("candidate", help="a train-denoiser weights file")
@@ -45,6 +66,7 @@ def main(argv=None):
     ap.add_argument("--snr", default="none,30")
     ap.add_argument("--mask", default="tsa")
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--method", default="pnp_gap", choices=("pnp_gap", "pnp_fast"))
     ap.add_argument("--out", default=str(RESULTS / "denoiser_weights.md"))
     args = ap.parse_args(argv)
     import torch
@@ -62,20 +84,21 @@ def main(argv=None):
         "candidate": Path(args.candidate),
     }
     mask = load_mask(args.mask)
+    run = _in_pnp_fast if args.method == "pnp_fast" else _in_pnp_gap
     rows = {k: {snr: [] for snr in snrs} for k in files}
     secs = {k: [] for k in files}
     for key, path in files.items():
-        den = SpectralDenoiser(path)
+        den = SpectralDenoiser(path, precision="auto" if args.method == "pnp_fast" else "float32")
         for scene in scenes:
             for snr in snrs:
                 system, cube, g = problem(scene, snr, mask)
                 t0 = time.perf_counter()
-                est = tc.reconstruct(system, g, "pnp_gap", denoiser=den).cube
+                est = run(system, g, den)
                 secs[key].append(time.perf_counter() - t0)
                 rows[key][snr].append(score(cube, est)["psnr"])
                 print(key, scene, snr_label(snr), f"{rows[key][snr][-1]:.2f}", flush=True)
     lines = [
-        f"# Denoiser weights in `pnp_gap`: {', '.join(scenes)} ({args.mask} code)",
+        f"# Denoiser weights in `{args.method}`: {', '.join(scenes)} ({args.mask} code)",
         "",
         f"reference: `{files['reference'].name}`; candidate: `{files['candidate'].name}`",
         "",

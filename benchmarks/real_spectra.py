@@ -22,8 +22,10 @@ Two modes:
   ``<out>/cv_<METHOD>[_<name>].md``.
 
 Every run is appended to a JSON file as it finishes and skipped when the file
-already holds it, so a killed run resumes with the same command.  The
-Markdown tables carry the date, machine, commit and command.
+already holds it, so a killed run resumes with the same command; ``--fresh
+METHODS`` (or ``all``) computes those methods' runs again after a code change.
+The Markdown tables carry the date, machine, commit and command, and the
+commits the rows were computed at.
 
     python benchmarks/real_spectra.py [--methods plain_gap_tv,gap_tv,otd]
         [--snr none,30,20] [--masks tsa,random] [--name real_spectra]
@@ -283,6 +285,10 @@ def main(argv=None):
         "--baseline-on-tune", action="store_true", help="--cv: also plain GAP-TV on the folds"
     )
     ap.add_argument("--name", default=None, help="results file stem")
+    ap.add_argument(
+        "--fresh", default="", metavar="METHODS",
+        help="comma list of methods (or 'all') whose stored runs are computed again",
+    )  # fmt: skip
     ap.add_argument("--out", default=str(RESULTS))
     args = ap.parse_args(argv)
     try:
@@ -295,14 +301,15 @@ def main(argv=None):
         name = args.name or f"cv_{args.cv}"
     else:
         name = args.name or "real_spectra"
-    store = Store(out / f"{name}.json")
+    store = Store(out / f"{name}.json", fresh=[m for m in args.fresh.split(",") if m])
     cache = {}
     if args.cv:
         text, results = cv(args, store, cache)
         (out / f"{name}.summary.json").write_text(json.dumps(results, indent=1))
     else:
         text = report(args, store, cache)
-    text = text + "\n\n" + provenance_lines(provenance()) + "\n"
+    text += f"\n\nRows computed at commit {store.commits()}.  \n"
+    text += provenance_lines(provenance()) + "\n"
     (out / f"{name}.md").write_text(text)
     print(text)
 

@@ -77,11 +77,25 @@ def protocol_problem():
 
 
 def cpu_options(method):
+    """``(method, options)`` that keep the network on the CPU (its default would be the GPU);
+    ``pnp_fast`` runs as ``pnp_gap`` with its settings and a CPU denoiser."""
     if method == "dcosnet":
-        return {"device": "cpu"}
+        return method, {"device": "cpu"}
     from tensor_cosdi.learn.spectral_net import SpectralDenoiser
 
-    return {"denoiser": SpectralDenoiser(device="cpu")}
+    if method == "pnp_fast":
+        import inspect
+
+        from tensor_cosdi.solvers.pnp_gap import pnp_fast
+
+        fast = {
+            k: p.default
+            for k, p in inspect.signature(pnp_fast).parameters.items()
+            if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
+        }
+        den = SpectralDenoiser(device="cpu", precision="auto")
+        return "pnp_gap", {"denoiser": den, **fast}
+    return method, {"denoiser": SpectralDenoiser(device="cpu")}
 
 
 def timed(torch, system, g, method, device, repeats, dev):
@@ -96,7 +110,8 @@ def timed(torch, system, g, method, device, repeats, dev):
             sync()
             cube = cube.cpu().numpy()
         else:  # NumPy arrays, and the network on the CPU (its default would be the GPU)
-            cube = tc.reconstruct(system, g, method, **cpu_options(method)).cube
+            name, options = cpu_options(method)
+            cube = tc.reconstruct(system, g, name, **options).cube
         secs.append(time.perf_counter() - t0)
     return float(np.median(secs)), np.asarray(cube)
 
@@ -117,7 +132,7 @@ def main(argv=None):
     rows = small_runs(torch, dev)
     system, cube, g, what = protocol_problem()
     big = []
-    for method in ("dcosnet", "pnp_gap"):
+    for method in ("dcosnet", "pnp_fast", "pnp_gap"):
         for device in ("torch", "numpy"):
             sec, est = timed(torch, system, g, method, device, args.repeats, dev)
             psnr = tc.metrics.psnr(cube, np.clip(est, 0, 1), data_range=1.0)

@@ -160,6 +160,20 @@ def candidates(grid: dict) -> list[dict]:
     return [dict(zip(names, vals)) for vals in itertools.product(*(grid[n] for n in names))]
 
 
+def pnp_fast_settings() -> dict:
+    """``pnp_fast``'s own settings (its signature's defaults, less ``precision`` and
+    ``progress``): ``pnp_gap`` with these and another denoiser is ``pnp_fast`` with it."""
+    import inspect
+
+    from tensor_cosdi.solvers.pnp_gap import pnp_fast
+
+    return {
+        k: p.default
+        for k, p in inspect.signature(pnp_fast).parameters.items()
+        if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
+    }
+
+
 def key(scene, snr, mask, method, options) -> str:
     return json.dumps([scene, snr, mask, method, options], sort_keys=True)
 

@@ -29,7 +29,7 @@ import tensorly as tl
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import RESULTS, write_results  # noqa: E402
+from _protocol import RESULTS, pnp_fast_settings, write_results  # noqa: E402
 
 import tensor_cosdi as tc  # noqa: E402
 
@@ -84,17 +84,8 @@ def cpu_options(method):
     from tensor_cosdi.learn.spectral_net import SpectralDenoiser
 
     if method == "pnp_fast":
-        import inspect
-
-        from tensor_cosdi.solvers.pnp_gap import pnp_fast
-
-        fast = {
-            k: p.default
-            for k, p in inspect.signature(pnp_fast).parameters.items()
-            if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
-        }
         den = SpectralDenoiser(device="cpu", precision="auto")
-        return "pnp_gap", {"denoiser": den, **fast}
+        return "pnp_gap", {"denoiser": den, **pnp_fast_settings()}
     return method, {"denoiser": SpectralDenoiser(device="cpu")}
 
 

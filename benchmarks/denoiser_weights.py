@@ -31,6 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import (  # noqa: E402
     RESULTS,
     load_mask,
+    pnp_fast_settings,
     problem,
     score,
     snr_label,
@@ -46,16 +47,7 @@ def _in_pnp_gap(system, g, den):
 
 def _in_pnp_fast(system, g, den):
     """``pnp_fast`` with another denoiser: ``pnp_gap`` with ``pnp_fast``'s own settings."""
-    import inspect
-
-    from tensor_cosdi.solvers.pnp_gap import pnp_fast
-
-    fast = {
-        k: p.default
-        for k, p in inspect.signature(pnp_fast).parameters.items()
-        if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
-    }
-    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **fast).cube
+    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **pnp_fast_settings()).cube
 
 
 def main(argv=None):

@@ -1,12 +1,14 @@
 """The findings script's verdicts and reasons agree with the numbers printed beside them.
 
-Runs ``benchmarks/thesis_findings.py --quick`` on two fast studies (CS2LI with both
-fringe orientations, the CASSI-VSI beam splitter) and re-derives every verdict from the
-per-seed values shown in its row, by the rules its header states.
+Runs ``benchmarks/thesis_findings.py --quick`` on three fast studies (CS2LI with both
+fringe orientations, the CASSI-VSI beam splitter, CASSI-VSI against SD-CASSI and the
+dual-arm CASSI) and re-derives every verdict from the per-seed values shown in its row, by
+the rules its header states.
 """
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
@@ -23,7 +25,18 @@ RANGES = {  # the thesis' ranges the script's verdicts test
     "mean arm SNR peaks": (0.5, 0.7),
     "dynamic ranges balance": (0.6, 0.8),
     "CS2LI over structured light": (0.0, 4.0),
+    "CASSI-VSI against the dual-arm CASSI": (-1.0, 1.0),
 }
+GAINS = ("CASSI-VSI (αT 0.7) over SD-CASSI", "least SAM of the three")  # "better" findings
+
+
+def _gain_expected(values):
+    k = sum(v > 0 for v in values)
+    if k == len(values):
+        return "reproduced"
+    if k == 0:
+        return "contradicted"
+    return f"inconclusive ({k} of {len(values)} seeds gain)"
 
 
 def _expected(values, lo, hi):
@@ -42,7 +55,7 @@ def verdict_rows(tmp_path_factory):
     except FileNotFoundError as exc:
         pytest.fail(f"the findings run on the report scenes: set TENSOR_COSDI_DATA ({exc})")
     out = tmp_path_factory.mktemp("findings")
-    cmd = [sys.executable, str(SCRIPT), "--quick", "--studies", "vsi_design,cs2li",
+    cmd = [sys.executable, str(SCRIPT), "--quick", "--studies", "vsi_design,cs2li,vsi_systems",
            "--workers", "1", "--out", str(out)]  # fmt: skip
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
@@ -54,11 +67,16 @@ def verdict_rows(tmp_path_factory):
 
 def test_every_verdict_follows_from_its_per_seed_values(verdict_rows):
     _, rows = verdict_rows
-    assert len(rows) == 5  # three beam-splitter findings, CS2LI with fringes along and across
+    # three beam-splitter findings, CS2LI with fringes along and across, three against the
+    # other imagers
+    assert len(rows) == 8
     for finding, _thesis, ours, verdict, note in rows:
         seeds = re.search(r"seeds: ([^)]*)\)", ours).group(1)
         values = [float(v) for v in seeds.split(",")]
         assert len(values) == 3
+        if any(key in finding for key in GAINS):
+            assert verdict == _gain_expected(values), (finding, values, verdict)
+            continue
         (lo, hi) = next(r for key, r in RANGES.items() if key in finding)
         assert verdict == _expected(values, lo, hi), (finding, values, verdict)
         if "CS2LI" in finding:  # the reason is a template filled from the mean
@@ -75,3 +93,30 @@ def test_both_fringe_orientations_are_in_the_table(verdict_rows):
         "fringes along the dispersion",
         "fringes across the dispersion",
     }
+
+
+def test_update_puts_one_study_into_a_saved_run(tmp_path):
+    try:
+        tc.datasets.data_dir()
+    except FileNotFoundError as exc:
+        pytest.fail(f"the findings run on the report scenes: set TENSOR_COSDI_DATA ({exc})")
+    base = [sys.executable, str(SCRIPT), "--quick", "--workers", "1", "--out", str(tmp_path)]
+    first = subprocess.run(base + ["--studies", "vsi_design"], capture_output=True, text=True,
+                           timeout=600)  # fmt: skip
+    assert first.returncode == 0, first.stderr[-2000:]
+    saved = (tmp_path / "thesis_findings.md").read_text()
+    bad = subprocess.run(base + ["--studies", "vsi_systems", "--update", "--seeds", "0,1"],
+                         capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert bad.returncode != 0 and "setup differs" in bad.stderr
+    assert (tmp_path / "thesis_findings.md").read_text() == saved  # untouched
+    done = subprocess.run(base + ["--studies", "vsi_systems", "--update"], capture_output=True,
+                          text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    text = (tmp_path / "thesis_findings.md").read_text()
+    assert "### CASSI-VSI beam splitter" in text and "### CASSI-VSI against SD-CASSI" in text
+    verdict_rows = [ln for ln in text[text.index("### Verdicts") :].splitlines() if "seeds:" in ln]
+    assert len(verdict_rows) == 6  # three beam-splitter findings and three against other imagers
+    assert saved.splitlines()[-1] in text  # the saved run's provenance stays
+    assert "Study vsi_systems updated" in text
+    data = json.loads((tmp_path / "thesis_findings.json").read_text())
+    assert {"vsi_design", "vsi_systems"} <= set(data)

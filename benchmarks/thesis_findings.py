@@ -851,7 +851,10 @@ def verdicts(data):
         row(
             "the dual-arm CASSI has the least SAM of the three", "least SAM",
             _spread(sam, "{:+.1f}", "°"), _gain_verdict(sam),
-            "the dual arm's SAM below the better of the other two by the value shown",
+            "ours: the better of CASSI-VSI and SD-CASSI minus the dual arm; mean SAM "
+            + ", ".join(f"{n} {_mean(r, 'sam', system=k):.1f}°" for k, n in (
+                ("dual_camera_cassi", "dual arm"), ("cassi_vsi", "CASSI-VSI"),
+                ("sd_cassi", "SD-CASSI"))),
         )  # fmt: skip
     if "dfa" in data:
         r = data["dfa"]["rows"]

@@ -698,7 +698,7 @@ def rerender(path: Path):
     head, sep, tail = text.partition("### Verdicts\n")
     if not sep:
         raise SystemExit(f"{md} has no verdict table to replace")
-    run_lines = [ln for ln in tail.splitlines() if ln.startswith(("Run ", "Command: "))]
+    run_lines = [ln for ln in tail.splitlines() if ln.startswith(("Run ", "Command: ", "Study "))]
     now = provenance()
     body = [
         *verdicts(data), "", *run_lines, "",

@@ -676,7 +676,8 @@ def merge(out: Path, new: dict, titles: dict, text: list, prov: dict, minutes: f
         ln for ln in verdict_part.splitlines() if ln.startswith(("Run ", "Command: ", "Study "))
     ]
     run_lines.append(
-        f"Study {', '.join(new)} updated {prov['date']} (commit {prov['commit']}, "
+        f"Study {', '.join(new)} updated and every verdict re-computed {prov['date']} "
+        f"(commit {prov['commit']}, "
         f"{minutes:.1f} min): `{prov['command']}`"
     )
     body = [head.rstrip("\n"), ""]

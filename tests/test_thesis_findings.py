@@ -117,6 +117,6 @@ def test_update_puts_one_study_into_a_saved_run(tmp_path):
     verdict_rows = [ln for ln in text[text.index("### Verdicts") :].splitlines() if "seeds:" in ln]
     assert len(verdict_rows) == 6  # three beam-splitter findings and three against other imagers
     assert saved.splitlines()[-1] in text  # the saved run's provenance stays
-    assert "Study vsi_systems updated" in text
+    assert "Study vsi_systems updated and every verdict re-computed" in text
     data = json.loads((tmp_path / "thesis_findings.json").read_text())
     assert {"vsi_design", "vsi_systems"} <= set(data)

@@ -8,7 +8,10 @@ algorithms).
 1. CASSI-VSI (Sec. 3.3): the combined error of Eq. 49 over the beam-splitting
    ratio αT ∈ {0.1 … 1.0} (best expected near 0.7) with OTD and with the
    thesis' A-VSI, and VSI (αT = 0.7) against SD-CASSI with the same code at
-   equal light (the same absolute noise); ``vsi_systems`` (Sec. 3.3.4,
+   equal light (the same absolute noise); ``vsi_noise``: the same αT sweep
+   at 15 and 20 dB (Fig. 21-22, 102), with the panchromatic estimate's PSNR
+   (the reconstruction summed over its bands; best expected at the least
+   αT, Fig. 22A); ``vsi_systems`` (Sec. 3.3.4,
    Fig. 23): ``studies.vsi_comparison`` — CASSI-VSI, SD-CASSI and the
    dual-arm CASSI (a noise-free panchromatic image beside the SD-CASSI
    frame), each at ``--snr`` of its own signal, OTD.
@@ -34,12 +37,13 @@ algorithms).
    tuning scenes, ``method="dl"``) and the Lytro-CASSI baseline (``systems.LytroCASSI``,
    ``method="lytro"``) against OTD-3D and WDCT-3D.
 
-Studies 1, 2 and 4 and ``vsi_systems`` run on the report split's real CAVE
+Studies 1, 2 and 4, ``vsi_noise`` and ``vsi_systems`` run on the report split's real CAVE
 scenes (without the research data the script stops, unless
 ``--allow-photos``); CS2LI builds its fringe scenes from photos.
 
     python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--quick]
-        [--seeds 0,1,2] [--studies vsi_design,vsi,vsi_systems,dfa,sweep,cs2li,table1,table1_dl]
+        [--seeds 0,1,2]
+        [--studies vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,table1,table1_dl]
         [--workers 2] [--out benchmarks/results]
 
 Every study runs for each of ``--seeds`` (codes and noise); tables show means
@@ -130,11 +134,79 @@ def vsi_run(scene, case, size, bands, snr, seed):
         system = systems.CASSIVSI(code, n_bands=bands, alpha_t=alpha_t, shifts=1, wavelengths=wl)
         clean = system.forward(cube)
     res = tc.reconstruct(system, clean + noise, method)
-    return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | _scores(cube, res.cube)
+    pan, pan_est = cube.sum(axis=2), np.asarray(res.cube).sum(axis=2)  # Fig. 22A: Σ over bands
+    return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | _scores(cube, res.cube) | {
+        "pan_psnr": metrics.psnr(pan, pan_est, data_range=float(pan.max()))
+    }  # fmt: skip
+
+
+VSI_ALPHAS = np.round(np.arange(0.1, 1.01, 0.1), 2)
+
+
+def _alpha_summary(vs, names, seeds):
+    """Per-αT means over scenes and seeds of one method's CASSI-VSI rows ``vs``: PSNR, the
+    combined error of Eq. 49, the best αT of each seed (least combined error) and, where the
+    rows have it, the αT of each seed's best panchromatic estimate."""
+    alphas = VSI_ALPHAS
+
+    def grid(key, **match):
+        return np.array([
+            [_mean(vs, key, scene=s, alpha_t=float(a), **match) for a in alphas] for s in names
+        ])  # fmt: skip
+
+    keys = ("psnr", "ssim", "rmse", "sam")
+    arr = {k: grid(k) for k in keys}
+    comb = metrics.combined_error(*(arr[k] for k in keys))
+    best, best_pan = [], []
+    for seed in seeds:
+        per = {k: grid(k, seed=seed) for k in keys}
+        best.append(float(alphas[int(np.argmin(metrics.combined_error(*(per[k] for k in keys))))]))
+        if all("pan_psnr" in r for r in vs):
+            best_pan.append(float(alphas[int(np.argmax(grid("pan_psnr", seed=seed).mean(0)))]))
+    return {
+        "psnr": arr["psnr"].mean(0).tolist(), "combined": comb.tolist(),
+        "best_alpha_t": float(alphas[int(np.argmin(comb))]), "best_alpha_t_per_seed": best,
+        **({"best_pan_alpha_t_per_seed": best_pan} if best_pan else {}),
+    }  # fmt: skip
+
+
+def vsi_noise_study(args, log, client=None):
+    """Fig. 21-22 and 102 at 15 and 20 dB: the αT sweep of :func:`vsi_study` (CASSI-VSI only)
+    at each SNR, with the panchromatic estimate's PSNR (Fig. 22A)."""
+    names, methods, snrs = _scene_names(), args.method.split(","), (15.0, 20.0)
+    rows = tc.studies.sweep(
+        {"scene": names, "case": [(m, float(a)) for m in methods for a in VSI_ALPHAS],
+         "snr": list(snrs), "seed": list(args.seeds)},
+        partial(vsi_run, size=args.size, bands=args.bands), client=client, progress=False,
+    )  # fmt: skip
+    for r in rows:
+        r["method"], r["alpha_t"] = r.pop("case")
+        log(f"VSI {r['snr']:g} dB {r['scene']:12s} {r['method']:5s} αT={r['alpha_t']:.1f} "
+            f"seed {r['seed']} PSNR {r['psnr']:.2f}")  # fmt: skip
+    lines = [
+        f"Scenes {', '.join(names)}; seeds {', '.join(map(str, args.seeds))} (means); the "
+        "panchromatic estimate is the reconstruction summed over its bands.\n",
+        "| SNR | method | αT | " + " | ".join(f"{a:.1f}" for a in VSI_ALPHAS) + " |",
+        "|---|---|---" + "|---" * len(VSI_ALPHAS) + "|",
+    ]
+    summary = {}
+    for snr in snrs:
+        for method in methods:
+            vs = [r for r in rows if r["method"] == method and r["snr"] == snr]
+            sm = summary.setdefault(f"{snr:g}", {})[method] = _alpha_summary(vs, names, args.seeds)
+            pan = [_mean(vs, "pan_psnr", alpha_t=float(a)) for a in VSI_ALPHAS]
+            for label, vals, fmt in (
+                ("mean PSNR dB", sm["psnr"], "{:.2f}"),
+                ("combined error % (Eq. 49)", sm["combined"], "{:.1f}"),
+                ("panchromatic PSNR dB", pan, "{:.2f}"),
+            ):
+                lines.append(f"| {snr:g} dB | {method} | {label} | "
+                             + " | ".join(fmt.format(v) for v in vals) + " |")  # fmt: skip
+    return "\n".join(lines), {"rows": rows, **summary}
 
 
 def vsi_study(args, log, client=None):
-    alphas = np.round(np.arange(0.1, 1.01, 0.1), 2)
+    alphas = VSI_ALPHAS
     names, methods = _scene_names(), args.method.split(",")
     cases = [
         (m, a)
@@ -159,36 +231,19 @@ def vsi_study(args, log, client=None):
     summary, notes = {}, []
     for method in methods:
         vs = [r for r in rows if r["system"] == "cassi_vsi" and r["method"] == method]
-        arr = {  # (scene, αT), each the mean over seeds
-            k: np.array([[_mean(vs, k, scene=s, alpha_t=float(a)) for a in alphas] for s in names])
-            for k in ("psnr", "ssim", "rmse", "sam")
-        }
-        comb = metrics.combined_error(arr["psnr"], arr["ssim"], arr["rmse"], arr["sam"])
-        best_per_seed = []
-        for seed in args.seeds:
-            per = {
-                k: np.array([
-                    [_mean(vs, k, scene=s, alpha_t=float(a), seed=seed) for a in alphas]
-                    for s in names
-                ])
-                for k in ("psnr", "ssim", "rmse", "sam")
-            }  # fmt: skip
-            c = metrics.combined_error(per["psnr"], per["ssim"], per["rmse"], per["sam"])
-            best_per_seed.append(float(alphas[int(np.argmin(c))]))
-        lines.append(
-            f"| {method} | mean PSNR dB | " + " | ".join(f"{v:.2f}" for v in arr["psnr"].mean(0))
-            + " |"
-        )  # fmt: skip
-        lines.append(
-            f"| {method} | combined error % (Eq. 49) | " + " | ".join(f"{v:.1f}" for v in comb)
-            + " |"
-        )  # fmt: skip
+        sm = _alpha_summary(vs, names, args.seeds)
+        for label, vals, fmt in (
+            ("mean PSNR dB", sm["psnr"], "{:.2f}"),
+            ("combined error % (Eq. 49)", sm["combined"], "{:.1f}"),
+        ):
+            lines.append(f"| {method} | {label} | " + " | ".join(fmt.format(v) for v in vals)
+                         + " |")  # fmt: skip
         sd_rows = [r for r in rows if r["system"] == "sd_cassi" and r["method"] == method]
         v07 = [r for r in vs if r["alpha_t"] == 0.7]
         summary[method] = {
-            "best_alpha_t": float(alphas[int(np.argmin(comb))]),
-            "best_alpha_t_per_seed": best_per_seed,
-            "combined": comb.tolist(),
+            "best_alpha_t": sm["best_alpha_t"],
+            "best_alpha_t_per_seed": sm["best_alpha_t_per_seed"],
+            "combined": sm["combined"],
             "vsi_0.7": {k: float(np.mean([r[k] for r in v07])) for k in ("psnr", "ssim", "sam")},
         }
         if sd_rows:
@@ -531,7 +586,8 @@ def main(argv=None):
         "--method", default="otd,avsi", help="reconstructions of the VSI study, comma-separated"
     )
     ap.add_argument(
-        "--studies", default="vsi_design,vsi,vsi_systems,dfa,sweep,cs2li,table1,table1_dl"
+        "--studies",
+        default="vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,table1,table1_dl",
     )
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true", help="32×32×8, one scene: a smoke run")
@@ -574,6 +630,9 @@ def main(argv=None):
         "vsi_design": (
             "CASSI-VSI beam splitter: conditioning, arm SNR, dynamic range (Sec. 3.3.1)",
             vsi_design_study,
+        ),
+        "vsi_noise": (
+            "CASSI-VSI: beam-splitting ratio at 15 and 20 dB (Fig. 21-22, 102)", vsi_noise_study
         ),
         "vsi_systems": (
             "CASSI-VSI against SD-CASSI and the dual-arm CASSI (Sec. 3.3.4)", vsi_systems_study
@@ -827,6 +886,26 @@ def verdicts(data):
                 _spread(gains, unit=" dB"), _gain_verdict(gains),
                 "same code, same absolute noise",
             )  # fmt: skip
+    if "vsi_noise" in data:
+        v = data["vsi_noise"]
+        for snr in (k for k in v if k != "rows"):
+            for method, sm in v[snr].items():
+                vals = sm["best_alpha_t_per_seed"]
+                row(
+                    f"best αT of CASSI-VSI ({method.upper()}, Eq. 49), {snr} dB (Fig. 22B)",
+                    "≈ 0.7 at every noise level", _spread(vals, "{:.1f}"),
+                    _range_verdict(vals, 0.6, 0.8),
+                    f"combined error at αT 0.1 … 1.0: {min(sm['combined']):.1f} to "
+                    f"{max(sm['combined']):.1f} %",
+                )  # fmt: skip
+                pan = sm.get("best_pan_alpha_t_per_seed")
+                if pan:
+                    row(
+                        f"CASSI-VSI panchromatic estimate best at the least αT ({method.upper()}, "
+                        f"{snr} dB, Fig. 22A)", "αT → 0 (0.1 in this grid)",
+                        _spread(pan, "{:.1f}"), _range_verdict(pan, 0.1, 0.1),
+                        "the reconstruction summed over its bands against the true one",
+                    )  # fmt: skip
     if "vsi_systems" in data:
         r = data["vsi_systems"]["rows"]
 

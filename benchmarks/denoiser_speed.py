@@ -113,8 +113,9 @@ def _layout_table(torch, nets, repeats: int) -> list:
     ]
     for p, den in nets.items():
         dtype = torch.bfloat16 if p == "bfloat16" else torch.float32
-        plain = copy.deepcopy(den.net).to(dtype)
-        fast = copy.deepcopy(plain).to(memory_format=torch.channels_last)  # as the denoiser runs
+        # the denoiser keeps its own network channels-last on a CPU: both layouts set here
+        plain = copy.deepcopy(den.net).to(dtype).to(memory_format=torch.contiguous_format)
+        fast = copy.deepcopy(plain).to(memory_format=torch.channels_last)
         y = torch.rand(1, 12, 256, 256, generator=torch.Generator().manual_seed(0)).to(dtype)
         s = torch.tensor([0.05], dtype=dtype)
         with torch.no_grad():

@@ -30,6 +30,9 @@ algorithms).
    unwrapping assumed for both, so only the reconstruction is compared);
    depth PSNR uses the true height's range.  Both fringe orientations: the
    phase running along the axis CASSI shears, and across it.
+   ``cs2li_code`` (Sec. 6.3.2, Fig. 58): ``studies.cs2li_code_design`` —
+   the colour-coded aperture's #f ∈ {1, 2, 6, Nλ} and κ ∈ {25, 50, 75 %}
+   against the report scenes' spectra and the height map.
 4. C3SLFI Table 1 (Sec. 5.3.2): ``studies.c3slfi_table`` — OTD and WDCT on
    the 3-D and 5-D forms, K = 2, 3 snapshots of 31 bands, 15 / 20 / 50 dB,
    on the real scenes and on two photo-derived ones; ``table1_dl``: the
@@ -37,13 +40,14 @@ algorithms).
    tuning scenes, ``method="dl"``) and the Lytro-CASSI baseline (``systems.LytroCASSI``,
    ``method="lytro"``) against OTD-3D and WDCT-3D.
 
-Studies 1, 2 and 4, ``vsi_noise`` and ``vsi_systems`` run on the report split's real CAVE
-scenes (without the research data the script stops, unless
-``--allow-photos``); CS2LI builds its fringe scenes from photos.
+Studies 1, 2 and 4, ``vsi_noise``, ``vsi_systems`` and ``cs2li_code`` run on
+the report split's real CAVE scenes (without the research data the script
+stops, unless ``--allow-photos``); CS2LI builds its fringe scenes from photos.
 
     python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--quick]
         [--seeds 0,1,2]
-        [--studies vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,table1,table1_dl]
+        [--studies vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,cs2li_code,table1,
+                   table1_dl]
         [--workers 2] [--out benchmarks/results]
 
 Every study runs for each of ``--seeds`` (codes and noise); tables show means
@@ -203,6 +207,36 @@ def vsi_noise_study(args, log, client=None):
                 lines.append(f"| {snr:g} dB | {method} | {label} | "
                              + " | ".join(fmt.format(v) for v in vals) + " |")  # fmt: skip
     return "\n".join(lines), {"rows": rows, **summary}
+
+
+def cs2li_code_study(args, log, client=None):
+    """Sec. 6.3.2, Fig. 58: ``studies.cs2li_code_design`` — #f ∈ {1, 2, 6, Nλ} × κ ∈ {25, 50,
+    75 %}, the report scenes' reflectance under one fringe frequency (4 steps, across the
+    dispersion), OTD."""
+    names, filters, kappas = _scene_names(), (1, 2, 6, args.bands), (0.25, 0.5, 0.75)
+    rows = []
+    for scene in names:
+        for r in tc.studies.cs2li_code_design(
+            filters, kappas, scene=scene, shape=(args.size, args.size), n_bands=args.bands,
+            snr_db=args.snr, seeds=list(args.seeds), client=client, progress=False,
+        ):  # fmt: skip
+            rows.append({"scene": scene, **r})
+            log(f"CS2LI code {scene:12s} #f {r['n_filters']:2d} κ {r['transmittance']:.2f} seed "
+                f"{r['seed']} SAM {r['sam']:.2f} depth PSNR {r['depth_psnr']:.2f}")  # fmt: skip
+    lines = [
+        f"Scenes {', '.join(names)} (reflectance) under one fringe frequency, 4 phase steps, "
+        f"fringes across the dispersion; seeds {', '.join(map(str, args.seeds))}; OTD "
+        "(means).\n",
+        "| #f | κ | PSNR dB | SSIM | SAM ° | RMSE | depth PSNR dB | depth SSIM |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for f in filters:
+        for k in kappas:
+            m = {key: _mean(rows, key, n_filters=f, transmittance=k) for key in (
+                "psnr", "ssim", "sam", "rmse", "depth_psnr", "depth_ssim")}  # fmt: skip
+            lines.append(f"| {f} | {k:.2f} | {m['psnr']:.2f} | {m['ssim']:.3f} | {m['sam']:.2f} | "
+                         f"{m['rmse']:.4f} | {m['depth_psnr']:.2f} | {m['depth_ssim']:.3f} |")
+    return "\n".join(lines), {"rows": rows, "filters": list(filters), "kappas": list(kappas)}
 
 
 def vsi_study(args, log, client=None):
@@ -587,7 +621,8 @@ def main(argv=None):
     )
     ap.add_argument(
         "--studies",
-        default="vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,table1,table1_dl",
+        default="vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,cs2li_code,table1,"
+        "table1_dl",
     )
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true", help="32×32×8, one scene: a smoke run")
@@ -633,6 +668,10 @@ def main(argv=None):
         ),
         "vsi_noise": (
             "CASSI-VSI: beam-splitting ratio at 15 and 20 dB (Fig. 21-22, 102)", vsi_noise_study
+        ),
+        "cs2li_code": (
+            "CS2LI colour-coded aperture: #f and κ against spectra and depth (Sec. 6.3.2)",
+            cs2li_code_study,
         ),
         "vsi_systems": (
             "CASSI-VSI against SD-CASSI and the dual-arm CASSI (Sec. 3.3.4)", vsi_systems_study
@@ -825,6 +864,17 @@ def _range_verdict(values, lo, hi) -> str:
     return f"inconclusive ({k} of {n} seeds in {lo:g}-{hi:g})"
 
 
+def _match_verdict(values, target) -> str:
+    """A "best at" finding from each seed's best case: reproduced when every seed's is
+    ``target``, not reproduced when none is, else how many are."""
+    n, k = len(values), sum(v == target for v in values)
+    if k == n:
+        return "reproduced"
+    if k == 0:
+        return "not reproduced"
+    return f"inconclusive ({k} of {n} seeds)"
+
+
 def _direction(values) -> str:
     """Whether every seed gained, lost, or the seeds disagree: the sign behind a range
     verdict."""
@@ -979,6 +1029,35 @@ def verdicts(data):
                 "same code, light and frame count; "
                 + ("mean gain above the thesis' +4 dB" if g.mean() > 4.0
                    else "mean gain within 0 … +4 dB" if g.mean() >= 0 else "mean loss"),
+            )  # fmt: skip
+    if "cs2li_code" in data:
+        v = data["cs2li_code"]
+        r, nl = v["rows"], max(v["filters"])
+        cells = [(f, k) for f in v["filters"] for k in v["kappas"]]
+
+        def best(key, sign):
+            return [min(cells, key=lambda c, rs=rs: sign * _mean(
+                rs, key, n_filters=c[0], transmittance=c[1])) for rs in (  # fmt: skip
+                [x for x in r if x["seed"] == q] for q in sorted({x["seed"] for x in r}))]
+
+        def cell(c):
+            return f"#f {c[0]}, κ {c[1]:.2f}"
+
+        for finding, key, sign, target in (
+            ("least SAM", "sam", 1, (nl, 0.25)),
+            ("least RMSE", "rmse", 1, (nl, 0.25)),
+            ("highest SSIM", "ssim", -1, (nl, 0.75)),
+            ("best depth (PSNR of the height map)", "depth_psnr", -1, (1, 0.75)),
+        ):
+            b = best(key, sign)
+            thesis = cell(target).replace(f"#f {nl},", f"#f = Nλ ({nl}),")
+            row(
+                f"CS2LI colour code: {finding} (Fig. 58)", thesis,
+                "; ".join(f"seed {q}: {cell(c)}" for q, c in enumerate(b)),
+                _match_verdict(b, target),
+                f"{cell(target)}: {_mean(r, key, n_filters=target[0], transmittance=target[1]):.3f}"
+                f"; the thesis' trade-off #f 6, κ 0.50: "
+                f"{_mean(r, key, n_filters=6, transmittance=0.5):.3f} (means)",
             )  # fmt: skip
     if "table1" in data:
         r = data["table1"]["rows"]

@@ -37,3 +37,32 @@ def test_a_few_filters_beat_one_narrow_filter_per_band_on_a_real_scene():
     # 48×48 cave.face at 30 dB: #f = 4 27.62 dB, #f = 16 25.62 dB (an ideal narrow filter per
     # open pixel leaves most detector pixels dark)
     assert psnr[4] > psnr[16] + 1.0, psnr
+
+
+def test_cs2li_code_design_records_spectra_and_depth():
+    recs = studies.cs2li_code_design(
+        (1, 4), (0.5,), scene="colorchecker", shape=(16, 16), n_bands=4, seeds=(0, 1),
+        progress=False, max_iter=3, pan_iter=3,
+    )  # fmt: skip
+    assert [(r["n_filters"], r["seed"]) for r in recs] == [(1, 0), (1, 1), (4, 0), (4, 1)]
+    for r in recs:
+        for key in ("psnr", "ssim", "sam", "rmse", "depth_psnr", "depth_ssim", "depth_rmse"):
+            assert np.isfinite(r[key]), (key, r)
+    for bad, match in (
+        ({"filters": (5,)}, "#f"), ({"filters": (2.5,)}, "#f"), ({"transmittances": (0,)}, "κ"),
+        ({"transmittances": (1.5,)}, "κ"), ({"filters": ()}, "at least one"),
+        ({"filters": "12"}, "sequences"),
+    ):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            studies.cs2li_code_design(**{"n_bands": 4, "scene": "colorchecker", **bad})
+
+
+def test_cs2li_depth_prefers_a_binary_code_to_one_narrow_filter_per_band():
+    try:
+        datasets.data_dir()
+    except FileNotFoundError:
+        pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
+    recs = studies.cs2li_code_design((1, 8), (0.75,), shape=(32, 32), n_bands=8, progress=False)
+    depth = {r["n_filters"]: r["depth_psnr"] for r in recs}
+    # 32×32×8 cave.face, 30 dB, OTD: binary 32.50 dB, #f = 8 15.52 dB (Fig. 58B's finding)
+    assert depth[1] > depth[8] + 5.0, depth

@@ -6,9 +6,11 @@ from __future__ import annotations
 import time
 from functools import lru_cache, partial
 
+import numpy as np
+
 __all__ = [
-    "colour_code_design", "colour_code_run", "c3slfi_table", "c3slfi_table_run",
-    "c3slfi_dictionary",
+    "colour_code_design", "colour_code_run", "cs2li_code_design", "cs2li_code_run",
+    "c3slfi_table", "c3slfi_table_run", "c3slfi_dictionary",
 ]  # fmt: skip
 
 
@@ -103,6 +105,127 @@ def colour_code_design(
     run = partial(  # a module-level function: picklable for Dask workers
         colour_code_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
         method=method, **options,
+    )  # fmt: skip
+    return sweep(grid, run, client=client, progress=progress)
+
+
+def _check_code_grid(filters, transmittances, n_bands):
+    from ..validate import integer, number
+
+    n_bands = integer("n_bands", n_bands, low=1)
+    if isinstance(filters, (str, bytes)) or isinstance(transmittances, (str, bytes)):
+        raise ValueError("filters and transmittances must be sequences of numbers")
+    filters = [integer("#f", f, low=1, high=n_bands) for f in filters]
+    kappas = [number("κ (transmittance)", k, low=0, low_open=True, high=1) for k in transmittances]
+    if not filters or not kappas:
+        raise ValueError("filters and transmittances must each hold at least one value")
+    return filters, kappas, n_bands
+
+
+def cs2li_code_run(
+    n_filters, transmittance, *, scene="cave.face", shape=(48, 48), n_bands=8, n_patterns=4,
+    shifts=1, snr_db=30.0, fringe_axis=0, method="otd", seed=0, **options,
+) -> dict:  # fmt: skip
+    """One cell of :func:`cs2li_code_design`: CS2LI with a colour-coded aperture of
+    ``n_filters`` filters and transmittance ``transmittance``; returns the reflectance's PSNR /
+    SSIM / SAM / RMSE and the height map's PSNR / SSIM / RMSE, and seconds.
+
+    The scene is :func:`tensor_cosdi.scenes.structured_light`'s seeded height map and fringes
+    (one frequency, ``n_patterns`` phase steps) with ``scene``'s reflectance.  The height comes
+    from the wrapped phase of the reconstruction summed over its bands, unwrapped with the true
+    phase (perfect unwrapping: only the reconstruction is judged).
+    """
+    from dataclasses import replace
+
+    from .. import depth, metrics, scenes
+    from ..solvers import reconstruct
+    from ..systems import CS2LI, fringe_cube, wavelengths_for
+
+    (n_filters,), (transmittance,), n_bands = _check_code_grid(
+        [n_filters], [transmittance], n_bands
+    )  # fmt: skip
+    shape = tuple(shape)
+    wl = wavelengths_for(None, n_bands)
+    sl = scenes.structured_light(shape, wl, frequencies=(4.0,), fringe_axis=fringe_axis, rng=seed)
+    sl = replace(sl, reflectance=np.asarray(scenes.scene_cube(scene, shape, wl)))
+    cube = np.asarray(fringe_cube(sl.reflectance, sl.phase, n_steps=n_patterns, amplitude=0.5))
+    system = CS2LI.example(  # the colour-coded aperture of #f filters, κ open, seeded
+        (*shape, n_bands, n_patterns), rng=seed, n_filters=n_filters,
+        transmittance=transmittance, shifts=shifts, wavelengths=wl,
+    )  # fmt: skip
+    g = system.simulate(cube, snr_db=snr_db, rng=seed)
+    t0 = time.perf_counter()
+    est = np.asarray(reconstruct(system, g, method, **options).cube)
+    seconds = time.perf_counter() - t0
+    refl = system.spectral_view(est)
+    phi = depth.wrapped_phase(est.sum(axis=2))
+    height = sl.height + depth.wrap(phi - sl.phase[..., 0]) / sl.phase_per_height
+    top = float(sl.height.max())
+    return {
+        "psnr": metrics.psnr(sl.reflectance, refl),
+        "ssim": metrics.ssim(sl.reflectance, refl),
+        "sam": metrics.sam(sl.reflectance, refl),
+        "rmse": metrics.rmse(sl.reflectance, refl),
+        "depth_psnr": metrics.psnr(sl.height, height, data_range=top),
+        "depth_ssim": metrics.ssim(sl.height, height, data_range=top),
+        "depth_rmse": metrics.rmse(sl.height, height),
+        "seconds": seconds,
+    }
+
+
+def cs2li_code_design(
+    filters=None, transmittances=(0.25, 0.5, 0.75), *, scene="cave.face",
+    shape=(48, 48), n_bands=8, n_patterns=4, snr_db=30.0, fringe_axis=0, method="otd",
+    seeds=(0,), client=None, progress=True, **options,
+) -> list[dict]:  # fmt: skip
+    """CS2LI's colour-coded aperture against its number of filters ``#f`` and transmittance
+    ``κ``, judged on the spectra *and* the depth (thesis Sec. 6.3.2, Fig. 58).
+
+    The thesis finds the least SAM and RMSE at ``#f = Nλ, κ = 25 %``, the best depth at
+    ``#f = 1, κ = 75 %`` (depth nearly invariant to ``#f``) and picks ``#f = 6, κ = 50 %``
+    as the trade-off.  Each cell is :func:`cs2li_code_run`.
+
+    Parameters
+    ----------
+    filters : sequence of int, optional
+        ``#f`` values (``1 ≤ #f ≤ n_bands``; 1 is a binary code); default the thesis'
+        ``1, 2, 6, Nλ`` (those up to ``n_bands``).
+    transmittances : sequence of float
+        ``κ`` values in (0, 1].
+    scene : str
+        The reflectance (a name of :data:`tensor_cosdi.scenes.SCENES`; judge it on a real
+        ``"cave.<name>"`` scene).
+    shape, n_bands, n_patterns, snr_db, fringe_axis
+        Spatial size, bands, phase steps, measurement SNR and the fringes' axis (0: across
+        the dispersion, 1: along it).
+    method : str
+        The reconstruction (``options`` go to it).
+    seeds, client, progress
+        As in :func:`colour_code_design`.
+
+    Returns
+    -------
+    list of dict
+        One record per ``(#f, κ, seed)`` with the scores of :func:`cs2li_code_run`.
+
+    Examples
+    --------
+    >>> from tensor_cosdi import studies
+    >>> recs = studies.cs2li_code_design((1, 4), (0.5,), scene="colorchecker", shape=(16, 16),
+    ...                                  n_bands=4, progress=False, max_iter=3, pan_iter=3)
+    >>> [(r["n_filters"], r["transmittance"]) for r in recs]
+    [(1, 0.5), (4, 0.5)]
+    """
+    from .sweeping import sweep
+
+    if filters is None:
+        n = n_bands if isinstance(n_bands, int) and n_bands >= 1 else 1  # checked just below
+        filters = sorted({f for f in (1, 2, 6, n) if f <= n})
+    filters, kappas, n_bands = _check_code_grid(filters, transmittances, n_bands)
+    grid = {"n_filters": filters, "transmittance": kappas, "seed": list(seeds)}
+    run = partial(
+        cs2li_code_run, scene=scene, shape=tuple(shape), n_bands=n_bands,
+        n_patterns=n_patterns, snr_db=snr_db, fringe_axis=fringe_axis, method=method, **options,
     )  # fmt: skip
     return sweep(grid, run, client=client, progress=progress)
 

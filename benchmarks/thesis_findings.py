@@ -1102,15 +1102,16 @@ def verdicts(data):
             ss = diff("ssim", binary, sl)
             row(
                 f"CS2LI (binary code) over SL + SD-CASSI, reflectance SSIM, {snr:g} dB (Fig. 56A)",
-                "up to +0.10", _spread(ss, "{:+.3f}"), _gain_verdict(ss),
-                f"SAM difference {diff('sam', binary, sl).mean():+.2f}° (mean; the thesis: "
-                "comparable)",
+                "up to +0.10", _spread(ss, "{:+.3f}"), _range_verdict(ss, 0.0, 0.10),
+                f"gain {_direction(ss)}; SAM difference {diff('sam', binary, sl).mean():+.2f}° "
+                "(mean; the thesis: comparable)",
             )  # fmt: skip
             c = diff("cube_psnr", colour, binary)
             row(
                 f"CS2LI colour code (#f 6, κ 0.50) over the binary code, {snr:g} dB (Fig. 56)",
-                "up to +1 dB, up to 0.5° less SAM", _spread(c, unit=" dB"), _gain_verdict(c),
-                f"SAM: {_gain_verdict(-diff('sam', colour, binary))}; depth "
+                "up to +1 dB, up to 0.5° less SAM", _spread(c, unit=" dB"),
+                _range_verdict(c, 0.0, 1.0),
+                f"gain {_direction(c)}; SAM: {_gain_verdict(-diff('sam', colour, binary))}; depth "
                 f"{diff('depth_psnr', colour, binary).mean():+.2f} dB (mean)",
             )  # fmt: skip
     if "cs2li_code" in data:

@@ -128,25 +128,14 @@ def _scene_names():
 
 def vsi_run(scene, case, size, bands, snr, seed):
     """One VSI cell: ``case = (method, αT)``, αT ``None`` for SD-CASSI with the same code and the
-    same absolute noise (equal light)."""
+    same absolute noise (equal light): ``studies.imagers.vsi_ratio_run``."""
     method, alpha_t = case
-    wl = scenes.default_wavelengths(bands)
-    code = tc.codes.random_binary((size, size), rng=seed)
-    cube = scenes.scene_cube(scene, (size, size), wl)
-    sd = systems.SDCASSI(code, n_bands=bands, shifts=1, wavelengths=wl)
-    clean_sd = sd.forward(cube)
-    sigma = np.sqrt(np.mean(clean_sd**2) / 10 ** (snr / 10))  # equal light: one absolute level
-    noise = np.random.default_rng(seed + 1).standard_normal(clean_sd.shape) * sigma
-    if alpha_t is None:
-        system, clean = sd, clean_sd
-    else:
-        system = systems.CASSIVSI(code, n_bands=bands, alpha_t=alpha_t, shifts=1, wavelengths=wl)
-        clean = system.forward(cube)
-    res = tc.reconstruct(system, clean + noise, method)
-    pan, pan_est = cube.sum(axis=2), np.asarray(res.cube).sum(axis=2)  # Fig. 22A: Σ over bands
-    return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | _scores(cube, res.cube) | {
-        "pan_psnr": metrics.psnr(pan, pan_est, data_range=float(pan.max()))
-    }  # fmt: skip
+    r = tc.studies.imagers.vsi_ratio_run(
+        alpha_t, scene=scene, shape=(size, size), n_bands=bands, snr_db=snr, method=method,
+        seed=seed,
+    )  # fmt: skip
+    r.pop("seconds")
+    return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | r
 
 
 VSI_ALPHAS = np.round(np.arange(0.1, 1.01, 0.1), 2)

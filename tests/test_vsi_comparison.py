@@ -67,3 +67,35 @@ def test_side_information_helps_on_a_real_scene():
     # 32×32×8 cave.face, 30 dB, OTD: SD-CASSI 28.32 dB, CASSI-VSI 29.11, dual arm 32.37
     assert psnr["cassi_vsi"] > psnr["sd_cassi"] + 0.3, psnr
     assert psnr["dual_camera_cassi"] > psnr["cassi_vsi"] + 1.5, psnr
+
+
+def test_vsi_ratio_records_and_equal_light():
+    rows = studies.vsi_ratio(("colorchecker",), (None, 0.5, 1.0), shape=(16, 16), n_bands=4,
+                             progress=False, max_iter=5, pan_iter=5)  # fmt: skip
+    assert [r["alpha_t"] for r in rows] == [None, 0.5, 1.0]
+    for r in rows:
+        assert {"psnr", "ssim", "rmse", "sam", "pan_psnr", "seconds"} <= set(r)
+    # αT = 1 sends all the light through the prism: SD-CASSI with the same code and noise
+    assert rows[2]["psnr"] == pytest.approx(rows[0]["psnr"], abs=1e-6)
+    for kwargs, match in (
+        ({"alphas": (1.2,)}, "alpha_t"), ({"alphas": ()}, "at least one"),
+        ({"scenes": "chelsea"}, "not one string"), ({"n_bands": 0}, "n_bands"),
+    ):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            studies.vsi_ratio(**{"scenes": ("chelsea",), "shape": (8, 8), "n_bands": 4,
+                                 "progress": False, **kwargs})  # fmt: skip
+
+
+def test_the_panchromatic_estimate_gains_as_light_goes_to_the_grayscale_arm():
+    try:
+        datasets.data_dir()
+    except FileNotFoundError:
+        pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
+    rows = studies.vsi_ratio(("cave.face",), (0.1, 0.7, 1.0), shape=(32, 32), n_bands=8,
+                             snr_db=20.0, progress=False)  # fmt: skip
+    pan = {r["alpha_t"]: r["pan_psnr"] for r in rows}
+    psnr = {r["alpha_t"]: r["psnr"] for r in rows}
+    # 32×32×8 cave.face, 20 dB, OTD: panchromatic 27.82 / 25.59 / 25.39 dB; cube 19.73 /
+    # 25.78 / 25.50 dB
+    assert pan[0.1] > pan[0.7] + 1.0 and pan[0.7] > pan[1.0], pan
+    assert psnr[0.7] > psnr[0.1] + 3.0, psnr

@@ -11,7 +11,7 @@ from ..optics.design import prism_grid
 from .cluster import local_client
 from .condition import conditioning, conditioning_design, vsi_arms
 from .design import c3slfi_table, colour_code_design, cs2li_code_design
-from .imagers import vsi_comparison
+from .imagers import vsi_comparison, vsi_ratio
 from .problems import (
     SCENES,
     SYSTEMS,
@@ -44,6 +44,7 @@ __all__ = [
     "colour_code_design",
     "cs2li_code_design",
     "vsi_comparison",
+    "vsi_ratio",
     "zernike_design",
     "c3slfi_table",
     "reconstruction_run",

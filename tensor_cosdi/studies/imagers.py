@@ -1,12 +1,20 @@
-"""Imagers against each other on the same scene and code (re-exported by
-:mod:`tensor_cosdi.studies`)."""
+"""CASSI-VSI studies: its beam-splitting ratio, and the imagers against each other on the same
+scene and code (re-exported by :mod:`tensor_cosdi.studies`)."""
 
 from __future__ import annotations
 
 import time
 from functools import partial
 
-__all__ = ["VSI_COMPARISON_SYSTEMS", "vsi_comparison", "vsi_comparison_run"]
+import numpy as np
+
+__all__ = [
+    "VSI_COMPARISON_SYSTEMS", "vsi_comparison", "vsi_comparison_run", "vsi_ratio",
+    "vsi_ratio_run", "VSI_RATIOS",
+]  # fmt: skip
+
+#: The αT grid of the thesis' splitting-ratio study (Fig. 21-22).
+VSI_RATIOS = tuple(round(0.1 * k, 1) for k in range(1, 11))
 
 #: The imagers of thesis Sec. 3.3.4 (Fig. 23): SD-CASSI, CASSI-VSI and the dual-arm CASSI (an
 #: SD-CASSI frame plus a panchromatic camera).
@@ -121,4 +129,106 @@ def vsi_comparison(
         alpha_t=alpha_t, method=method, **options,
     )  # fmt: skip
     grid = {"system": systems, "scene": scenes, "seed": list(seeds)}
+    return sweep(grid, run, client=client, progress=progress)
+
+
+def vsi_ratio_run(
+    alpha_t, *, scene="cave.face", shape=(64, 64), n_bands=16, shifts=1, snr_db=30.0,
+    method="otd", seed=0, **options,
+) -> dict:  # fmt: skip
+    """One cell of :func:`vsi_ratio`: CASSI-VSI with splitting ratio ``alpha_t`` (``None``:
+    SD-CASSI with the same code) imaging ``scene``; returns PSNR / SSIM / RMSE / SAM, the
+    panchromatic estimate's PSNR and seconds.
+
+    Equal light: the noise is one absolute level, the one that puts SD-CASSI's measurement at
+    ``snr_db`` (``None``: no noise), so a ratio that sends light to the grayscale arm pays for
+    it in the dispersed one.  The panchromatic estimate is the reconstruction summed over its
+    bands, scored against the scene's.
+    """
+    from .. import codes, metrics, scenes
+    from ..solvers import reconstruct
+    from ..systems import CASSIVSI, SDCASSI, wavelengths_for
+    from ..validate import integer, number
+
+    shape = tuple(shape)
+    wl = wavelengths_for(None, integer("n_bands", n_bands, low=1))
+    if alpha_t is not None:
+        alpha_t = number("alpha_t", alpha_t, low=0, high=1)
+    cube = np.asarray(scenes.scene_cube(scene, shape, wl))
+    code = codes.random_binary(shape, rng=seed)
+    sd = SDCASSI(code, n_bands=len(wl), shifts=shifts, wavelengths=wl)
+    clean = np.asarray(sd.forward(cube))
+    system = sd
+    if alpha_t is not None:
+        system = CASSIVSI(code, n_bands=len(wl), alpha_t=alpha_t, shifts=shifts, wavelengths=wl)
+    g = clean if system is sd else np.asarray(system.forward(cube))
+    if snr_db is not None:
+        from ..noise import check_snr_db
+
+        sigma = np.sqrt(np.mean(clean**2) / 10 ** (check_snr_db(snr_db) / 10))
+        g = g + np.random.default_rng(seed + 1).standard_normal(g.shape) * sigma
+    t0 = time.perf_counter()
+    est = np.asarray(reconstruct(system, g, method, **options).cube)
+    seconds = time.perf_counter() - t0
+    pan, pan_est = cube.sum(axis=2), est.sum(axis=2)
+    return {
+        "psnr": metrics.psnr(cube, est), "ssim": metrics.ssim(cube, est),
+        "rmse": metrics.rmse(cube, est), "sam": metrics.sam(cube, est),
+        "pan_psnr": metrics.psnr(pan, pan_est, data_range=float(pan.max())),
+        "seconds": seconds,
+    }  # fmt: skip
+
+
+def vsi_ratio(
+    scenes=("cave.face",), alphas=VSI_RATIOS, *, shape=(64, 64), n_bands=16, shifts=1,
+    snr_db=30.0, method="otd", seeds=(0,), client=None, progress=True, **options,
+) -> list[dict]:  # fmt: skip
+    """CASSI-VSI's beam-splitting ratio αT at equal light (thesis Sec. 3.3.2-3.3.3, Fig. 21-22,
+    102): quality over αT, the combined error of Eq. 49 that picks one ratio
+    (:func:`tensor_cosdi.metrics.combined_error`; the thesis finds ≈ 0.7 at 15, 20 and 30 dB)
+    and the panchromatic estimate, best as αT → 0 (Fig. 22A).  Each cell is
+    :func:`vsi_ratio_run`; ``None`` in ``alphas`` adds SD-CASSI with the same code.
+
+    Parameters
+    ----------
+    scenes : sequence of str
+        Names of :data:`tensor_cosdi.scenes.SCENES` (real ``"cave.<name>"`` scenes to judge).
+    alphas : sequence of float or None
+        Splitting ratios in [0, 1] (default :data:`VSI_RATIOS`).
+    shape, n_bands, shifts, snr_db
+        The cube's size, pixels of dispersion per band and SD-CASSI's SNR (the one absolute
+        noise level of every cell).
+    method : str
+        The reconstruction (``"otd"``, or the thesis' ``"avsi"`` for CASSI-VSI only).
+    seeds, client, progress
+        As in :func:`~tensor_cosdi.studies.sweep`.
+    **options
+        Passed to the reconstruction.
+
+    Returns
+    -------
+    list of dict
+        One record per scene × αT × seed: PSNR, SSIM, RMSE, SAM, ``pan_psnr`` and seconds.
+
+    Examples
+    --------
+    >>> rows = vsi_ratio(("chelsea",), (0.3, 0.7), shape=(16, 16), n_bands=4, progress=False,
+    ...                  max_iter=5, pan_iter=5)
+    >>> [r["alpha_t"] for r in rows]
+    [0.3, 0.7]
+    """
+    from ..validate import number
+    from .sweeping import sweep
+
+    if isinstance(scenes, str) or isinstance(alphas, str):
+        raise ValueError("scenes and alphas must be sequences, not one string")
+    scenes = list(scenes)
+    alphas = [None if a is None else number("alpha_t", a, low=0, high=1) for a in alphas]
+    if not scenes or not alphas:
+        raise ValueError("scenes and alphas must each hold at least one value")
+    run = partial(
+        vsi_ratio_run, shape=tuple(shape), n_bands=n_bands, shifts=shifts, snr_db=snr_db,
+        method=method, **options,
+    )  # fmt: skip
+    grid = {"scene": scenes, "alpha_t": alphas, "seed": list(seeds)}
     return sweep(grid, run, client=client, progress=progress)

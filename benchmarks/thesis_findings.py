@@ -79,14 +79,13 @@ import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
-from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 import tensor_cosdi as tc
-from tensor_cosdi import depth, metrics, scenes, systems
+from tensor_cosdi import metrics
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import provenance, provenance_lines  # noqa: E402
@@ -394,47 +393,24 @@ CS2LI_METHODS = ("CS2LI + OTD", "CS2LI + PnP-ADMM", "SL + SD-CASSI (OTD per patt
 FRINGES = {"along": 1, "across": 0}
 
 
+#: The findings' CS2LI methods as ``studies.cs2li_comparison_run`` (imager, reconstruction).
+CS2LI_CELLS = {
+    "CS2LI + OTD": ("cs2li", "otd"),
+    "CS2LI + PnP-ADMM": ("cs2li", "pnp_admm"),
+    "CS2LI colour + OTD": ("cs2li_colour", "otd"),
+    "SL + SD-CASSI (OTD per pattern)": ("sl_sd_cassi", "otd"),
+}
+
+
 def cs2li_run(scene, method, fringes, size, bands, snr, seed, n_patterns=4):
-    """One CS2LI cell: depth and cube quality of ``method`` (one of :data:`CS2LI_METHODS`) with
-    fringes ``"along"`` or ``"across"`` the dispersion (:data:`FRINGES`)."""
-    wl, K = scenes.default_wavelengths(bands), n_patterns
-    real = scene.startswith("cave.")  # a real scene's reflectance under the photo's fringes
-    sl = scenes.structured_light(
-        (size, size), wl, frequencies=(4.0,), photo_name=SCENES[0] if real else scene, rng=seed,
-        fringe_axis=FRINGES[fringes],
+    """One CS2LI cell: depth and cube quality of ``method`` (a key of :data:`CS2LI_CELLS`) with
+    fringes ``"along"`` or ``"across"`` the dispersion (:data:`FRINGES`):
+    ``studies.design.cs2li_comparison_run``."""
+    imager, recon = CS2LI_CELLS[method]
+    return tc.studies.design.cs2li_comparison_run(
+        imager, scene=scene, shape=(size, size), n_bands=bands, n_patterns=n_patterns,
+        snr_db=snr, fringe_axis=FRINGES[fringes], method=recon, seed=seed,
     )  # fmt: skip
-    if real:
-        sl = replace(sl, reflectance=np.asarray(scenes.scene_cube(scene, (size, size), wl)))
-    cube = np.asarray(systems.fringe_cube(sl.reflectance, sl.phase, n_steps=K, amplitude=0.5))
-    code = tc.codes.random_binary((size, size + bands - 1), rng=seed)
-    if "colour" in method:  # the thesis' trade-off colour code: #f 6, κ 50 %
-        code = tc.codes.colour_coded_aperture(
-            (size, size + bands - 1), bands, n_filters=min(6, bands), transmittance=0.5, rng=seed
-        )
-    t0 = time.perf_counter()
-    if method.startswith("CS2LI"):
-        cs = systems.CS2LI(code, n_bands=bands, n_patterns=K, shifts=1, wavelengths=wl)
-        g = cs.simulate(cube, snr_db=snr, rng=seed)
-        est = np.asarray(tc.reconstruct(cs, g, "otd" if "OTD" in method else "pnp_admm").cube)
-    else:
-        sd = systems.SDCASSI(code[:, :size], n_bands=bands, shifts=1, wavelengths=wl)
-        est = np.empty_like(cube)
-        for t in range(K):
-            g = sd.simulate(cube[..., t], snr_db=snr, rng=seed + t)
-            est[..., t] = np.asarray(tc.reconstruct(sd, g, "otd").cube)
-    phi = depth.wrapped_phase(est.sum(axis=2))
-    h = sl.height + depth.wrap(phi - sl.phase[..., 0]) / sl.phase_per_height
-    rmse_h = float(np.sqrt(np.mean((h - sl.height) ** 2)))
-    refl = est.mean(axis=3)  # the reflectance: mean over the phase steps (offset 1)
-    return {
-        "sam": metrics.sam(sl.reflectance, refl),
-        "ssim": metrics.ssim(sl.reflectance, refl),
-        "height_rmse": rmse_h,
-        "depth_psnr": float(20 * np.log10(float(sl.height.max()) / rmse_h)),
-        "phase_mae": float(np.abs(depth.wrap(phi - sl.phase[..., 0])).mean()),
-        "cube_psnr": metrics.psnr(cube.reshape(size, size, -1), est.reshape(size, size, -1)),
-        "seconds": time.perf_counter() - t0,
-    }
 
 
 def cs2li_study(args, log, client=None):

@@ -36,7 +36,10 @@ algorithms).
    ``cs2li_code`` (Sec. 6.3.2, Fig. 58): ``studies.cs2li_code_design`` —
    the colour-coded aperture's #f ∈ {1, 2, 6, Nλ} and κ ∈ {25, 50, 75 %}
    against the report scenes' spectra and the height map.
-4. C3SLFI Table 1 (Sec. 5.3.2): ``studies.c3slfi_table`` — OTD and WDCT on
+4. ``c3slfi_sparsity`` (Sec. 5.3.1, Fig. 45): ``studies.c3slfi_sparsity`` —
+   the share of sorted coefficients holding 99-99.99 % of the light field's
+   energy in the WDCT basis and in OTD's learned one, 3-D and 5-D.
+   C3SLFI Table 1 (Sec. 5.3.2): ``studies.c3slfi_table`` — OTD and WDCT on
    the 3-D and 5-D forms, K = 2, 3 snapshots of 31 bands, 15 / 20 / 50 dB,
    on the real scenes and on two photo-derived ones; ``table1_dl``: the
    DL-3D baseline (K-SVD dictionary of lenslet patches learned on the
@@ -51,7 +54,7 @@ scenes from photos.
     python benchmarks/thesis_findings.py [--size 64] [--bands 16] [--snr 30] [--quick]
         [--seeds 0,1,2]
         [--studies vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,cs2li_noise,
-                   cs2li_code,table1,table1_dl]
+                   cs2li_code,c3slfi_sparsity,table1,table1_dl]
         [--workers 2] [--out benchmarks/results]
 
 Every study runs for each of ``--seeds`` (codes and noise); tables show means
@@ -230,6 +233,36 @@ def cs2li_code_study(args, log, client=None):
             lines.append(f"| {f} | {k:.2f} | {m['psnr']:.2f} | {m['ssim']:.3f} | {m['sam']:.2f} | "
                          f"{m['rmse']:.4f} | {m['depth_psnr']:.2f} | {m['depth_ssim']:.3f} |")
     return "\n".join(lines), {"rows": rows, "filters": list(filters), "kappas": list(kappas)}
+
+
+def c3slfi_sparsity_study(args, log, client=None):
+    """Sec. 5.3.1, Fig. 45: ``studies.c3slfi_sparsity`` — the share of sorted coefficients that
+    holds 99 / 99.9 / 99.99 % of a spectral light field's energy, WDCT against OTD's learned
+    basis, 3-D against 5-D (64×64 lenslet image, 4×4 views, 2 snapshots)."""
+    names, rows = _scene_names(), []
+    shape = (32, 32) if QUICK else (64, 64)
+    for scene in names:
+        for seed in args.seeds:
+            for r in tc.studies.c3slfi_sparsity(scene, shape=shape, n_bands=args.bands,
+                                                snr_db=args.snr, seed=seed):  # fmt: skip
+                rows.append({"scene": scene, "seed": seed, **r})
+                log(f"C3SLFI sparsity {scene:12s} seed {seed} {r['form']} {r['basis']:4s} "
+                    f"99.9 %: {r['share_0.999']:.2e}")  # fmt: skip
+    lines = [
+        f"Scenes {', '.join(names)}; seeds {', '.join(map(str, args.seeds))}; {shape[0]}×"
+        f"{shape[1]} lenslet image, 4×4 views, {args.bands} bands; OTD's basis: the HOSVD of its "
+        f"reconstruction at {args.snr:g} dB in that form.  Share of the sorted coefficients "
+        "holding each energy fraction (means; smaller is sparser).\n",
+        "| form | basis | 99 % | 99.9 % | 99.99 % |",
+        "|---|---|---|---|---|",
+    ]
+    for form in ("3d", "5d"):
+        for basis in ("wdct", "otd"):
+            m = [_mean(rows, f"share_{f}", form=form, basis=basis)
+                 for f in ("0.99", "0.999", "0.9999")]  # fmt: skip
+            lines.append(f"| {form.upper()} | {basis.upper()} | "
+                         + " | ".join(f"{v:.2e}" for v in m) + " |")  # fmt: skip
+    return "\n".join(lines), {"rows": rows}
 
 
 def vsi_study(args, log, client=None):
@@ -635,7 +668,7 @@ def main(argv=None):
     ap.add_argument(
         "--studies",
         default="vsi_design,vsi,vsi_noise,vsi_systems,dfa,sweep,cs2li,cs2li_noise,cs2li_code,"
-        "table1,table1_dl",
+        "c3slfi_sparsity,table1,table1_dl",
     )
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
     ap.add_argument("--quick", action="store_true", help="32×32×8, one scene: a smoke run")
@@ -697,6 +730,10 @@ def main(argv=None):
         "dfa": ("CASSDI-DFA: Zernike aberration and PSF crop (Sec. 4.3)", dfa_study),
         "sweep": ("CASSDI-DFA in the focal-sweep model (Sec. 4.1)", sweep_study),
         "cs2li": ("CS2LI vs structured light + SD-CASSI (Sec. 6.3)", cs2li_study),
+        "c3slfi_sparsity": (
+            "C3SLFI: how sparse the light field is in each basis and form (Sec. 5.3.1)",
+            c3slfi_sparsity_study,
+        ),
         "table1": (
             "C3SLFI Table 1: OTD / WDCT, 3-D / 5-D, over K and SNR (Sec. 5.3.2)",
             table1_study,
@@ -1108,6 +1145,30 @@ def verdicts(data):
                 f"; the thesis' trade-off #f 6, κ 0.50: "
                 f"{_mean(r, key, n_filters=6, transmittance=0.5):.3f} (means)",
             )  # fmt: skip
+    if "c3slfi_sparsity" in data:
+        r = data["c3slfi_sparsity"]["rows"]
+
+        def share(rs, form, basis):
+            return _mean(rs, "share_0.999", form=form, basis=basis)
+
+        for form in ("3d", "5d"):
+            g = _per_seed(r, lambda rs, f=form: share(rs, f, "wdct") - share(rs, f, "otd"))
+            row(
+                f"C3SLFI: OTD's basis sparser than WDCT, {form.upper()} form (Fig. 45)", "sparser",
+                _spread(np.asarray(g) * 100, "{:+.2f}", " %"), _gain_verdict(g),
+                "ours: WDCT's minus OTD's share of coefficients holding 99.9 % of the energy; "
+                f"means {share(r, form, 'wdct'):.2e} and {share(r, form, 'otd'):.2e}",
+            )  # fmt: skip
+        g, gw = (
+            _per_seed(r, lambda rs, b=b: share(rs, "5d", b) - share(rs, "3d", b))
+            for b in ("otd", "wdct")
+        )
+        row(
+            "C3SLFI: the 3-D form sparser than the 5-D one, OTD's basis (Fig. 45)", "sparser",
+            _spread(np.asarray(g) * 100, "{:+.2f}", " %"), _gain_verdict(g),
+            "ours: the 5-D minus the 3-D share holding 99.9 % of the energy; WDCT: "
+            f"{_gain_verdict(gw)}",
+        )  # fmt: skip
     if "table1" in data:
         r = data["table1"]["rows"]
         for group in sorted({x["group"] for x in r}):

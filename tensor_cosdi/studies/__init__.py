@@ -10,7 +10,13 @@ a scene of :mod:`tensor_cosdi.scenes` shaped for it, and a noisy measurement.
 from ..optics.design import prism_grid
 from .cluster import local_client
 from .condition import conditioning, conditioning_design, vsi_arms
-from .design import c3slfi_table, colour_code_design, cs2li_code_design, cs2li_comparison
+from .design import (
+    c3slfi_sparsity,
+    c3slfi_table,
+    colour_code_design,
+    cs2li_code_design,
+    cs2li_comparison,
+)
 from .imagers import vsi_comparison, vsi_ratio
 from .problems import (
     SCENES,
@@ -48,6 +54,7 @@ __all__ = [
     "vsi_ratio",
     "zernike_design",
     "c3slfi_table",
+    "c3slfi_sparsity",
     "reconstruction_run",
     "write_csv",
 ]

@@ -10,7 +10,7 @@ import numpy as np
 
 __all__ = [
     "colour_code_design", "colour_code_run", "cs2li_code_design", "cs2li_code_run",
-    "cs2li_comparison", "cs2li_comparison_run", "CS2LI_IMAGERS",
+    "cs2li_comparison", "cs2li_comparison_run", "CS2LI_IMAGERS", "c3slfi_sparsity",
     "c3slfi_table", "c3slfi_table_run", "c3slfi_dictionary",
 ]  # fmt: skip
 
@@ -347,6 +347,93 @@ def cs2li_code_design(
         n_patterns=n_patterns, snr_db=snr_db, fringe_axis=fringe_axis, method=method, **options,
     )  # fmt: skip
     return sweep(grid, run, client=client, progress=progress)
+
+
+def _energy_shares(coefficients, fractions, points):
+    """The share of the largest coefficients that holds each energy fraction, and the energy
+    captured at ``points`` (shares of the coefficients, sorted by magnitude)."""
+    e = np.sort(np.abs(np.asarray(coefficients, dtype=np.float64)).ravel() ** 2)[::-1]
+    cum = np.cumsum(e) / e.sum()
+    n = e.size
+    shares = {f: float((np.searchsorted(cum, f) + 1) / n) for f in fractions}
+    curve = [float(cum[max(0, min(n - 1, int(np.ceil(q * n)) - 1))]) for q in points]
+    return shares, curve
+
+
+#: :func:`c3slfi_sparsity`'s curve: the shares of the sorted coefficients it reports the energy at.
+SPARSITY_POINTS = tuple(float(v) for v in np.round(np.geomspace(1e-4, 1.0, 25), 6))
+
+
+def c3slfi_sparsity(
+    scene="cave.face", *, shape=(64, 64), views=(4, 4), n_bands=16, n_snapshots=2, snr_db=30.0,
+    seed=0, fractions=(0.99, 0.999, 0.9999), **options,
+) -> list[dict]:  # fmt: skip
+    """How sparsely each basis represents a spectral light field in its 3-D (lenslet) and 5-D
+    forms (thesis Sec. 5.3.1, Fig. 45).
+
+    Bases as the thesis fixes them: WDCT ``Ψ_W ⊗ Ψ_W ⊗ Ψ_DCT`` (3-D) and
+    ``Ψ_W ⊗ Ψ_W ⊗ Ψ_DCT ⊗ I ⊗ I`` (5-D; Symlet-8, as deep as the size allows), and OTD's:
+    the complete HOSVD bases (:func:`tensor_cosdi.bases.tucker_bases`) of OTD's own
+    reconstruction from a seeded C3SLFI measurement in that form — what OTD learns, not the
+    truth's bases.  The true light field is projected on each, its coefficients sorted by
+    magnitude.  The thesis finds OTD's basis sparser than WDCT in both forms and the 3-D
+    form sparser than the 5-D one.
+
+    Parameters
+    ----------
+    scene : str
+        A name of :data:`tensor_cosdi.scenes.SCENES` (a real ``"cave.<name>"`` scene to judge).
+    shape, views, n_bands, n_snapshots, snr_db, seed
+        The C3SLFI problem (:func:`~tensor_cosdi.studies.make_problem`) OTD reconstructs.
+    fractions : sequence of float
+        Energy fractions in (0, 1] to report the needed share of coefficients for.
+    **options
+        Passed to OTD.
+
+    Returns
+    -------
+    list of dict
+        One record per form (``"3d"``, ``"5d"``) and basis (``"wdct"``, ``"otd"``): the share
+        of coefficients holding each fraction (``share_0.999``…), the energy captured at the
+        shares :data:`SPARSITY_POINTS` (``curve``) and the OTD reconstruction's PSNR.
+
+    Examples
+    --------
+    >>> recs = c3slfi_sparsity("chelsea", shape=(16, 16), views=(2, 2), n_bands=4,
+    ...                        max_iter=5, pan_iter=5)
+    >>> [(r["form"], r["basis"]) for r in recs]
+    [('3d', 'wdct'), ('3d', 'otd'), ('5d', 'wdct'), ('5d', 'otd')]
+    """
+    from ..bases import KroneckerBasis, dct, identity, tucker_bases, wavelet
+    from ..solvers import reconstruct
+    from ..validate import number
+    from .problems import make_problem, score
+
+    if isinstance(fractions, (str, bytes)) or not len(fractions):
+        raise ValueError(f"fractions must be a sequence of numbers in (0, 1], got {fractions!r}")
+    fractions = [number("energy fraction", f, low=0, low_open=True, high=1) for f in fractions]
+    p = make_problem("c3slfi", scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
+                     rng=seed, n_snapshots=n_snapshots, views=tuple(views))  # fmt: skip
+    truth3 = np.asarray(p.cube)
+    forms = {
+        "3d": (p.system, p.measurement, truth3),
+        "5d": (p.system.as_5d(), p.system.measurement_to_5d(p.measurement),
+               np.asarray(p.system.to_5d(truth3))),
+    }  # fmt: skip
+    out = []
+    for form, (system, g, truth) in forms.items():
+        est = np.asarray(reconstruct(system, g, "otd", **options).cube)
+        cube3 = est if form == "3d" else np.asarray(p.system.to_3d(est))
+        fixed = {0: wavelet(truth.shape[0]), 1: wavelet(truth.shape[1]), 2: dct(truth.shape[2])}
+        fixed.update({m: identity(truth.shape[m]) for m in range(3, truth.ndim)})
+        for name, mats in (("wdct", fixed), ("otd", tucker_bases(est))):
+            coef = KroneckerBasis(truth.shape, mats).analysis(truth)
+            shares, curve = _energy_shares(coef, fractions, SPARSITY_POINTS)
+            out.append({
+                "form": form, "basis": name, "otd_psnr": score(p, cube3)["psnr"],
+                **{f"share_{f:g}": v for f, v in shares.items()}, "curve": curve,
+            })  # fmt: skip
+    return out
 
 
 def c3slfi_dictionary(shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), seed=0):

@@ -95,14 +95,17 @@ def colour_code_design(
     >>> [(r["n_filters"], r["transmittance"]) for r in recs]
     [(1, 0.5), (4, 0.5)]
     """
-    from .sweeping import sweep
+    from ..validate import integer
+    from .sweeping import seed_list, sweep
 
-    filters = [int(f) for f in filters]
+    filters = [integer("#f", f) for f in filters]  # 2.5 is an error, not 2
     if any(f < 1 or f > n_bands for f in filters):
         raise ValueError(f"every #f must lie in 1…n_bands = {n_bands}, got {filters}")
     if any(not 0 < k <= 1 for k in transmittances):
         raise ValueError(f"every κ must lie in (0, 1], got {list(transmittances)}")
-    grid = {"n_filters": filters, "transmittance": list(transmittances), "seed": list(seeds)}
+    grid = {
+        "n_filters": filters, "transmittance": list(transmittances), "seed": seed_list(seeds)
+    }
     run = partial(  # a module-level function: picklable for Dask workers
         colour_code_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
         method=method, **options,
@@ -134,6 +137,7 @@ def _fringe_problem(scene, shape, n_bands, n_patterns, fringe_axis, seed):
     from ..validate import integer
 
     wl = wavelengths_for(None, integer("n_bands", n_bands, low=1))
+    integer("n_patterns (phase steps)", n_patterns, low=3)
     sl = scenes.structured_light(shape, wl, frequencies=(4.0,), fringe_axis=fringe_axis, rng=seed)
     sl = replace(sl, reflectance=np.asarray(scenes.scene_cube(scene, shape, wl)))
     cube = np.asarray(fringe_cube(sl.reflectance, sl.phase, n_steps=n_patterns, amplitude=0.5))
@@ -274,7 +278,7 @@ def cs2li_comparison(
     ['cs2li', 'cs2li_colour', 'sl_sd_cassi']
     """
     from ..noise import check_snr_db
-    from .sweeping import sweep
+    from .sweeping import seed_list, sweep
 
     if any(isinstance(v, (str, bytes)) for v in (scenes, imagers, snrs)):
         raise ValueError("scenes, imagers and snrs must be sequences, not one string")
@@ -284,7 +288,7 @@ def cs2li_comparison(
     scenes, imagers, snrs = list(scenes), list(imagers), [check_snr_db(v) for v in snrs]
     if not scenes or not imagers or not snrs:
         raise ValueError("scenes, imagers and snrs must each hold at least one value")
-    grid = {"scene": scenes, "imager": imagers, "snr_db": snrs, "seed": list(seeds)}
+    grid = {"scene": scenes, "imager": imagers, "snr_db": snrs, "seed": seed_list(seeds)}
     run = partial(
         cs2li_comparison_run, shape=tuple(shape), n_bands=n_bands, n_patterns=n_patterns,
         fringe_axis=fringe_axis, method=method, **options,
@@ -335,13 +339,13 @@ def cs2li_code_design(
     >>> [(r["n_filters"], r["transmittance"]) for r in recs]
     [(1, 0.5), (4, 0.5)]
     """
-    from .sweeping import sweep
+    from .sweeping import seed_list, sweep
 
     if filters is None:
         n = n_bands if isinstance(n_bands, int) and n_bands >= 1 else 1  # checked just below
         filters = sorted({f for f in (1, 2, 6, n) if f <= n})
     filters, kappas, n_bands = _check_code_grid(filters, transmittances, n_bands)
-    grid = {"n_filters": filters, "transmittance": kappas, "seed": list(seeds)}
+    grid = {"n_filters": filters, "transmittance": kappas, "seed": seed_list(seeds)}
     run = partial(
         cs2li_code_run, scene=scene, shape=tuple(shape), n_bands=n_bands,
         n_patterns=n_patterns, snr_db=snr_db, fringe_axis=fringe_axis, method=method, **options,
@@ -554,7 +558,7 @@ def c3slfi_table(
     >>> [(r["form"], round(r["ratio"], 3)) for r in recs]
     [('3d', 0.333), ('5d', 0.333)]
     """
-    from .sweeping import sweep
+    from .sweeping import seed_list, sweep
 
     bad = [f for f in forms if f not in ("3d", "5d")]
     if bad:
@@ -564,7 +568,7 @@ def c3slfi_table(
     grid = {
         "scene": list(scenes), "n_snapshots": [int(k) for k in snapshots],
         "snr_db": [float(s) for s in snrs], "method": list(methods), "form": list(forms),
-        "seed": list(seeds),
+        "seed": seed_list(seeds),
     }  # fmt: skip
     run = partial(
         c3slfi_table_run, shape=tuple(shape), views=tuple(views), n_bands=n_bands, **options

@@ -115,7 +115,7 @@ def vsi_comparison(
     >>> sorted(r["system"] for r in rows)
     ['cassi_vsi', 'dual_camera_cassi', 'sd_cassi']
     """
-    from .sweeping import sweep
+    from .sweeping import seed_list, sweep
 
     if isinstance(systems, str) or isinstance(scenes, str):
         raise ValueError("systems and scenes must be sequences of names, not one string")
@@ -128,7 +128,7 @@ def vsi_comparison(
         vsi_comparison_run, shape=tuple(shape), n_bands=n_bands, shifts=shifts, snr_db=snr_db,
         alpha_t=alpha_t, method=method, **options,
     )  # fmt: skip
-    grid = {"system": systems, "scene": scenes, "seed": list(seeds)}
+    grid = {"system": systems, "scene": scenes, "seed": seed_list(seeds)}
     return sweep(grid, run, client=client, progress=progress)
 
 
@@ -218,7 +218,7 @@ def vsi_ratio(
     [0.3, 0.7]
     """
     from ..validate import number
-    from .sweeping import sweep
+    from .sweeping import seed_list, sweep
 
     if isinstance(scenes, str) or isinstance(alphas, str):
         raise ValueError("scenes and alphas must be sequences, not one string")
@@ -230,5 +230,5 @@ def vsi_ratio(
         vsi_ratio_run, shape=tuple(shape), n_bands=n_bands, shifts=shifts, snr_db=snr_db,
         method=method, **options,
     )  # fmt: skip
-    grid = {"scene": scenes, "alpha_t": alphas, "seed": list(seeds)}
+    grid = {"scene": scenes, "alpha_t": alphas, "seed": seed_list(seeds)}
     return sweep(grid, run, client=client, progress=progress)

@@ -9,7 +9,20 @@ from pathlib import Path
 
 from .cluster import local_client
 
-__all__ = ["sweep", "write_csv"]
+__all__ = ["sweep", "write_csv", "seed_list"]
+
+
+def seed_list(seeds) -> list:
+    """``seeds`` as a non-empty list of integers ≥ 0 (a study's codes and noise), or a
+    ``ValueError`` naming what was wrong."""
+    from ..validate import integer
+
+    if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__iter__"):
+        raise ValueError(f"seeds must be a sequence of integers ≥ 0, got {seeds!r}")
+    out = [integer("seed", q, low=0) for q in seeds]
+    if not out:
+        raise ValueError("seeds must hold at least one integer")
+    return out
 
 def _call(run, params):
     out = run(**params)

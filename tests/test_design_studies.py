@@ -126,3 +126,27 @@ def test_otds_learned_basis_is_sparser_than_wdct_on_a_real_light_field():
     for form in ("3d", "5d"):
         assert share[form, "otd"] < 0.5 * share[form, "wdct"], share
     assert share["3d", "otd"] < share["5d", "otd"], share
+
+
+@pytest.mark.parametrize("seeds", ["x", (), (1.5,), (-1,), 3])
+def test_every_design_study_names_bad_seeds(seeds):
+    for study, args in (
+        (studies.colour_code_design, {"scene": "colorchecker"}),
+        (studies.cs2li_code_design, {"scene": "colorchecker", "n_bands": 4}),
+        (studies.cs2li_comparison, {"scenes": ("colorchecker",), "n_bands": 4}),
+        (studies.vsi_comparison, {"scenes": ("colorchecker",), "n_bands": 4}),
+        (studies.vsi_ratio, {"scenes": ("colorchecker",), "n_bands": 4}),
+    ):  # fmt: skip
+        with pytest.raises(ValueError, match="seed"):
+            study(seeds=seeds, shape=(8, 8), progress=False, **args)
+
+
+def test_colour_code_design_refuses_a_fractional_filter_count():
+    with pytest.raises(ValueError, match="#f must be an integer"):
+        studies.colour_code_design(filters=(2.5,), scene="colorchecker", shape=(8, 8), n_bands=4)
+
+
+def test_cs2li_studies_need_three_phase_steps():
+    with pytest.raises(ValueError, match="n_patterns"):
+        studies.cs2li_comparison(("colorchecker",), shape=(8, 8), n_bands=4, n_patterns=2,
+                                 progress=False)  # fmt: skip

@@ -108,6 +108,9 @@ def test_c3slfi_sparsity_records_and_bad_fractions():
         assert 0 < r["share_0.9"] <= r["share_0.99"] <= 1
         assert len(r["curve"]) == len(studies.design.SPARSITY_POINTS)
         assert np.all(np.diff(r["curve"]) >= 0) and r["curve"][-1] == pytest.approx(1.0)
+    whole = studies.c3slfi_sparsity("chelsea", shape=(16, 16), views=(2, 2), n_bands=4,
+                                    fractions=(1.0,), max_iter=2, pan_iter=2)  # fmt: skip
+    assert all(0 < r["share_1"] <= 1 for r in whole)  # never past the last coefficient
     for bad in ((0,), (1.5,), (), "0.9"):
         with pytest.raises(ValueError, match="fraction"):
             studies.c3slfi_sparsity("chelsea", shape=(16, 16), views=(2, 2), n_bands=4,

@@ -359,7 +359,8 @@ def _energy_shares(coefficients, fractions, points):
     e = np.sort(np.abs(np.asarray(coefficients, dtype=np.float64)).ravel() ** 2)[::-1]
     cum = np.cumsum(e) / e.sum()
     n = e.size
-    shares = {f: float((np.searchsorted(cum, f) + 1) / n) for f in fractions}
+    # min(…, n − 1): a fraction of 1 can sit above the last cumulative sum by rounding
+    shares = {f: float((min(int(np.searchsorted(cum, f)), n - 1) + 1) / n) for f in fractions}
     curve = [float(cum[max(0, min(n - 1, int(np.ceil(q * n)) - 1))]) for q in points]
     return shares, curve
 
@@ -427,14 +428,14 @@ def c3slfi_sparsity(
     out = []
     for form, (system, g, truth) in forms.items():
         est = np.asarray(reconstruct(system, g, "otd", **options).cube)
-        cube3 = est if form == "3d" else np.asarray(p.system.to_3d(est))
+        psnr = score(p, est if form == "3d" else np.asarray(p.system.to_3d(est)))["psnr"]
         fixed = {0: wavelet(truth.shape[0]), 1: wavelet(truth.shape[1]), 2: dct(truth.shape[2])}
         fixed.update({m: identity(truth.shape[m]) for m in range(3, truth.ndim)})
         for name, mats in (("wdct", fixed), ("otd", tucker_bases(est))):
             coef = KroneckerBasis(truth.shape, mats).analysis(truth)
             shares, curve = _energy_shares(coef, fractions, SPARSITY_POINTS)
             out.append({
-                "form": form, "basis": name, "otd_psnr": score(p, cube3)["psnr"],
+                "form": form, "basis": name, "otd_psnr": psnr,
                 **{f"share_{f:g}": v for f, v in shares.items()}, "curve": curve,
             })  # fmt: skip
     return out

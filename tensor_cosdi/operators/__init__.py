@@ -19,7 +19,7 @@ from .algebra import (
     vec_index,
     weighted_sum,
 )
-from .blur import Blur
+from .blur import Blur, BlurSum
 from .codes import Code
 from .gram import Pattern, StructureError, check_structure, probe_structure
 from .integrate import Replicate, SumAxis
@@ -55,6 +55,7 @@ __all__ = [
     "SumAxis",
     "Replicate",
     "Blur",
+    "BlurSum",
     "Transpose",
     "Pad",
     "LightFieldLayout",

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 
 from .. import _backend as B
 from ..codes import depth_codes
-from ..operators import Blur, Code, Replicate, Shear, SumAxis
+from ..operators import Blur, BlurSum, Code, Shear, SumAxis
 from ._base import (
     System,
     as_code,
@@ -57,7 +57,9 @@ class CASSDIDFA(System):
 
         The 4-D form is its diagonal ``z = k``: plane ``z`` is seen only at
         step ``z``, through code ``z`` — so the codes alone tell the planes
-        apart, which the swept optics do not grant.
+        apart, which the swept optics do not grant.  The inner sum runs in the Fourier
+        domain (:class:`~tensor_cosdi.operators.BlurSum`: one transform per plane and per
+        step rather than one per plane and step).
 
     Attributes
     ----------
@@ -142,7 +144,7 @@ class CASSDIDFA(System):
         p.setflags(write=False)
         self.psfs = p
         nz = p.shape[3]
-        cube, stack, steps_shape = (nx, ny, nl, nz), (nx, ny, nl, nz, steps), (nx, ny, nl, steps)
+        cube, steps_shape = (nx, ny, nl, nz), (nx, ny, nl, steps)
         shear = Shear(steps_shape, self.shifts)
         per_band = SumAxis(shear.output_shape, 2)
         return (
@@ -150,9 +152,7 @@ class CASSDIDFA(System):
             @ per_band
             @ shear
             @ Code(self.codes, steps_shape, axes=(0, 1, 3))
-            @ SumAxis(stack, 3)
-            @ Blur(stack, p)
-            @ Replicate(cube, 4, steps)
+            @ BlurSum(cube, p, sum_axis=3)
         )
 
     @property

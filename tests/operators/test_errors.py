@@ -5,6 +5,7 @@ import pytest
 
 from tensor_cosdi.operators import (
     Blur,
+    BlurSum,
     Code,
     LightFieldLayout,
     ModeProduct,
@@ -124,6 +125,14 @@ def test_constructor_consistency_errors():
         LightFieldLayout((2, 2, 3), "tiled")
     with pytest.raises(ValueError, match=r"psfs shape .* does not match"):
         Blur((4, 4, 3), np.ones((3, 3, 2)))
+    with pytest.raises(ValueError, match="must not be a spatial axis"):
+        BlurSum((4, 4, 2, 3), np.ones((3, 3, 2, 3, 2)), sum_axis=1)
+    with pytest.raises(ValueError, match=r"psfs must have shape \(h, w, \*rest, K\)"):
+        BlurSum((4, 4, 2, 3), np.ones((3, 3, 2, 3)), sum_axis=3)
+    with pytest.raises(ValueError, match="sum_axis must be an integer"):
+        BlurSum((4, 4, 2, 3), np.ones((3, 3, 2, 3, 2)), sum_axis=True)
+    with pytest.raises(ValueError, match="at least 3 axes"):
+        BlurSum((4, 4), np.ones((3, 3, 2)), sum_axis=1)
     with pytest.raises(ValueError, match="n must contain positive integers"):
         Replicate((3, 4), 0, 0)
 

@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from tensor_cosdi.operators import (
     Blur,
+    BlurSum,
     Code,
     LightFieldLayout,
     ModeProduct,
@@ -114,6 +115,28 @@ def test_blur(shape, psf, per_slice, seed):
     g = np.random.default_rng(seed)
     p = g.random(psf + ((shape[2],) if per_slice else ()))
     check_matrix_path(Blur(shape, p), seed)
+
+
+@given(
+    shape=st.tuples(st.integers(2, 7), st.integers(2, 7), st.integers(1, 3), st.integers(1, 3)),
+    psf=st.tuples(st.integers(1, 4), st.integers(1, 4)),
+    steps=st.integers(1, 3),
+    data=st.data(),
+    seed=st.integers(0, 2**16),
+)
+def test_blur_sum_is_the_blurred_stack_summed(shape, psf, steps, data, seed):
+    """The fused Fourier-domain map against the explicit matrix of SumAxis ∘ Blur ∘
+    Replicate, with any spatial pair, summed axis and PSFs shared along either rest axis."""
+    g = np.random.default_rng(seed)
+    axes = data.draw(st.permutations(range(4)))[:2]
+    rest = [a for a in range(4) if a not in axes]
+    sum_axis = data.draw(st.sampled_from(rest))
+    sizes_ = tuple(data.draw(st.sampled_from((1, shape[a]))) for a in rest)
+    spatial = tuple(shape[a] for a in axes)
+    op = BlurSum(shape, g.random(psf + sizes_ + (steps,)), sum_axis=sum_axis, axes=axes)
+    assert op.output_shape == tuple(n for a, n in enumerate(shape) if a != sum_axis) + (steps,)
+    assert tuple(op.output_shape[a] for a in op.out_axes) == spatial
+    check_matrix_path(op, seed)
 
 
 @given(

@@ -286,7 +286,9 @@ def fold_for(shape, axis: int, block_axis: int):
     return _Fold(shape, axis, block_axis)
 
 
-def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int | None = None):
+def conjugate_gradient(
+    apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int | None = None, warn: bool = True
+):
     """Conjugate gradients for ``apply(x) = b`` with a symmetric positive-definite ``apply``.
 
     Backend-neutral (works on GPU tensors), so it is written on TensorLy
@@ -295,7 +297,8 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
     iterations (default: ten times the number of unknowns, between 100 and
     10 000 — round-off makes ill-conditioned systems need more than ``n``).
     Emits a ``RuntimeWarning`` with the reached residual when it stops
-    before the tolerance.
+    before the tolerance, unless ``warn=False`` (a deliberately inexact solve: a fixed
+    number of warm-started steps inside an outer iteration).
     """
     n = int(np.prod(tl.shape(b)))
     if maxiter is None:
@@ -319,7 +322,7 @@ def conjugate_gradient(apply, b, *, x0=None, rtol: float = 1e-12, maxiter: int |
         p = r + (rs_new / rs) * p
         rs = rs_new
     else:
-        if rs > tol2:
+        if rs > tol2 and warn:
             warnings.warn(
                 f"conjugate gradients stopped after {maxiter} iterations at relative residual "
                 f"{np.sqrt(rs / bnorm2):.2e} (> rtol={rtol:.0e})",

@@ -26,6 +26,20 @@ class UnsafeFile(Refused):
     or inflate beyond ``max_bytes``: refused before anything is read."""
 
 
+def require_file(path, what: str = "file") -> None:
+    """Return if ``path`` is a regular file (or a link to one); else ``FileNotFoundError`` when
+    nothing is there, :class:`UnsafeFile` when something else is (a folder, a FIFO, a device,
+    a dangling link) — never opened."""
+    if path.is_file():
+        return
+    if os.path.lexists(path):
+        raise UnsafeFile(
+            f"{path}: not a regular file (a folder, FIFO, device or dangling link); only "
+            "regular files are read"
+        )
+    raise FileNotFoundError(f"{what} not found: {path}")
+
+
 def _require_h5py():
     try:
         import h5py
@@ -503,8 +517,8 @@ def array_entries(path: Path, suffix: str, max_bytes: int = MAX_ARRAY_BYTES):
     if suffix == ".zarr":
         if not path.is_dir():
             raise FileNotFoundError(f"Zarr store (a folder) not found: {path}")
-    elif not path.is_file():
-        raise FileNotFoundError(f"file not found: {path}")
+    else:
+        require_file(path)
     try:
         return _READERS[suffix][1](path, max_bytes)
     except (ImportError, Refused):

@@ -352,14 +352,13 @@ def _read_h5(p: Path, max_bytes: int):
 def bundle_document(path) -> dict | None:
     """The JSON document of a bundle at ``path`` (``.npz`` or HDF5) without reading its arrays, or
     ``None`` when the file is not a bundle."""
-    from ._readers import reason
+    from ._readers import reason, require_file
     from .files import _require_h5py
 
     p = Path(path)
     if p.suffix.lower() == ".zarr" and p.is_dir():
         return None  # a bundle is one file; a Zarr store is a cube
-    if not p.is_file():
-        raise FileNotFoundError(f"file not found: {p}")
+    require_file(p)
     try:
         if p.suffix.lower() in H5_SUFFIXES:
             with _require_h5py().File(p, "r") as f:

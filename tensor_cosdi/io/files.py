@@ -46,10 +46,12 @@ from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
 from ._atomic import atomic_write, atomic_write_folder
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
+    Refused,
     _load,
     _require_h5py,
     array_entries,
     reason,
+    require_file,
 )
 
 __all__ = [
@@ -160,8 +162,7 @@ def _read_envi(path: Path, max_bytes):
         raise ImportError(
             "reading ENVI files needs the spectral package: pip install 'tensor_cosdi[envi]'"
         ) from None
-    if not path.is_file():
-        raise FileNotFoundError(f"file not found: {path}")
+    require_file(path)
     try:
         img = envi.open(str(path))
         shape = (int(img.nrows), int(img.ncols), int(img.nbands))
@@ -213,6 +214,8 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
         raise ValueError(f"{path}: {name!r} holds {np.dtype(dtype)} values; a cube is real")
     log.debug("reading cube %s:%s %s %s", path, name, tuple(shape), np.dtype(dtype))
     cube = np.asarray(_load(path, suffix, load))
+    if cube.dtype.kind not in "biuf":  # a format whose listing cannot tell (MATLAB v5 complex)
+        raise Refused(f"{path}: {name!r} holds {cube.dtype} values; a cube is real")
     if suffix in (".tif", ".tiff") and cube.ndim == 3:
         axes = getattr(load, "axes", "")
         if axes.endswith("S") and cube.ndim == 3:

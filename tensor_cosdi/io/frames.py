@@ -88,18 +88,19 @@ def read_frame(
         If the file does not exist.
     ValueError
         Unknown format, unreadable or truncated file, not a 2-D numeric
-        image — the message names the file.
+        image, not a regular file (a folder, FIFO or device: never opened) —
+        the message names the file.
     """
+    from ._readers import reason, require_file
+    from .files import MAX_ARRAY_BYTES
+
     p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"frame file not found: {p}")
+    require_file(p, "frame file")
     suffix = p.suffix.lower()
     if suffix not in FRAME_SUFFIXES:
         raise ValueError(
             f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}"
         )
-    from ._readers import reason
-    from .files import MAX_ARRAY_BYTES
 
     _check_declared(p, suffix, MAX_ARRAY_BYTES if max_bytes is None else int(max_bytes))
     try:

@@ -103,8 +103,21 @@ def test_complex_cube_and_wrong_wavelength_count_are_refused(hostile):
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="FIFOs and /dev/zero need POSIX")
 def test_devices_and_fifos_are_never_opened(hostile):
     for name in ("fifo", "dev_zero"):
-        with pytest.raises(FileNotFoundError, match="file not found"):
+        with pytest.raises(ValueError, match="not a regular file"):
             read_array(hostile[name])
+        with pytest.raises(ValueError, match="not a regular file"):
+            read_frame(hostile[name])
+    with pytest.raises(FileNotFoundError, match="file not found"):
+        read_array(hostile["fifo"].parent / "nothing_here.npy")
+
+
+def test_a_complex_matlab_v5_cube_is_refused(tmp_path):
+    """MATLAB v5's listing says 'double' for a complex variable: checked after loading."""
+    import scipy.io
+
+    scipy.io.savemat(tmp_path / "c.mat", {"cube": np.ones((4, 4, 3)) + 1j})
+    with pytest.raises(ValueError, match="complex128 values; a cube is real"):
+        read_cube(tmp_path / "c.mat")
 
 
 def test_frames_share_the_inflation_limit(tmp_path):

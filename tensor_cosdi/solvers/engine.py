@@ -36,8 +36,6 @@ so no option depends on the measurement's scale.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import tensorly as tl
 
@@ -396,9 +394,7 @@ def cg_solver(normal, *, rtol: float = 1e-6, maxiter: int = 20):
     """A warm-started CG ``(b, x0) -> x`` for :func:`admm`'s ``normal_solve`` (inexact ADMM)."""
     from ..operators.woodbury import conjugate_gradient
 
-    def solve(b, x0):
-        with warnings.catch_warnings():  # a few CG steps per ADMM iteration is the design
-            warnings.simplefilter("ignore", RuntimeWarning)
-            return conjugate_gradient(normal, b, x0=x0, rtol=rtol, maxiter=maxiter)
+    def solve(b, x0):  # a few CG steps per ADMM iteration is the design: no warning
+        return conjugate_gradient(normal, b, x0=x0, rtol=rtol, maxiter=maxiter, warn=False)
 
     return solve

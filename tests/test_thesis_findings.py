@@ -39,11 +39,11 @@ def _gain_expected(values):
     return f"inconclusive ({k} of {len(values)} seeds gain)"
 
 
-def _form_expected(values):
+def _form_expected(values):  # the printed values: 0.00 favours neither form
     k = sum(v > 0 for v in values)
     if k == len(values):
         return "the printed form better in every seed"
-    if k == 0:
+    if all(v < 0 for v in values):
         return "the default better in every seed"
     return f"inconclusive (the printed form better in {k} of {len(values)} seeds)"
 

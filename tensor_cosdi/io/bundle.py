@@ -387,11 +387,10 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     the JSON document are each checked against their SHA-256: an edited
     system description, like an edited array, is an error.
     """
-    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile, reason
+    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile, reason, require_file
 
     p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"bundle not found: {p}")
+    require_file(p, "bundle")
     if p.suffix.lower() in H5_SUFFIXES:
         try:
             data, doc = _read_h5(p, MAX_ARRAY_BYTES if max_bytes is None else max_bytes)

@@ -109,6 +109,10 @@ def test_devices_and_fifos_are_never_opened(hostile):
             read_frame(hostile[name])
     with pytest.raises(FileNotFoundError, match="file not found"):
         read_array(hostile["fifo"].parent / "nothing_here.npy")
+    with pytest.raises(ValueError, match="not a regular file"):
+        load_bundle(hostile["fifo"].parent)  # a folder named as a bundle
+    with pytest.raises(FileNotFoundError, match="bundle not found"):
+        load_bundle(hostile["fifo"].parent / "nothing_here.npz")
 
 
 def test_a_complex_matlab_v5_cube_is_refused(tmp_path):

@@ -52,6 +52,16 @@ FAST_WARM_ITER = 20
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
 SIGMA_END = {40.0: 0.015, 30.0: 0.03, 20.0: 0.08}
+#: ``sigma_end="auto"`` for a short run (``max_iter`` ≤ :data:`SHORT_RUN`, e.g. :func:`pnp_fast`):
+#: with fewer steps the level must stay higher.  Cross-validated with ``pnp_fast``'s settings
+#: (40 iterations, one call each, OTD start with 20 ADMM iterations) on 12 tuning scenes in 4
+#: folds, TSA mask: 0.05 noiseless (three folds of four; the fourth 0.06, a tie) and 0.05
+#: at 30 dB (every fold), from 0.015-0.1 (``benchmarks/results/cv_pnp_fast_sigma.md``: tuning
+#: means 30.55 dB noiseless at the long run's 0.015 against 30.94, 29.51 against 29.54 dB at
+#: 30 dB); the 20-dB anchors are the long run's.
+SHORT_RUN = 50
+SIGMA_END_SHORT = {40.0: 0.05, 30.0: 0.05, 20.0: 0.08}
+SIGMA_END_ADMM_SHORT = {28.5: 0.05, 19.5: 0.2}
 #: ``max_iter="auto"``: iterations with and without acceleration.  Accelerated (clean data)
 #: keeps gaining to 100 (see :data:`SIGMA_END`); plain GAP at 30 dB does not (balloons 27.25 dB
 #: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start, 20 do what 40 did
@@ -144,8 +154,10 @@ def pnp_gap(
         Denoiser level of the first and the last iteration, relative to the
         start's robust peak.  ``sigma_end="auto"`` follows the measurement's
         estimated SNR (:data:`SIGMA_END` for GAP, :data:`SIGMA_END_ADMM` for
-        ADMM; :func:`tensor_cosdi.noise.snr_schedule`): the noisier the data,
-        the higher the floor, and the first level is then ``max(sigma,
+        ADMM; :func:`tensor_cosdi.noise.snr_schedule`) and the run's length
+        (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT` up to
+        :data:`SHORT_RUN` iterations): the noisier the data or the shorter the
+        run, the higher the floor, and the first level is then ``max(sigma,
         sigma_end)``.
     warm : ``"gap_tv"``, ``"otd"``, ``"dcosnet"`` or ``"none"``
         Start from ``warm_iter`` iterations of :func:`~.gap_tv.gap_tv` at its
@@ -231,15 +243,21 @@ def pnp_gap(
         rho = check_positive("rho", rho)
     elif not (isinstance(rho, str) and rho == "auto"):
         check_positive("rho", rho)  # validated, unused by GAP
-    if sigma_end == "auto":
-        sigma_end = snr_schedule(snr, SIGMA_END_ADMM if admm else SIGMA_END)
-        sigma = max(sigma, sigma_end)  # the level never starts below its floor
-    sigma_end = check_positive("sigma_end", sigma_end)
     if isinstance(max_iter, str):
         if max_iter != "auto":
             raise ValueError(f"max_iter must be 'auto' or an integer ≥ 1, got {max_iter!r}")
         max_iter = ADMM_ITER if admm else MAX_ITER[accelerate]
     max_iter = engine.check_int("max_iter", max_iter, 1)
+    if sigma_end == "auto":
+        short = max_iter <= SHORT_RUN
+        table = (
+            (SIGMA_END_ADMM_SHORT if short else SIGMA_END_ADMM)
+            if admm
+            else (SIGMA_END_SHORT if short else SIGMA_END)
+        )
+        sigma_end = snr_schedule(snr, table)
+        sigma = max(sigma, sigma_end)  # the level never starts below its floor
+    sigma_end = check_positive("sigma_end", sigma_end)
     warm_iter = _check_warm_iter(warm_iter)
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra

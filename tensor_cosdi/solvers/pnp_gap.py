@@ -364,7 +364,9 @@ def pnp_fast(
     ``max_iter`` 40 (accelerated GAP on clean data, ADMM on noisy data, as there), one
     denoiser call per iteration (``ensemble=1``), the network in bfloat16 where the CPU
     runs it natively (``precision="auto"``) and a shorter OTD start (:data:`FAST_WARM_ITER`
-    ADMM iterations after OTD's first stage).  Registered as ``"pnp_fast"``.
+    ADMM iterations after OTD's first stage); being a short run, its denoiser level ends
+    higher (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT`).  Registered as
+    ``"pnp_fast"``.
 
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
     and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  In bfloat16 the result

@@ -641,11 +641,18 @@ def hostile_file_cases(folder: Path):
          ("inflates",)),
         ("MATLAB sparse matrix", lambda: read_array(hf["mat_sparse"]), ("sparse",)),
         ("complex cube", lambda: read_cube(hf["npz_complex"]), ("complex",)),
+        ("complex MATLAB v5 cube (listed as double)", lambda: read_cube(hf["mat_complex"]),
+         ("complex",)),
         ("3 wavelengths for 4 bands", lambda: read_cube(hf["npz_wavelengths"]), ("wavelengths",)),
         ("TIFF pages of two shapes", lambda: read_cube(hf["tiff_mixed"]), ("series", "pages")),
     ] + [
-        (f"a {what} named .npy", lambda k=key: read_array(hf[k]), ("file",))
+        (f"a {what} named .npy", lambda k=key: read_array(hf[k]), ("regular file",))
         for key, what in (("fifo", "FIFO"), ("dev_zero", "link to /dev/zero")) if key in hf
+    ] + [
+        (f"a {what} as a frame", lambda k=key: read_frame(hf[k]), ("regular file",))
+        for key, what in (("fifo", "FIFO"), ("dev_zero", "link to /dev/zero")) if key in hf
+    ] + [
+        ("a folder as a bundle", lambda: load_bundle(folder), ("regular file",)),
     ] + [
         (f"Zarr {what}", lambda k=key: read_array(hf[k]), words)
         for key, what, words in (

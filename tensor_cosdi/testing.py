@@ -242,7 +242,8 @@ def hostile_files(folder) -> dict:
     ``hdf5_link`` (an external link named ``cube``), ``hdf5_chunks`` (2×2×2
     data in 128³-element gzip chunks), ``npz_bomb`` (4 MiB of zeros in a few
     KiB), ``mat_bomb`` (2 MiB compressed), ``mat_padded`` (an 8 MiB padded
-    compressed element), ``mat_sparse``, ``npz_complex``, ``npz_wavelengths``
+    compressed element), ``mat_sparse``, ``npz_complex``, ``mat_complex`` (MATLAB v5
+    lists it as ``double``), ``npz_wavelengths``
     (3 wavelengths for 4 bands), ``tiff_mixed`` (pages of two shapes),
     ``tiff_rgb`` (a 12×16 RGB image, values ``rgb_values(0)``), and on POSIX
     ``fifo`` (a FIFO named ``.npy``) and ``dev_zero`` (a link to ``/dev/zero``
@@ -264,8 +265,8 @@ def hostile_files(folder) -> dict:
         ("hdf5_external", ".h5"), ("hdf5_virtual", ".h5"), ("hdf5_virtual_missing", ".h5"),
         ("hdf5_link", ".h5"), ("hdf5_chunks", ".h5"), ("npz_bomb", ".npz"),
         ("mat_bomb", ".mat"), ("mat_padded", ".mat"), ("mat_sparse", ".mat"),
-        ("npz_complex", ".npz"), ("npz_wavelengths", ".npz"), ("tiff_mixed", ".tif"),
-        ("tiff_rgb", ".tif"),
+        ("npz_complex", ".npz"), ("mat_complex", ".mat"), ("npz_wavelengths", ".npz"),
+        ("tiff_mixed", ".tif"), ("tiff_rgb", ".tif"),
     )}  # fmt: skip
     secret = folder / "secret.bin"
     np.full(64, 7.0).tofile(secret)
@@ -292,6 +293,7 @@ def hostile_files(folder) -> dict:
     out["mat_padded"].write_bytes(head + struct.pack("<II", 15, len(data)) + data)
     scipy.io.savemat(out["mat_sparse"], {"mask": scipy.sparse.eye(4, format="csc")})
     np.savez(out["npz_complex"], cube=np.ones((4, 4, 3), complex))
+    scipy.io.savemat(out["mat_complex"], {"cube": np.ones((4, 4, 3)) + 1j})  # listed as double
     np.savez(out["npz_wavelengths"], cube=np.ones((4, 4, 4)), wavelengths=[450.0, 500.0, 550.0])
     with tifffile.TiffWriter(out["tiff_mixed"]) as w:
         for shape in ((8, 8), (8, 8), (4, 4), (8, 8)):

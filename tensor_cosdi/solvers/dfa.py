@@ -106,7 +106,7 @@ def _diff_adjoint(p):
 
 
 def admm_stage(
-    op, g, start, *, basis, tv=None, couplings=(), rho=0.5, lam=0.02, max_iter=40, cg_iter=5,
+    op, g, start, *, basis, tv=None, couplings=(), rho=0.5, lam=0.1, max_iter=60, cg_iter=3,
     tol=1e-4, desc="ADMM", progress=False,
 ):  # fmt: skip
     """One stage of the thesis' DFA reconstruction as printed (Alg. 2-4, Eq. 64, 67, 70):
@@ -135,6 +135,7 @@ def admm_stage(
         ``α = rho · ‖A‖²``; ``τ_θ / α = lam · RMS(start)``.
     max_iter, cg_iter, tol
         ADMM iterations, CG steps per x-step, and the stop on the relative change.
+        The defaults are :func:`multiresolution_dfa`'s (``form="admm"``).
 
     Returns
     -------

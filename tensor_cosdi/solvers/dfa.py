@@ -48,7 +48,10 @@ from .priors import TV, rms, robust_peak, soft
 
 _check_int = engine.check_int
 
-__all__ = ["multiresolution_dfa", "fista_tv", "admm_stage", "FORMS"]
+__all__ = [
+    "multiresolution_dfa", "fista_tv", "admm_stage", "finite_differences",
+    "finite_differences_adjoint", "FORMS",
+]  # fmt: skip
 
 #: ``form`` of :func:`multiresolution_dfa`: FISTA-TV with hard ties (default) or the printed
 #: ADMM of Alg. 2-4.
@@ -88,16 +91,24 @@ def fista_tv(
     )
 
 
-def _diff(x):
-    """Forward differences along axes 0 and 1 (0 past the last row / column): ``T x``,
-    stacked on a new last axis."""
+def finite_differences(x):
+    """Forward differences along axes 0 and 1 (0 past the last row / column): the ``T`` of
+    Eq. 63 (``‖fg‖_TV = ‖T fg‖₁``), stacked on a new last axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> finite_differences(np.array([[0.0, 1.0], [3.0, 5.0]]))[..., 0]
+    array([[3., 4.],
+           [0., 0.]])
+    """
     d0 = tl.concatenate([x[1:] - x[:-1], 0 * x[-1:]], axis=0)
     d1 = tl.concatenate([x[:, 1:] - x[:, :-1], 0 * x[:, -1:]], axis=1)
     return tl.stack([d0, d1], axis=-1)
 
 
-def _diff_adjoint(p):
-    """``Tᵀ p`` for :func:`_diff` (the negative divergence)."""
+def finite_differences_adjoint(p):
+    """``Tᵀ p`` for :func:`finite_differences` (the negative divergence)."""
     p0, p1 = p[..., 0], p[..., 1]
     z0, z1 = 0 * p0[:1], 0 * p1[:, :1]
     a0 = tl.concatenate([z0, p0[:-1]], axis=0) - tl.concatenate([p0[:-1], z0], axis=0)
@@ -153,7 +164,7 @@ def admm_stage(
         for C, _, sig in ties:
             out = out + sig * C.apply_adjoint(C.apply(v))
         if t_w is not None:
-            out = out + alpha * _diff_adjoint(_diff(v))
+            out = out + alpha * finite_differences_adjoint(finite_differences(v))
         return out
 
     rhs0 = op.apply_adjoint(g)
@@ -162,14 +173,14 @@ def admm_stage(
     x = start
     theta = psi.analysis(x)
     nu = tl.zeros_like(theta)
-    w = None if t_w is None else _diff(x)
+    w = None if t_w is None else finite_differences(x)
     nu_w = None if t_w is None else tl.zeros_like(w)
     loop = engine.Loop(max_iter, tol, progress=progress, desc=desc)
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
     for it in loop:
         rhs = rhs0 + alpha * psi.synthesis(theta - nu)
         if t_w is not None:
-            rhs = rhs + alpha * _diff_adjoint(w - nu_w)
+            rhs = rhs + alpha * finite_differences_adjoint(w - nu_w)
         x_new = conjugate_gradient(normal, rhs, x0=x, maxiter=cg_iter, warn=False)
         change = relative_change(x_new, x)
         x = x_new
@@ -178,7 +189,7 @@ def admm_stage(
         nu = nu + a - theta
         term = t_theta * float(tl.sum(tl.abs(theta)))
         if t_w is not None:
-            d = _diff(x)
+            d = finite_differences(x)
             w = soft(d + nu_w, t_w)
             nu_w = nu_w + d - w
             term += t_w * float(tl.sum(tl.abs(w)))

@@ -73,12 +73,14 @@ def test_admm_stage_reaches_the_tied_least_squares_solution():
 
 
 def test_finite_differences_and_their_adjoint():
-    from tensor_cosdi.solvers.dfa import _diff, _diff_adjoint
+    from tensor_cosdi.solvers.dfa import finite_differences as T
+    from tensor_cosdi.solvers.dfa import finite_differences_adjoint as Tt
 
     rng = np.random.default_rng(0)
     x, p = rng.standard_normal((5, 4, 3)), rng.standard_normal((5, 4, 3, 2))
-    assert abs(np.vdot(_diff(x), p) - np.vdot(x, _diff_adjoint(p))) < 1e-12
-    assert np.allclose(_diff(x)[:-1, :, :, 0], x[1:] - x[:-1]) and np.all(_diff(x)[-1, ..., 0] == 0)
+    assert abs(np.vdot(T(x), p) - np.vdot(x, Tt(p))) < 1e-12
+    assert np.allclose(T(x)[:-1, :, :, 0], x[1:] - x[:-1]) and np.all(T(x)[-1, ..., 0] == 0)
+    assert np.allclose(T(x)[:, :-1, :, 1], x[:, 1:] - x[:, :-1]) and np.all(T(x)[:, -1, :, 1] == 0)
 
 
 @pytest.mark.parametrize("name", ["cs2li", "mu_cosdi"])

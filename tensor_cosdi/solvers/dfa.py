@@ -98,9 +98,8 @@ def finite_differences(x):
     Examples
     --------
     >>> import numpy as np
-    >>> finite_differences(np.array([[0.0, 1.0], [3.0, 5.0]]))[..., 0]
-    array([[3., 4.],
-           [0., 0.]])
+    >>> finite_differences(np.array([[0.0, 1.0], [3.0, 5.0]]))[..., 0].tolist()
+    [[3.0, 4.0], [0.0, 0.0]]
     """
     d0 = tl.concatenate([x[1:] - x[:-1], 0 * x[-1:]], axis=0)
     d1 = tl.concatenate([x[:, 1:] - x[:, :-1], 0 * x[:, -1:]], axis=1)

@@ -12,9 +12,16 @@ __all__ = ["to_srgb", "rgb_to_cube", "reflectance"]
 
 
 def colour_science():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # colour warns when matplotlib is absent
-        import colour
+    """The ``colour`` package, imported without its side effects on the caller: it warns when
+    matplotlib is absent, and its import switches NumPy's print options to the 1.13 legacy
+    format for the whole process (colour-science 0.4.x) — restored here."""
+    state = np.get_printoptions()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import colour
+    finally:
+        np.set_printoptions(**state)
     return colour
 
 

@@ -28,7 +28,6 @@ All take any spatial size and any band list (default 28 bands, 450–650 nm).
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,13 +78,6 @@ def _wavelengths(wavelengths) -> np.ndarray:
     return wl
 
 
-def _import_colour():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # colour warns when matplotlib is absent
-        import colour
-    return colour
-
-
 def colorchecker(
     shape=(64, 96), wavelengths=None, *, chart: str = "ColorChecker N Ohta", dtype="float64"
 ):
@@ -114,7 +106,9 @@ def colorchecker(
     """
     nx, ny = validate_shape(shape, "shape")
     wl = _wavelengths(wavelengths)
-    colour = _import_colour()
+    from .colour import colour_science
+
+    colour = colour_science()
     charts = colour.SDS_COLOURCHECKERS
     if chart not in charts:
         raise ValueError(f"unknown chart {chart!r}; choose one of {sorted(charts)}")

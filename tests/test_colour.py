@@ -66,3 +66,25 @@ def test_band_axis_and_errors():
         to_srgb(np.ones((2, 2, 2)), [300, 550])
     with pytest.raises(ValueError, match="illuminant"):
         to_srgb(np.ones((2, 2, 2)), [450, 550], illuminant="D99")
+
+
+def test_colour_science_leaves_numpys_print_options_alone():
+    """colour-science's import switches NumPy to the 1.13 legacy print format for the whole
+    process; the library's way in (`colour.colour_science`, used by previews and scenes) must
+    not pass that on to the user.  A fresh interpreter: colour may be imported here already."""
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy as np\n"
+        "before = np.get_printoptions()\n"
+        "import tensor_cosdi as tc\n"
+        "tc.colour.to_srgb(np.ones((2, 2, 3)) * 0.5, [450.0, 550.0, 650.0])\n"
+        "tc.scenes.colorchecker((6, 4), [450.0, 550.0, 650.0])\n"
+        "assert np.get_printoptions() == before, np.get_printoptions()\n"
+        "print(repr(np.array([3.0, 4.0])))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-1500:]
+    assert done.stdout.strip() == "array([3., 4.])"

@@ -31,6 +31,12 @@ def test_the_walk_finds_the_sub_packages_and_their_modules():
         assert name in MODULES, name
 
 
+NUMPY_PRINT_DEFAULTS = dict(
+    edgeitems=3, threshold=1000, floatmode="maxprec", precision=8, suppress=False,
+    linewidth=75, nanstr="nan", infstr="inf", sign="-", formatter=None, legacy=False,
+)  # fmt: skip
+
+
 @pytest.mark.parametrize("name", MODULES)
 def test_docstring_examples(name):
     module = importlib.import_module(name)
@@ -42,6 +48,9 @@ def test_docstring_examples(name):
     state = np.get_printoptions()
     failures = []
     try:
+        # NumPy's default print format, whatever an earlier test's imports left (a bare
+        # `import colour` switches the process to the 1.13 legacy format)
+        np.set_printoptions(**NUMPY_PRINT_DEFAULTS)
         for test in tests:
             result = runner.run(test, out=failures.append, clear_globs=True)
             assert result.attempted > 0

@@ -197,6 +197,8 @@ class BlurSum(TensorOperator):
                 f"input shape {shape}, got {psfs.shape}"
             )
         self.sum_axis = _normalize_axis(sum_axis, len(shape), "sum_axis")
+        if not isinstance(axes, (tuple, list)) or len(axes) != 2:
+            raise ValueError(f"axes must be two distinct axes, got {axes!r}")
         spatial = [_normalize_axis(a, len(shape), "blur axis") for a in axes]
         rest = [a for a in range(len(shape)) if a not in spatial]
         at = 2 + rest.index(self.sum_axis) if self.sum_axis in rest else None

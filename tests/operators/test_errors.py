@@ -133,6 +133,8 @@ def test_constructor_consistency_errors():
         BlurSum((4, 4, 2, 3), np.ones((3, 3, 2, 3, 2)), sum_axis=True)
     with pytest.raises(ValueError, match="at least 3 axes"):
         BlurSum((4, 4), np.ones((3, 3, 2)), sum_axis=1)
+    with pytest.raises(ValueError, match="axes must be two distinct axes"):
+        BlurSum((4, 4, 2, 3), np.ones((3, 3, 2, 3, 2)), sum_axis=3, axes=0)
     with pytest.raises(ValueError, match="n must contain positive integers"):
         Replicate((3, 4), 0, 0)
 

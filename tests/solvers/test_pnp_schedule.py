@@ -1,0 +1,45 @@
+"""pnp_gap's automatic last denoiser level follows the noise and the run's length."""
+
+import importlib
+from unittest import mock
+
+import pytest
+
+import tensor_cosdi as tc
+from tensor_cosdi.noise import snr_schedule
+from tensor_cosdi.solvers.snr import estimate_snr
+
+M = importlib.import_module("tensor_cosdi.solvers.pnp_gap")
+
+
+@pytest.fixture(scope="module")
+def levels():
+    """``{options: (sigma_end, n_steps)}`` that pnp_gap hands its denoiser prior (TV denoiser,
+    a 30-dB problem)."""
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    seen = {}
+    cases = {
+        "plain gap, 20": dict(splitting="gap", accelerate=False),
+        "admm, 40": dict(max_iter=40),
+        "admm, 80": dict(),
+        "accelerated, 40": dict(accelerate=True, max_iter=40),
+        "accelerated, 100": dict(accelerate=True),
+    }
+    for name, opts in cases.items():
+        with mock.patch.object(M, "Denoiser", side_effect=M.Denoiser) as spy:
+            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **opts)
+        kw = spy.call_args.kwargs
+        seen[name] = (kw["sigma_end"], kw["n_steps"])
+    return seen, estimate_snr(p.system, p.measurement).snr_db
+
+
+def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels):
+    seen, snr = levels
+    assert seen["admm, 40"] == (snr_schedule(snr, M.SIGMA_END_ADMM_SHORT), 40)
+    assert seen["admm, 80"] == (snr_schedule(snr, M.SIGMA_END_ADMM), 80)
+    assert seen["accelerated, 40"] == (snr_schedule(snr, M.SIGMA_END_SHORT), 40)
+    assert seen["accelerated, 100"] == (snr_schedule(snr, M.SIGMA_END), 100)
+    # plain GAP's 20-iteration default was tuned with the long table
+    assert seen["plain gap, 20"] == (snr_schedule(snr, M.SIGMA_END), 20)
+    assert seen["admm, 40"][0] > seen["admm, 80"][0]
+    assert seen["accelerated, 40"][0] > seen["accelerated, 100"][0]

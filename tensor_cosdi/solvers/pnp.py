@@ -27,7 +27,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..operators import Code, Replicate, sensing_gain
+from ..operators import Code, Replicate, SumAxis, sensing_gain
 from . import engine
 from ._base import (
     History,
@@ -148,12 +148,7 @@ def hierarchical_pnp(
     )
     z = tl.clip(z, 0, None)
     # 2. modulation (mean 1 over the patterns) and the reflectance F (Nx, Ny, Nλ)
-    zsum = tl.sum(z, axis=2)
-    eps = 1e-6 * max(float(tl.max(zsum)), np.finfo(float).tiny)
-    m = nt * z / (zsum[..., None] + eps)
-    mod = Code(m, (nx, ny, nl, nt), axes=(0, 1, 3)) @ Replicate((nx, ny, nl), 3, nt)
-    from ..operators import SumAxis
-
+    mod, zsum = _modulation(z, nl)
     tie = (SumAxis((nx, ny, nl), 2), zsum / nt, tie_weight)
     f, h2, c2 = pnp_admm_operator(
         op @ mod,
@@ -213,8 +208,6 @@ def joint_pnp(
     ``f ⊗ m`` with the modulation ``m = Nt · z / Σ_t z`` (as :func:`hierarchical_pnp`'s);
     ``depth`` as there.  Returns ``(P, history, converged, depth)``.
     """
-    from ..operators import SumAxis
-
     g = measurement
     nx, ny, nl, nt = system.cube_shape
     op = system.operator
@@ -249,8 +242,8 @@ def joint_pnp(
     eta2 = eta4 = tl.zeros_like(c_f.apply(f))
     loop = engine.Loop(max_iter, tol, progress=progress, desc="PnP-ADMM (Alg. 6, joint)")
     gnorm = max(float(tl.norm(g)), np.finfo(float).tiny)
+    cz = c_z.apply(z)
     for it in loop:
-        cz = c_z.apply(z)
         f_new = solve_f(atg_f + r1 * (theta_f - eta1) + r2 * c_f.apply_adjoint(cz - eta2), f)
         change = relative_change(f_new, f)
         f = f_new
@@ -271,13 +264,21 @@ def joint_pnp(
     f, z = theta_f, tl.clip(theta_z, 0, None)
     if nonneg:
         f = tl.clip(f, 0, None)
-    zsum = tl.sum(z, axis=2)
-    eps = 1e-6 * max(float(tl.max(zsum)), np.finfo(float).tiny)
-    m = nt * z / (zsum[..., None] + eps)
-    cube = (Code(m, (nx, ny, nl, nt), axes=(0, 1, 3)) @ Replicate((nx, ny, nl), 3, nt)).apply(f)
+    cube = _modulation(z, nl)[0].apply(f)
     hist = loop.history
     hist["residual"][-1] = relative_residual(system, cube, g)
     return cube, hist, loop.converged, _phase(z, nt, n_steps)
+
+
+def _modulation(z, nl):
+    """``(M, Σ_t z)``: the operator ``F ↦ F ⊗ m`` of a reflectance ``(Nx, Ny, Nλ)`` under the
+    modulation ``m = Nt · z / Σ_t z`` (mean 1 over the patterns) of fringe images
+    ``z (Nx, Ny, Nt)``, and the patterns' sum."""
+    nx, ny, nt = tl.shape(z)
+    zsum = tl.sum(z, axis=2)
+    eps = 1e-6 * max(float(tl.max(zsum)), np.finfo(float).tiny)
+    m = nt * z / (zsum[..., None] + eps)
+    return Code(m, (nx, ny, nl, nt), axes=(0, 1, 3)) @ Replicate((nx, ny, nl), 3, nt), zsum
 
 
 def _phase(z, nt, n_steps):

@@ -34,7 +34,6 @@ import tensorly as tl
 from .. import _backend as B
 from ..bases import KroneckerBasis
 from ..operators import Code, Replicate, SumAxis
-from ..operators.woodbury import conjugate_gradient
 from . import engine
 from ._base import (
     History,
@@ -166,6 +165,7 @@ def admm_stage(
             out = out + alpha * finite_differences_adjoint(finite_differences(v))
         return out
 
+    solve = engine.cg_solver(normal, rtol=1e-12, maxiter=cg_iter)  # warm-started, inexact
     rhs0 = op.apply_adjoint(g)
     for C, b, sig in ties:
         rhs0 = rhs0 + sig * C.apply_adjoint(b)
@@ -180,7 +180,7 @@ def admm_stage(
         rhs = rhs0 + alpha * psi.synthesis(theta - nu)
         if t_w is not None:
             rhs = rhs + alpha * finite_differences_adjoint(w - nu_w)
-        x_new = conjugate_gradient(normal, rhs, x0=x, maxiter=cg_iter, warn=False)
+        x_new = solve(rhs, x)
         change = relative_change(x_new, x)
         x = x_new
         a = psi.analysis(x)

@@ -325,7 +325,11 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--mask", help="direct path: coded aperture file[:variable]")
     rec.add_argument("--measurement", help="direct path: measurement file[:variable]")
     rec.add_argument("--bands", type=_positive_int, help="direct path: number of bands")
-    rec.add_argument("--shift", type=float, help="direct path: dispersion in pixels per band")
+    rec.add_argument(
+        "--shift",
+        help="direct path: dispersion in pixels per band, or one shift per band (a "
+        "comma-separated list or a file of values, e.g. a prism's)",
+    )
     rec.add_argument(
         "--wavelengths",
         help="direct path: band centres in nm: START:STOP (evenly spaced), a comma-separated "
@@ -367,7 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--calibrate",
         action="store_true",
         help="direct path, SD-CASSI: estimate where the mask sits on the sensor (sub-pixel) from "
-        "the capture and reconstruct with the mask moved there",
+        "the capture, and the dispersion direction where the shifts are unevenly spaced, and "
+        "reconstruct with the mask moved (and the dispersion mirrored) there",
     )
     rec.add_argument(
         "--preview",

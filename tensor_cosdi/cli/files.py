@@ -11,6 +11,29 @@ import numpy as np
 from .util import _method_defaults, done_line, run_metadata
 
 
+def _values(text: str, flag: str, what: str):
+    """A comma-separated list or a text / ``.npy`` / ``.csv`` file of numbers (``None`` when
+    ``text`` is neither)."""
+    if "," in text:
+        try:
+            return np.array([float(v) for v in text.split(",") if v.strip()])
+        except ValueError:
+            raise ValueError(what) from None
+    p = Path(text)
+    if p.is_file():
+        try:
+            v = np.load(p, allow_pickle=False) if p.suffix == ".npy" else np.loadtxt(
+                p, delimiter="," if p.suffix == ".csv" else None
+            )  # fmt: skip
+        except Exception as e:
+            raise ValueError(f"{flag} {text}: not a file of numbers ({e})") from None
+        v = np.asarray(v)
+        if v.dtype.kind not in "biuf":
+            raise ValueError(f"{flag} {text}: not a file of numbers (dtype {v.dtype})")
+        return v.astype(np.float64).reshape(-1)
+    return None
+
+
 def parse_wavelengths(text: str, n: int) -> np.ndarray:
     """``--wavelengths`` → ``n`` band centres in nm, checked.
 
@@ -35,25 +58,42 @@ def parse_wavelengths(text: str, n: int) -> np.ndarray:
         except ValueError:
             raise ValueError(what) from None
         wl = np.linspace(lo, hi, n)
-    elif "," in text:
-        try:
-            wl = np.array([float(v) for v in text.split(",") if v.strip()])
-        except ValueError:
-            raise ValueError(what) from None
-    elif Path(text).is_file():
-        p = Path(text)
-        try:
-            wl = np.load(p, allow_pickle=False) if p.suffix == ".npy" else np.loadtxt(
-                p, delimiter="," if p.suffix == ".csv" else None
-            )  # fmt: skip
-        except Exception as e:
-            raise ValueError(f"--wavelengths {text}: not a file of numbers ({e})") from None
-        wl = np.asarray(wl, dtype=np.float64).reshape(-1)
     else:
-        raise ValueError(what)
+        wl = _values(text, "--wavelengths", what)
+        if wl is None:
+            raise ValueError(what)
     if wl.size != n:
         raise ValueError(f"--wavelengths gives {wl.size} band centres for {n} bands")
     return check_wavelengths_nm(wl, "--wavelengths")
+
+
+def parse_shifts(text: str, n):
+    """``--shift`` → a step in pixels per band (a number) or one shift per band (a
+    comma-separated list or a text / ``.npy`` / ``.csv`` file of ``n`` values, e.g. a prism's
+    :meth:`~tensor_cosdi.optics.DoubleAmiciPrism.shifts`); the system checks the values."""
+    text = str(text).strip()
+    what = (
+        "--shift must be a number of pixels per band, a comma-separated list or a file of "
+        f"per-band shifts; got {text!r}"
+    )
+    try:
+        step = float(text)
+    except ValueError:
+        step = None
+    if step is not None:
+        if not np.isfinite(step):
+            raise ValueError(what)
+        return int(step) if step.is_integer() else step
+    shifts = _values(text, "--shift", what)
+    if shifts is None:
+        raise ValueError(what)
+    if n is None:
+        raise ValueError("--shift with one shift per band needs --bands")
+    if shifts.size != n:
+        raise ValueError(f"--shift gives {shifts.size} shifts for {n} bands")
+    if not np.all(np.isfinite(shifts)):
+        raise ValueError(f"--shift holds NaN or inf: {text!r}")
+    return shifts
 
 
 def _system_from_args(args, code):
@@ -64,7 +104,9 @@ def _system_from_args(args, code):
     cls = REGISTRY[args.system]  # an unknown name lists the registered ones
     params = inspect.signature(cls.__init__).parameters
     kwargs = dict(args.system_option or [])
-    named = {"n_bands": args.bands, "shifts": args.shift}
+    named = {"n_bands": args.bands}
+    if args.shift is not None:
+        named["shifts"] = parse_shifts(args.shift, args.bands)
     if args.wavelengths:
         if args.bands is None:
             raise ValueError("--wavelengths needs --bands")
@@ -73,7 +115,7 @@ def _system_from_args(args, code):
         if v is not None:
             if k not in params:
                 raise ValueError(f"{args.system} takes no {k!r}; its arguments: {list(params)[1:]}")
-            kwargs[k] = int(v) if k == "shifts" and float(v).is_integer() else v
+            kwargs[k] = v
     takes_kwargs = any(p.kind is p.VAR_KEYWORD for p in params.values())
     unknown = [k for k in kwargs if k not in params and not takes_kwargs]
     if unknown:
@@ -157,20 +199,31 @@ def _reconstruct_direct(args) -> int:
 def _registered(system, g):
     """``--calibrate``: the system with its code moved to where the capture says it sits, and
     what the bundle records; an estimate that does not stand out is an error, not a guess."""
-    from ..io import estimate_registration
+    from ..io import estimate_registration, mirror_symmetric
 
-    reg = estimate_registration(system, g)  # refuses imagers without a movable 2-D code
+    # the direction is searched only where a capture can decide it (unevenly spaced shifts)
+    search = callable(getattr(system, "mirrored", None)) and not mirror_symmetric(system.shifts)
+    # refuses imagers without a movable 2-D code
+    reg = estimate_registration(system, g, direction="search" if search else "keep")
     line = (
         f"mask registration: rows {reg.row_offset:+.2f} px, columns {reg.col_offset:+.2f} px "
-        f"(score {reg.score:.3f}, margin {reg.margin:.3f})"
+        f"(score {reg.score:.3f}, margin {reg.margin:.3f}); "
+        + (
+            f"dispersion {'as given' if reg.direction == 1 else 'mirrored'} (direction margin "
+            f"{reg.direction_margin:.3f})"
+            if search
+            else "dispersion as given (evenly spaced shifts: a capture cannot tell its direction)"
+        )
     )
     if not reg.reliable:
         raise ValueError(
             f"{line} does not stand out (needs score ≥ {reg.MIN_SCORE}, margin ≥ "
-            f"{reg.MIN_MARGIN}); reconstruct without --calibrate or check the mask file"
+            f"{reg.MIN_MARGIN}"
+            + (f", direction margin ≥ {reg.MIN_DIRECTION_MARGIN}" if search else "")
+            + "); reconstruct without --calibrate or check the mask file"
         )
     print(line)
-    keys = ("row_offset", "col_offset", "score", "margin")
+    keys = ("row_offset", "col_offset", "score", "margin", "direction", "direction_margin")
     return reg.apply(system), {"registration": {k: getattr(reg, k) for k in keys}}
 
 

@@ -9,8 +9,8 @@ flat
 measurement.
 * :func:`calibrate_lenslet_grid` → :class:`LensletGrid` (pitch, offset, rotation, views).
 * :func:`code_from_monochromator`, :func:`shifts_from_line_frames` — a measured code per band and
-the
-  dispersion (Appendix A).
+  the dispersion (Appendix A); :func:`estimate_registration` — the mask's offset on the sensor
+  (and the dispersion direction, for unevenly spaced shifts) from a capture alone.
 * :func:`save_bundle`, :func:`load_bundle` — one file with the data, the system, calibration and
 provenance.
 * :class:`AcquisitionPlan`, :class:`SerialDevice`, :class:`Acquisition`
@@ -24,6 +24,7 @@ from .calibration import (
     Registration,
     code_from_monochromator,
     estimate_registration,
+    mirror_symmetric,
     shifts_from_line_frames,
 )
 from .files import read_array, read_cube, split_key, write_cube
@@ -77,6 +78,7 @@ __all__ = [
     "code_from_monochromator",
     "shifts_from_line_frames",
     "estimate_registration",
+    "mirror_symmetric",
     "Registration",
     "Acquisition",
     "AcquisitionPlan",

@@ -14,7 +14,12 @@ on the sensor from the capture itself: the measurement's fine texture is the
 code's texture seen through the dispersion, so its correlation with the
 sensing of a white scene ``A 1`` through a shifted mask peaks at the true
 offset.  A shift by one band step ``s`` changes ``A 1`` only at the
-measurement's ends, so the whole measurement is used, edges included.
+measurement's ends, so the whole measurement is used, edges included.  The
+same criterion decides the dispersion *direction* where the per-band shifts
+are not evenly spaced (a prism's): the mirrored system then shears the code
+into another texture.  With evenly spaced shifts it cannot, nor can any
+criterion on the capture: the mirrored system measures the band-reversed
+cube exactly as the other measures the cube.
 """
 
 from __future__ import annotations
@@ -30,7 +35,11 @@ __all__ = [
     "estimate_registration",
     "Registration",
     "shift_code",
+    "mirror_symmetric",
 ]
+
+#: ``estimate_registration``'s ``direction`` values.
+DIRECTION_MODES = ("keep", "search")
 
 
 def _stack(frames, what):
@@ -168,6 +177,13 @@ class Registration:
         so margins are small even when the peak is right.
     grid : dict
         The score at every integer offset searched, ``{(row, col): score}``.
+    direction : {1, -1}
+        The dispersion relative to the system as filed: ``1`` as filed, ``-1``
+        mirrored (:meth:`~tensor_cosdi.systems.SDCASSI.mirrored`).  Always
+        ``1`` unless the direction was searched.
+    direction_margin : float or None
+        With a searched direction: the best score in that direction minus
+        the best in the other (``None``: not searched).
     """
 
     row_offset: float
@@ -175,28 +191,52 @@ class Registration:
     score: float
     margin: float
     grid: dict = field(repr=False, default_factory=dict)
+    direction: int = 1
+    direction_margin: float | None = None
 
-    #: ``reliable`` needs at least this score and this margin.
+    #: ``reliable`` needs at least this score and this margin (and, with a searched direction,
+    #: this direction margin).
     MIN_SCORE = 0.1
     MIN_MARGIN = 0.01
+    MIN_DIRECTION_MARGIN = 0.01
 
     @property
     def reliable(self) -> bool:
-        """Whether the peak stands out: ``score ≥ MIN_SCORE`` and ``margin ≥ MIN_MARGIN``."""
-        return self.score >= self.MIN_SCORE and self.margin >= self.MIN_MARGIN
+        """Whether the peak stands out: ``score ≥ MIN_SCORE``, ``margin ≥ MIN_MARGIN`` and, when
+        the direction was searched, ``direction_margin ≥ MIN_DIRECTION_MARGIN``."""
+        ok = self.score >= self.MIN_SCORE and self.margin >= self.MIN_MARGIN
+        if self.direction_margin is not None:
+            ok = ok and self.direction_margin >= self.MIN_DIRECTION_MARGIN
+        return ok
 
     def apply(self, system):
         """The system with its code moved by the estimated offsets (linear interpolation; the
-        border row or column repeats where the shift uncovers one)."""
+        border row or column repeats where the shift uncovers one), its dispersion mirrored when
+        ``direction`` is ``-1``."""
         code = np.asarray(system.code, dtype=np.float64)
-        moved = shift_code(code, self.row_offset, self.col_offset)
-        return system.with_code(moved)
+        moved = system.with_code(shift_code(code, self.row_offset, self.col_offset))
+        return moved.mirrored() if self.direction == -1 else moved
 
 
 def shift_code(code: np.ndarray, rows: float, cols: float) -> np.ndarray:
     """``code`` moved by ``(rows, cols)`` pixels (linear interpolation, edges repeated)."""
     shift = (rows, cols) + (0.0,) * (code.ndim - 2)
     return ndimage.shift(code, shift, order=1, mode="nearest")
+
+
+def mirror_symmetric(shifts, tol: float = 0.05) -> bool:
+    """Whether mirroring the dispersion (shifts ``s_l`` → ``max(s) − s_l``) gives the same set of
+    shifts, within ``tol`` px: then the mirrored system measures the band-reversed cube exactly
+    as the other measures the cube, and no capture can tell the directions apart (evenly
+    spaced shifts are; a prism's are not).
+
+    >>> mirror_symmetric([0, 2, 4, 6]), mirror_symmetric([0, 2.4, 4.7, 6.8])
+    (True, False)
+    """
+    s = np.asarray(shifts, dtype=np.float64).ravel()
+    if s.size == 0 or not np.all(np.isfinite(s)):
+        raise ValueError(f"shifts must be finite numbers, got {shifts!r}")
+    return bool(np.allclose(np.sort(s.max() - s), np.sort(s), rtol=0.0, atol=tol))
 
 
 def _texture(a: np.ndarray) -> np.ndarray:
@@ -220,8 +260,11 @@ def _peak(positions, values, half_width: float = 0.5) -> float:
     return best
 
 
-def estimate_registration(system, measurement, *, max_offset: int = 3) -> Registration:
-    """Estimate the mask-to-sensor offset of a coded-aperture capture from the capture alone.
+def estimate_registration(
+    system, measurement, *, max_offset: int = 3, direction: str = "keep"
+) -> Registration:
+    """Estimate the mask-to-sensor offset of a coded-aperture capture from the capture alone, and
+    the dispersion direction where the shifts allow it.
 
     Parameters
     ----------
@@ -233,6 +276,12 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
     max_offset : int
         Integer offsets ``−max_offset … max_offset`` are searched in rows and
         columns, then refined to 0.05 px around the best.
+    direction : {"keep", "search"}
+        ``"keep"``: the dispersion runs as the system says.  ``"search"``:
+        also try the mirrored dispersion and keep the better-scoring one
+        (twice the time).  Only for shifts that are not mirror-symmetric
+        (:func:`mirror_symmetric`; evenly spaced shifts are refused with the
+        reason).
 
     Returns
     -------
@@ -247,10 +296,15 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
     the measurement and that of ``A' 1`` (a white scene seen through the
     code shifted by the candidate offset).  A data-fit residual hardly
     changes with the offset (a reconstruction absorbs the error); the
-    texture correlation does.  The dispersion *direction* is not estimated:
-    a mirrored system measures the band-reversed cube exactly as the other
-    measures the cube (see :class:`~tensor_cosdi.systems.SDCASSI`'s
-    ``shear_direction``), so no criterion on the capture can tell them apart.
+    texture correlation does.  The same score decides the dispersion
+    direction when the per-band shifts are unevenly spaced (a prism
+    disperses blue more than red): the mirrored system then shears the code
+    into another texture (``benchmarks/results/registration_direction.md``).
+    With evenly spaced shifts no criterion on the capture can: the mirrored
+    system measures the band-reversed cube exactly as the other measures the
+    cube (see :class:`~tensor_cosdi.systems.SDCASSI`'s ``shear_direction``);
+    the direction then comes from the optics or a calibration frame
+    (:func:`shifts_from_line_frames`).
 
     Examples
     --------
@@ -291,11 +345,37 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
         )
     if not np.all(np.isfinite(g)):
         raise ValueError("the measurement holds NaN or infinite values")
+    if not isinstance(direction, str) or direction not in DIRECTION_MODES:
+        raise ValueError(f"direction must be one of {DIRECTION_MODES}, got {direction!r}")
+    if direction == "search":
+        if not callable(getattr(system, "mirrored", None)):
+            raise ValueError(
+                f"direction='search' needs an imager that can mirror its dispersion (SDCASSI), "
+                f"got {type(system).__name__}"
+            )
+        if mirror_symmetric(system.shifts):
+            raise ValueError(
+                "direction='search' cannot decide with evenly spaced shifts (mirror-symmetric: "
+                "the mirrored system measures the band-reversed cube exactly as this one "
+                "measures the cube); take the direction from the optics or a calibration frame"
+            )
     a = _texture(g)
     norm_a = float(np.linalg.norm(a))
     if norm_a == 0.0:
         raise ValueError("the measurement has no texture (a constant frame): nothing to register")
     a = a / norm_a
+    found = _register(system, code, a, max_offset)
+    if direction == "keep":
+        return Registration(*found)
+    other = _register(system.mirrored(), code, a, max_offset)
+    if other[2] > found[2]:
+        return Registration(*other, direction=-1, direction_margin=float(other[2] - found[2]))
+    return Registration(*found, direction=1, direction_margin=float(found[2] - other[2]))
+
+
+def _register(system, code, a, max_offset):
+    """``(row, col, score, margin, grid)`` of the best code offset for the unit-norm texture
+    ``a`` of a capture (see :func:`estimate_registration`)."""
     white = np.ones(system.cube_shape)
     cache: dict = {}
 
@@ -318,4 +398,4 @@ def estimate_registration(system, measurement, *, max_offset: int = 3) -> Regist
     best_score = score(x, y)
     far = [v for (gr, gc), v in grid.items() if max(abs(gr - x), abs(gc - y)) >= 1.5]
     margin = best_score - (max(far) if far else -1.0)
-    return Registration(float(x), float(y), float(best_score), float(margin), grid)
+    return float(x), float(y), float(best_score), float(margin), grid

@@ -46,7 +46,9 @@ GAP_TV_WARM_ITER = 80
 #: :func:`pnp_fast`'s ``warm_iter``: OTD's ADMM stage cut from 45 iterations to 20.  Four
 #: tuning scenes (cloth, balloons, clay, feathers; TSA mask, 256×256×28): 30.47 → 30.36 dB
 #: noiseless, 29.14 → 29.07 dB at 30 dB; with the start's ADMM stage dropped altogether 29.89
-#: and 25.42 dB.
+#: and 25.42 dB.  Its first stage keeps OTD's 90 iterations (``pan_iter``): 12 tuning scenes,
+#: 4 folds (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at
+#: 30 dB, 20 lose 2.9 and 1.2 dB.
 FAST_WARM_ITER = 20
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
@@ -133,6 +135,7 @@ def pnp_gap(
     max_iter="auto",
     warm: str = "otd",
     warm_iter="auto",
+    pan_iter="auto",
     accelerate="auto",
     eps="auto",
     splitting="auto",
@@ -170,6 +173,10 @@ def pnp_gap(
         The denoiser refines a good start; from the least-norm one it climbs
         slowly (a learned denoiser removes what looks like noise, not the
         coded-aperture pattern's large-scale errors).
+    pan_iter : int or "auto"
+        With ``warm="otd"``: the iterations of OTD's first stage (its
+        ``pan_iter``; ``"auto"``: OTD's default).  Any other start refuses an
+        integer here.
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration
@@ -291,6 +298,7 @@ def pnp_gap(
         prior,
         warm=warm,
         warm_iter=warm_iter,
+        pan_iter=pan_iter,
         accelerate=accelerate,
         eps=eps,
         max_iter=max_iter,
@@ -304,16 +312,18 @@ def pnp_gap(
 
 def warm_started_gap(
     system, g, prior, *, warm, warm_iter, accelerate, eps, max_iter, tol, progress, desc,
-    guard=None, rho=None,
+    guard=None, rho=None, pan_iter="auto",
 ):  # fmt: skip
     """:func:`~tensor_cosdi.solvers.engine.gap` (or, with ``rho``, :func:`~.engine.admm`) with
     ``prior`` from a ``warm`` start (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
-    least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own); one history for both
-    stages.  Returns ``(x, history, converged)``."""
+    least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
+    first-stage iterations, ``"auto"`` its own); one history for both stages.  Returns
+    ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter)
+    pan_iter = _check_pan_iter(pan_iter, warm)
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -323,7 +333,10 @@ def warm_started_gap(
     elif warm == "otd":
         from .otd import online_tucker_admm
 
-        start, hist, _ = online_tucker_admm(system, g, admm_iter=warm_iter, progress=progress)
+        pan = {} if pan_iter == "auto" else {"pan_iter": pan_iter}
+        start, hist, _ = online_tucker_admm(
+            system, g, admm_iter=warm_iter, progress=progress, **pan
+        )
     elif warm == "dcosnet":  # one pass of the shipped network (torch; weights for this system)
         from ._base import History
         from .dcosnet import dcosnet
@@ -349,6 +362,20 @@ def _check_warm_iter(warm_iter):
             raise ValueError(f"warm_iter must be 'auto' or an integer ≥ 1, got {warm_iter!r}")
         return warm_iter
     return engine.check_int("warm_iter", warm_iter, 1)
+
+
+def _check_pan_iter(pan_iter, warm):
+    if isinstance(pan_iter, str):
+        if pan_iter != "auto":
+            raise ValueError(f"pan_iter must be 'auto' or an integer ≥ 1, got {pan_iter!r}")
+        return pan_iter
+    pan_iter = engine.check_int("pan_iter", pan_iter, 1)
+    if warm != "otd":
+        raise ValueError(
+            f"pan_iter sets the first stage of the OTD start; warm={warm!r} has none "
+            "(use warm='otd' or leave pan_iter='auto')"
+        )
+    return pan_iter
 
 
 def _joined(first, second):

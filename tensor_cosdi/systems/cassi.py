@@ -162,6 +162,19 @@ class SDCASSI(System):
             colour=self.colour,
         )  # fmt: skip
 
+    def mirrored(self) -> "SDCASSI":
+        """The same imager with its dispersion mirrored: shifts ``s_l`` → ``max(s) − s_l`` (the
+        band that moved least moves most), same code, wavelengths and colour.
+
+        >>> import numpy as np
+        >>> SDCASSI(np.ones((4, 5)), n_bands=3, shifts=[0, 1, 3]).mirrored().shifts.tolist()
+        [3, 2, 0]
+        """
+        return SDCASSI(
+            self.code, n_bands=self.cube_shape[2], shifts=self.shifts.max() - self.shifts,
+            wavelengths=self.wavelengths, colour=self.colour,
+        )  # fmt: skip
+
     @property
     def shear_direction(self) -> int:
         """``-1`` when the first band is shifted most (a mirrored dispersion), else ``1``."""

@@ -297,3 +297,47 @@ def test_calibrate_moves_the_mask_to_where_the_capture_says_it_sits(tmp_path, ca
     assert cli.main(args("noise.h5", "noise.mat", "--calibrate")) == 2
     assert "does not stand out" in capsys.readouterr().err
     assert not (tmp_path / "noise.h5").exists()
+    assert "dispersion as given (evenly spaced shifts" in out
+
+
+def test_calibrate_finds_a_mirrored_prism_dispersion_given_per_band_shifts(tmp_path, capsys):
+    """``--shift`` as a file of a prism's per-band shifts; the capture was taken with the
+    dispersion mirrored and the mask moved: ``--calibrate`` says so, the bundle's system is the
+    mirrored one and the reconstruction beats the system as filed."""
+    from tensor_cosdi.io.calibration import shift_code
+
+    wl = np.linspace(450, 650, 12)
+    shifts = tc.optics.DoubleAmiciPrism().shifts(wl, distance_mm=30, pixel_um=6, integer=True)
+    np.savetxt(tmp_path / "shifts.txt", shifts)
+    mask = tc.codes.random_binary((48, 48), rng=4)
+    true = tc.systems.SDCASSI(shift_code(mask, -0.5, 1.2), n_bands=12, shifts=shifts,
+                              wavelengths=wl, shear_direction=-1)  # fmt: skip
+    cube = tc.scenes.colorchecker((48, 48), wl)
+    scipy.io.savemat(tmp_path / "mask.mat", {"mask": mask})
+    scipy.io.savemat(tmp_path / "meas.mat", {"meas": true.simulate(cube, snr_db=30, rng=0)})
+
+    def args(out, shift, *extra):
+        return [
+            "reconstruct", "--system", "sd_cassi", "--mask", str(tmp_path / "mask.mat"),
+            "--shift", shift, "--bands", "12", "--wavelengths", "450:650",
+            "--measurement", str(tmp_path / "meas.mat:meas"), "--out", str(tmp_path / out),
+            "--method", "gap_tv", "--quiet", *extra,
+        ]  # fmt: skip
+
+    assert cli.main(args("plain.h5", str(tmp_path / "shifts.txt"))) == 0
+    assert cli.main(args("fixed.h5", ",".join(f"{v:g}" for v in shifts), "--calibrate")) == 0
+    out = capsys.readouterr().out
+    assert "dispersion mirrored (direction margin" in out, out
+    fixed = load_bundle(tmp_path / "fixed.h5")
+    np.testing.assert_array_equal(fixed.system.shifts, true.shifts)
+    assert fixed.metadata["registration"]["direction"] == -1
+    psnr = {
+        name: metrics.psnr(cube, load_bundle(tmp_path / name).cube, data_range=1.0)
+        for name in ("plain.h5", "fixed.h5")
+    }
+    assert psnr["fixed.h5"] > psnr["plain.h5"] + 3.0, psnr
+    for bad, message in (("1,2", "gives 2 shifts for 12 bands"), ("inf", "--shift must be"),
+                         ("two", "--shift must be"), ("1,x,3", "--shift must be")):  # fmt: skip
+        assert cli.main(args("bad.h5", bad)) == 2
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "bad.h5").exists()

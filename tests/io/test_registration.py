@@ -92,3 +92,61 @@ def test_only_movable_single_codes_and_the_right_measurement():
     vsi = tc.systems.REGISTRY["cassi_vsi"].example((16, 16, 4))
     with pytest.raises(ValueError, match="movable code"):
         estimate_registration(vsi, np.ones(vsi.measurement_shape))
+
+
+def prism_shifts(wl):
+    """The thesis' double Amici prism 30 mm before a 6-µm sensor, whole pixels: unevenly spaced
+    (steps of 2 or 3 px over the KAIST bands)."""
+    return tc.optics.DoubleAmiciPrism().shifts(wl, distance_mm=30, pixel_um=6, integer=True)
+
+
+def test_a_prism_dispersion_in_either_direction_is_found_with_the_offset():
+    """The real TSA mask moved by seeded offsets under a real scene at 20 dB, through a prism's
+    unevenly spaced shifts, the dispersion as filed or mirrored: the search names the true
+    direction and both offsets within 0.25 px, and the corrected system is the true one."""
+    n = 96
+    cube, wl, mask = real_problem(n)
+    shifts = prism_shifts(wl)
+    assert not tc.io.mirror_symmetric(shifts)
+    rng = np.random.default_rng(11)
+    w = (slice(80, 80 + n), slice(80, 80 + n))
+    for trial, direction in enumerate((1, -1, -1, 1)):
+        true = rng.uniform(-2, 2, size=2)
+        truth = tc.systems.SDCASSI(shift_code(mask, *true)[w], n_bands=28, shifts=shifts,
+                                   wavelengths=wl, shear_direction=direction)  # fmt: skip
+        g = truth.simulate(cube, snr_db=20, rng=trial)
+        filed = tc.systems.SDCASSI(mask[w], n_bands=28, shifts=shifts, wavelengths=wl)
+        reg = estimate_registration(filed, g, direction="search")
+        assert reg.direction == direction, (trial, reg)
+        assert reg.direction_margin >= reg.MIN_DIRECTION_MARGIN and reg.reliable, reg
+        assert abs(reg.row_offset - true[0]) <= 0.25 and abs(reg.col_offset - true[1]) <= 0.25
+        fixed = reg.apply(filed)
+        np.testing.assert_array_equal(fixed.shifts, truth.shifts)
+        assert fixed.shear_direction == direction
+    kept = estimate_registration(filed, g)  # "keep": the direction as filed, not searched
+    assert kept.direction == 1 and kept.direction_margin is None
+
+
+def test_evenly_spaced_shifts_refuse_a_direction_search_with_the_reason():
+    sd = tc.systems.SDCASSI(tc.codes.random_binary((24, 24), rng=0), n_bands=6, shifts=2)
+    g = sd.simulate(tc.scenes.colorchecker((24, 24), sd.wavelengths), snr_db=40, rng=0)
+    with pytest.raises(ValueError, match="evenly spaced shifts"):
+        estimate_registration(sd, g, direction="search")
+    # …because the mirrored system measures the band-reversed cube exactly
+    cube = np.random.default_rng(0).random(sd.cube_shape)
+    np.testing.assert_allclose(sd.mirrored().forward(cube[:, :, ::-1]), sd.forward(cube))
+    for bad in ("mirror", 1, None):
+        with pytest.raises(ValueError, match="direction must be one of"):
+            estimate_registration(sd, g, direction=bad)
+
+
+def test_mirrored_twice_is_the_system_and_symmetry_is_tested_on_the_shift_set():
+    sd = tc.systems.SDCASSI(tc.codes.random_binary((8, 8), rng=0), n_bands=4, shifts=[0, 1, 3, 6])
+    once = sd.mirrored()
+    assert once.shifts.tolist() == [6, 5, 3, 0] and once.shear_direction == -1
+    np.testing.assert_array_equal(once.mirrored().shifts, sd.shifts)
+    np.testing.assert_array_equal(once.wavelengths, sd.wavelengths)
+    assert tc.io.mirror_symmetric([0, 2, 4, 6]) and tc.io.mirror_symmetric([0, 1, 5, 6])
+    assert not tc.io.mirror_symmetric([0, 1, 3, 6])
+    with pytest.raises(ValueError, match="finite"):
+        tc.io.mirror_symmetric([0, np.nan])

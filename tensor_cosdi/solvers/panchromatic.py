@@ -3,6 +3,7 @@ start the spatial bases, and the cube on the way to it (:func:`subspace_gap_tv`)
 
 from __future__ import annotations
 
+import numpy as np
 from tensorly import tenalg
 
 from .. import _backend as B
@@ -127,8 +128,7 @@ def subspace_gap_tv(
     denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
 
     def subspace_tv(v, weight):
-        coef = tenalg.multi_mode_dot(v, mats, modes=modes, transpose=True)
-        return tenalg.multi_mode_dot(denoise(coef, weight), mats, modes=modes)
+        return subspace_denoise(v, mats, modes, denoise, weight)
 
     x, _, _ = engine.gap(
         system.operator,
@@ -141,3 +141,37 @@ def subspace_gap_tv(
         objective=False,  # an internal stage: its history is not returned
     )
     return x
+
+
+def subspace_denoise(v, atoms, modes, denoise, weight):
+    """``P denoise(Pᵀ v, weight)`` with ``P`` the ``atoms`` matrices along ``modes``: a denoiser
+    run on a few coefficient images instead of every band (the subspace TV of
+    :func:`subspace_gap_tv`).
+
+    A Fortran-ordered NumPy ``v`` (the shear kernels' layout, which the solvers keep) with one
+    mode, its last axis, gives a Fortran-ordered result: ``vᵀ`` is C-ordered with that axis
+    first, so both products are single GEMMs.  The general mode products return the transformed
+    axis first in memory, and every shear of the next iteration paid for it (90 iterations of
+    :func:`subspace_gap_tv` at 256×256×28: 1.31 → 1.10 s, the same estimate).
+
+    >>> import numpy as np
+    >>> from tensor_cosdi.bases import dct
+    >>> v = np.asfortranarray(np.random.default_rng(0).random((4, 5, 6)))
+    >>> out = subspace_denoise(v, [dct(6)[:, :2]], [2], lambda c, w: c, 0.1)
+    >>> out.flags.f_contiguous, out.shape
+    (True, (4, 5, 6))
+    """
+    if (
+        isinstance(v, np.ndarray)
+        and list(modes) == [v.ndim - 1]
+        and v.ndim > 1
+        and v.flags.f_contiguous
+        and not v.flags.c_contiguous
+    ):
+        m = np.asarray(atoms[0])
+        rev = v.shape[::-1]
+        coef = (m.T @ v.T.reshape(rev[0], -1)).reshape((m.shape[1], *rev[1:])).T
+        den = np.asfortranarray(denoise(coef, weight))
+        return (m @ den.T.reshape(m.shape[1], -1)).reshape(rev).T
+    coef = tenalg.multi_mode_dot(v, atoms, modes=modes, transpose=True)
+    return tenalg.multi_mode_dot(denoise(coef, weight), atoms, modes=modes)

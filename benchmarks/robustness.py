@@ -715,7 +715,8 @@ def option_cases():
         return problems[name]
 
     for method, opt in (("pnp_gap", "warm_iter"), ("pnp_fast", "warm_iter"), ("dl", "warm_iter"),
-                        ("otd", "admm_iter")):  # "auto" or a count: not caught by type below
+                        ("otd", "admm_iter"),
+                        ("pnp_gap", "pan_iter")):  # "auto" or a count: not caught by type below
         if method not in tc.reconstruct.methods():
             continue
         system, g = problem_for(method)
@@ -770,6 +771,20 @@ def option_cases():
          lambda: tc.io.estimate_registration(vsi, np.ones(vsi.measurement_shape)), ("movable",)),
         ("denoisers.wavelet sigma=nan", lambda: denoisers.wavelet(np.ones((4, 4, 2)), np.nan),
          ("sigma",)),
+        ("estimate_registration direction='mirror'",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g, direction="mirror"), ("direction",)),
+        ("estimate_registration direction=-1",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g, direction=-1), ("direction",)),
+        ("estimate_registration direction search with even shifts",
+         lambda: tc.io.estimate_registration(reg_sd, reg_g, direction="search"), ("evenly",)),
+        ("estimate_registration direction search on CASSI-VSI",
+         lambda: tc.io.estimate_registration(vsi, np.ones(vsi.measurement_shape),
+                                             direction="search"), ("movable",)),
+        ("mirror_symmetric NaN shift", lambda: tc.io.mirror_symmetric([0, np.nan]), ("shifts",)),
+        ("mirror_symmetric no shifts", lambda: tc.io.mirror_symmetric([]), ("shifts",)),
+        ("pnp_gap pan_iter with a GAP-TV start",
+         lambda: tc.reconstruct(*problem_for("pnp_gap"), "pnp_gap", warm="gap_tv", pan_iter=30),
+         ("pan_iter",)),
     ]:  # fmt: skip
         out.append(Case("options", name, call, words))
     system, g = problem_for("lsq")

@@ -268,6 +268,7 @@ def pnp_gap(
         sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)
     warm_iter = _check_warm_iter(warm_iter)
+    pan_iter = _check_pan_iter(pan_iter, warm)
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
@@ -370,7 +371,7 @@ def _check_pan_iter(pan_iter, warm):
             raise ValueError(f"pan_iter must be 'auto' or an integer ≥ 1, got {pan_iter!r}")
         return pan_iter
     pan_iter = engine.check_int("pan_iter", pan_iter, 1)
-    if warm != "otd":
+    if warm in WARM_STARTS and warm != "otd":  # an unknown start is named by its own check
         raise ValueError(
             f"pan_iter sets the first stage of the OTD start; warm={warm!r} has none "
             "(use warm='otd' or leave pan_iter='auto')"

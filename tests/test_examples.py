@@ -64,6 +64,11 @@ def _mask_registration(ns):
     assert reg.reliable
     psnr = ns["psnr"]
     assert psnr["mask registered"] > psnr["mask as filed"] + 1.0, psnr
+    reg = ns["reg_prism"]  # a prism mounted the other way round: found, and the fit improves
+    assert reg.direction == -1 and reg.reliable, reg
+    assert abs(reg.row_offset - true[0]) <= 0.25 and abs(reg.col_offset - true[1]) <= 0.25, reg
+    psnr = ns["psnr_prism"]
+    assert psnr["registered"] > psnr["as filed"] + 3.0, psnr
 
 
 def _sdcassi_forward(ns):

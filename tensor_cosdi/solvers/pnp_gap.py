@@ -205,7 +205,10 @@ def pnp_gap(
         acceleration (clean data; tuning split 30.71 → 31.01 dB) and with
         ADMM (four tuning scenes at 30 dB, TSA mask, 256×256×28: 29.52 →
         29.73 dB, every scene +0.11 … +0.34, about 5 s more a cube; 120
-        single-call iterations instead gave 29.66).
+        single-call iterations instead gave 29.66).  At 30 dB, 4 with
+        ``max_iter=120`` gains about 0.2 dB more for twice the time
+        (``benchmarks/results/cv_pnp_gap_ensemble.md``: 28.11 → 28.34 dB on
+        four tuning scenes, the choice of every fold).
     precision : {"float32", "bfloat16", "auto"}
         The learned denoiser's arithmetic
         (:class:`~tensor_cosdi.learn.spectral_net.SpectralDenoiser`):

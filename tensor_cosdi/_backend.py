@@ -9,6 +9,7 @@ NumPy arrays and convert them once per context (see :class:`ParamCache`).
 
 from __future__ import annotations
 
+import os
 import threading
 
 import numpy as np
@@ -23,6 +24,7 @@ __all__ = [
     "check_floating",
     "default_rng",
     "ParamCache",
+    "thread_limit",
     "rfftn",
     "irfftn",
     "batched_solve",
@@ -175,12 +177,28 @@ class ParamCache:
 
 
 # ---------------------------------------------------------------- FFT and solves
+def thread_limit() -> int:
+    """Threads the library's own parallel NumPy work (FFTs, TV channel chunks) may use: the
+    ``OMP_NUM_THREADS`` limit where the environment sets a positive one (a single-threaded
+    Dask worker of :func:`tensor_cosdi.studies.local_client`, a batch job), else the CPUs this
+    process may run on.  Two such workers on two cores each running two FFT threads spent
+    their time waiting for each other.
+    """
+    limit = os.environ.get("OMP_NUM_THREADS", "").strip()
+    if limit.isdigit() and int(limit) > 0:
+        return int(limit)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
 def rfftn(x, s, axes):
     """Real FFT over ``axes`` with zero padding to sizes ``s`` (any backend)."""
     if isinstance(x, np.ndarray):
         import scipy.fft
 
-        return scipy.fft.rfftn(x, s=s, axes=axes, workers=-1)
+        return scipy.fft.rfftn(x, s=s, axes=axes, workers=thread_limit())
     if backend_name() == "pytorch":
         import torch
 
@@ -193,7 +211,7 @@ def irfftn(X, s, axes):
     if isinstance(X, np.ndarray):
         import scipy.fft
 
-        return scipy.fft.irfftn(X, s=s, axes=axes, workers=-1)
+        return scipy.fft.irfftn(X, s=s, axes=axes, workers=thread_limit())
     if backend_name() == "pytorch":
         import torch
 

@@ -233,10 +233,15 @@ def mirror_symmetric(shifts, tol: float = 0.05) -> bool:
     >>> mirror_symmetric([0, 2, 4, 6]), mirror_symmetric([0, 2.4, 4.7, 6.8])
     (True, False)
     """
-    s = np.asarray(shifts, dtype=np.float64).ravel()
+    try:
+        s = np.asarray(shifts, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        s = np.array([np.nan])
     if s.size == 0 or not np.all(np.isfinite(s)):
         raise ValueError(f"shifts must be finite numbers, got {shifts!r}")
-    return bool(np.allclose(np.sort(s.max() - s), np.sort(s), rtol=0.0, atol=tol))
+    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.number)) or not tol >= 0:
+        raise ValueError(f"tol must be a number of pixels ≥ 0, got {tol!r}")
+    return bool(np.allclose(np.sort(s.max() - s), np.sort(s), rtol=0.0, atol=float(tol)))
 
 
 def _texture(a: np.ndarray) -> np.ndarray:

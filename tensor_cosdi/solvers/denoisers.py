@@ -49,7 +49,7 @@ def _like(out: np.ndarray, x):
 
 
 def _workers(channels: int) -> int:
-    return max(1, min(channels, os.cpu_count() or 1, 8))
+    return max(1, min(channels, B.thread_limit(), 8))
 
 
 _POOL: dict = {}

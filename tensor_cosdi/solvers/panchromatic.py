@@ -152,7 +152,8 @@ def subspace_denoise(v, atoms, modes, denoise, weight):
     mode, its last axis, gives a Fortran-ordered result: ``vᵀ`` is C-ordered with that axis
     first, so both products are single GEMMs.  The general mode products return the transformed
     axis first in memory, and every shear of the next iteration paid for it (90 iterations of
-    :func:`subspace_gap_tv` at 256×256×28: 1.31 → 1.10 s, the same estimate).
+    :func:`subspace_gap_tv` at 256×256×28: 1.45 → 1.13 s, medians of four alternated runs, the
+    same estimate).
 
     >>> import numpy as np
     >>> from tensor_cosdi.bases import dct

@@ -148,5 +148,9 @@ def test_mirrored_twice_is_the_system_and_symmetry_is_tested_on_the_shift_set():
     np.testing.assert_array_equal(once.wavelengths, sd.wavelengths)
     assert tc.io.mirror_symmetric([0, 2, 4, 6]) and tc.io.mirror_symmetric([0, 1, 5, 6])
     assert not tc.io.mirror_symmetric([0, 1, 3, 6])
-    with pytest.raises(ValueError, match="finite"):
-        tc.io.mirror_symmetric([0, np.nan])
+    for bad in ([0, np.nan], [], "abc", [[0, 1], [2]]):
+        with pytest.raises(ValueError, match="shifts must be finite numbers"):
+            tc.io.mirror_symmetric(bad)
+    for tol in (-0.1, np.nan, "0.1", True):
+        with pytest.raises(ValueError, match="tol must be"):
+            tc.io.mirror_symmetric([0, 1, 3], tol=tol)

@@ -93,3 +93,28 @@ def test_tv_on_an_accelerator_is_scikit_images_tv_with_its_stopping_rule(dtype, 
     assert isinstance(got, torch.Tensor) and got.dtype == torch.from_numpy(x).dtype
     np.testing.assert_allclose(got.numpy(), ref, atol=1e-6 if dtype == np.float32 else 1e-12)
     assert seen and max(seen) == (5,)  # only the channels' energies came to the host
+
+
+def test_threads_follow_the_environments_limit(monkeypatch):
+    """FFTs and TV chunks use ``OMP_NUM_THREADS`` where it is set (a single-threaded Dask worker)
+    and the CPUs the process may use otherwise; the TV result does not depend on it."""
+    from unittest import mock
+
+    import scipy.fft
+
+    from tensor_cosdi import _backend
+    from tensor_cosdi.solvers.denoisers import tv
+
+    x = np.random.default_rng(0).random((24, 20, 6))
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    free = _backend.thread_limit()
+    assert free >= 1
+    many = tv(x, 0.1)
+    for value, want in (("1", 1), ("3", 3), ("0", free), ("lots", free), ("", free)):
+        monkeypatch.setenv("OMP_NUM_THREADS", value)
+        assert _backend.thread_limit() == want, value
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    np.testing.assert_array_equal(tv(x, 0.1), many)
+    with mock.patch.object(scipy.fft, "rfftn", wraps=scipy.fft.rfftn) as spy:
+        _backend.rfftn(x, s=(32, 32), axes=(0, 1))
+    assert spy.call_args.kwargs["workers"] == 1

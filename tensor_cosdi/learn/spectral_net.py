@@ -314,9 +314,11 @@ class SpectralDenoiser:
         dev = self._device(x)
         if isinstance(x, torch.Tensor):
             t = x
-        else:  # torch takes no negative strides (a flipped view): a contiguous copy then
+        else:  # torch takes no negative strides (a flipped view, as the self-ensemble hands
+            # over): a copy then, in the view's own memory order (a C-ordered copy of a
+            # flipped Fortran-ordered cube would transpose it)
             a = np.asarray(B.to_numpy(x))
-            t = torch.from_numpy(a if all(s >= 0 for s in a.strides) else a.copy())
+            t = torch.from_numpy(a if all(s >= 0 for s in a.strides) else a.copy(order="K"))
         work_dtype = torch.float32
         t = t.to(device=dev, dtype=work_dtype).reshape(shape[0], shape[1], -1)
         scale = _robust_peak(t)
@@ -332,8 +334,8 @@ class SpectralDenoiser:
         fortran = (
             not isinstance(x, torch.Tensor)
             and len(shape) == 3
-            and np.asarray(x).flags.f_contiguous
-            and not np.asarray(x).flags.c_contiguous
+            and t.permute(2, 1, 0).is_contiguous()
+            and not t.is_contiguous()
         )
         if fortran:  # (bands, columns, rows) in C order: pixels column-major, no copy
             flat = (t / scale).permute(2, 1, 0).reshape(1, shape[2], -1).transpose(1, 2)

@@ -142,7 +142,7 @@ def admm(
     atg = op.apply_adjoint(g)
     if isinstance(start, list):
         start = start.pop() if len(start) == 1 else _bad_handoff(start)
-    x = solve(atg, None) if start is None else layout_like(start, atg)
+    x = solve(atg, None) if start is None else _layout_like(start, atg)
     del start
     prior.setup(x, penalty=r, gain=r / rho)
     z = prior.prox(x)
@@ -182,7 +182,7 @@ def admm(
     return z, loop.history, loop.converged
 
 
-def layout_like(x, ref):
+def _layout_like(x, ref):
     """``x`` in ``ref``'s memory order (NumPy; C or Fortran order, else ``x`` as it is): the
     operator's adjoint returns its fast layout (Fortran order for the shear kernels), and a
     start in the other order would keep every iterate there — the coded shear of a C-ordered

@@ -230,6 +230,19 @@ def mirror_symmetric(shifts, tol: float = 0.05) -> bool:
     as the other measures the cube, and no capture can tell the directions apart (evenly
     spaced shifts are; a prism's are not).
 
+    Parameters
+    ----------
+    shifts : sequence of float
+        Per-band column shifts in pixels (``SDCASSI.shifts``).
+    tol : float
+        Pixels by which the two sorted shift sets may differ.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
     >>> mirror_symmetric([0, 2, 4, 6]), mirror_symmetric([0, 2.4, 4.7, 6.8])
     (True, False)
     """

@@ -441,7 +441,17 @@ def build_parser() -> argparse.ArgumentParser:
     dc.add_argument(
         "--mask", default="tsa",
         help="tsa (crops of the real TSA mask), random (Bernoulli ½ codes), mixed (TSA crops and "
-        "binary codes of density 0.3-0.7, half and half), or a .npy/.mat",
+        "binary codes of density 0.3-0.7, half and half), seeded (one fixed Bernoulli ½ code of "
+        "the patch's size drawn from --seed), or a .npy/.mat",
+    )  # fmt: skip
+    dc.add_argument(
+        "--learn-code", action="store_true",
+        help="learn the binary code with the network (thesis §7.3), starting from --mask seeded",
+    )  # fmt: skip
+    dc.add_argument(
+        "--code-until", type=float, default=0.5,
+        help="fraction of the steps during which a learned code changes; then it is held while "
+        "the network adapts (default 0.5)",
     )  # fmt: skip
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
     dc.add_argument(

@@ -92,5 +92,7 @@ def run_train_dcosnet(args) -> int:
         lr_end=min(1e-5, args.lr),
         seed=args.seed,
         hold_out=args.hold_out,
+        learn_code=args.learn_code,
+        code_until=args.code_until,
     )
     return _run_training(args, train_dcosnet, cfg.check())

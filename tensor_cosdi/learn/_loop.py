@@ -84,8 +84,9 @@ def run(
 
     ``prepare(cfg)`` loads the data (before the seeds are set); ``build(torch,
     cfg, data)`` returns the model; ``batch_loss(torch, net, rng, dev, cfg,
-    data)`` returns one batch's scalar loss.  ``weights_config(cfg)`` is the
-    dict stored beside the weights to rebuild the model.
+    data, step)`` returns one batch's scalar loss (``step``: the optimiser
+    steps done).  ``weights_config(cfg)`` is the dict stored beside the
+    weights to rebuild the model.
     """
     torch = require_torch()
     from tqdm import tqdm
@@ -159,7 +160,7 @@ def run(
     bar = tqdm(total=cfg.steps, initial=step, desc=desc, disable=not progress)
     net.train()
     while step < last:
-        loss = batch_loss(torch, net, rng, dev, cfg, data)
+        loss = batch_loss(torch, net, rng, dev, cfg, data, step)
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)

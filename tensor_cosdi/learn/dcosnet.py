@@ -46,7 +46,18 @@ import tensorly as tl
 from .. import _backend as B
 from . import require_torch
 
-__all__ = ["DCoSNet", "Sensing", "build_dcosnet", "ssim", "default_weights", "PRIORS"]
+__all__ = [
+    "DCoSNet",
+    "Sensing",
+    "build_dcosnet",
+    "ssim",
+    "default_weights",
+    "PRIORS",
+    "seeded_code",
+    "tile_code",
+    "training_code",
+    "read_config",
+]
 
 WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
 #: Shipped weights per system name.
@@ -113,9 +124,13 @@ class Sensing:
     def coded_shear(cls, codes, offsets, *, device=None, dtype=None):
         """What ``Sensing`` builds from single-shot SD-CASSI systems with the 2-D ``codes``
         ``(B, H, W)`` and the whole-pixel per-band column ``offsets`` (one per band, the
-        systems' ``shifts``), without building the systems (a training batch)."""
+        systems' ``shifts``), without building the systems (a training batch).
+
+        ``codes`` may be a torch tensor that requires a gradient (a code being
+        learned): ``A``, ``Aᵀ`` and ``diag(AAᵀ)`` are then differentiable in it."""
         torch = require_torch()
-        codes = np.asarray(codes)
+        if not isinstance(codes, torch.Tensor):
+            codes = np.asarray(codes)
         offsets = tuple(int(o) for o in offsets)
         if codes.ndim != 3 or not offsets or min(offsets) < 0:
             raise ValueError(
@@ -135,9 +150,9 @@ class Sensing:
 
     def _set_codes(self, codes):
         torch = require_torch()
-        self.codes = torch.from_numpy(np.ascontiguousarray(codes)).to(
-            device=self.device, dtype=self.dtype
-        )
+        if not isinstance(codes, torch.Tensor):
+            codes = torch.from_numpy(np.ascontiguousarray(codes))
+        self.codes = codes.to(device=self.device, dtype=self.dtype)
         self.d = self._shear_sum(self.codes[:, None] ** 2)
         self.dbar = self.d.reshape(len(codes), -1).mean(dim=1)
 
@@ -264,9 +279,16 @@ def _spectral_prior(torch, stages: int, r_max: int = 12, width: int = 64, blocks
 
 def build_dcosnet(
     torch, channels: int, stages: int = 1, width: int = 32, unet_width: int = 32,
-    prior: str = "unet",
+    prior: str = "unet", code_shape=None,
 ):  # fmt: skip
     """The untrained network (a ``torch.nn.Module``) for cubes of ``channels`` channels.
+
+    ``code_shape`` ``(rows, columns)`` adds a learnable binary coded aperture
+    (thesis §7.3: the code trained with the network): real logits ``θ``
+    (``code_logits``), a code ``1[θ > 0]`` in the forward pass and the
+    gradient of ``sigmoid(θ / τ)`` (``τ`` = :data:`CODE_TEMPERATURE`) in the
+    backward pass (a straight-through estimator), so every code the network
+    sees is binary.  ``binary_code()`` returns it.
 
     ``prior="unet"`` is the thesis' Module II, one U-Net per stage trained
     from scratch; ``"spectral"`` is the subspace denoiser of
@@ -346,10 +368,20 @@ def build_dcosnet(
             self.c_up = nn.ModuleList([conv_stack(4) for _ in range(stages)])
             self.c_lo = nn.ModuleList([conv_stack(3) for _ in range(stages)])
             self.prior = prior
+            if code_shape is not None:
+                self.code_logits = nn.Parameter(torch.zeros(tuple(int(n) for n in code_shape)))
             if prior == "unet":
                 self.unet = nn.ModuleList([UNet() for _ in range(stages)])
             else:
                 self.spectral = _spectral_prior(torch, stages)
+
+        def binary_code(self):
+            """The learned code (0/1, straight-through gradient); ``None`` without one."""
+            theta = getattr(self, "code_logits", None)
+            if theta is None:
+                return None
+            soft = torch.sigmoid(theta / CODE_TEMPERATURE)
+            return (theta > 0).to(theta.dtype) + (soft - soft.detach())  # exactly 0 / 1
 
         def denoise(self, x, k):
             return self.unet[k](x) if self.prior == "unet" else self.spectral(x, k)
@@ -379,6 +411,68 @@ def build_dcosnet(
             return w, sensing.forward(w)
 
     return DCoSNetModule()
+
+
+#: Temperature of the straight-through code's surrogate gradient (``sigmoid(θ/τ)``).
+CODE_TEMPERATURE = 0.25
+
+
+def seeded_code(shape, seed: int) -> np.ndarray:
+    """The fixed Bernoulli(½) code ``mask="seeded"`` trains with (and a learned code starts
+    from): ``shape`` ``(rows, columns)`` drawn from ``numpy.random.default_rng(seed)``."""
+    rows, cols = (int(n) for n in shape)
+    if rows < 1 or cols < 1:
+        raise ValueError(f"a code needs a positive shape, got {shape}")
+    return (np.random.default_rng(seed).random((rows, cols)) < 0.5).astype(np.float64)
+
+
+def tile_code(code, shape) -> np.ndarray:
+    """``code`` repeated periodically (from its top-left corner) to cover ``shape`` — how a
+    network trained on one patch-sized code is used on a larger scene."""
+    code = np.asarray(code)
+    if code.ndim != 2 or code.size == 0:
+        raise ValueError(f"need a non-empty 2-D code, got shape {code.shape}")
+    rows, cols = (int(n) for n in shape)
+    reps = (-(-rows // code.shape[0]), -(-cols // code.shape[1]))
+    return np.tile(code, reps)[:rows, :cols]
+
+
+def _checkpoint(weights):
+    torch = require_torch()
+    path = Path(weights)
+    if not path.is_file():
+        raise FileNotFoundError(f"D-CoSNet weights not found: {path}")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+        dict(ckpt["config"])["channels"]
+    except Exception as exc:  # a pickle of anything else, a truncated file, another network
+        raise ValueError(
+            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({exc})"
+        ) from None
+    return path, ckpt
+
+
+def read_config(weights) -> dict:
+    """The configuration D-CoSNet ``weights`` record (system, channels, shift, stages, widths,
+    prior and, for one seeded or learned code, ``code``/``code_shape``/``code_seed``)."""
+    return dict(_checkpoint(weights)[1]["config"])
+
+
+def training_code(weights):
+    """The binary code that D-CoSNet ``weights`` were trained with when it was one fixed code
+    (``mask="seeded"``) or a learned one, else ``None`` (crops of a mask or random codes)."""
+    path, ckpt = _checkpoint(weights)
+    try:
+        cfg = dict(ckpt["config"])
+        kind = cfg.get("code")
+        if kind == "learned":
+            return (ckpt["model"]["code_logits"] > 0).double().numpy()
+        if kind == "seeded":
+            return seeded_code(cfg["code_shape"], int(cfg["code_seed"]))
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet "
+                         f"({exc})") from None
+    return None
 
 
 def ssim(x, y, *, data_range: float = 1.0, sigma: float = 1.5, win: int = 11):
@@ -435,11 +529,15 @@ class DCoSNet:
         ckpt = torch.load(path, map_location="cpu", weights_only=True)
         try:
             cfg = dict(ckpt["config"])
+            learned = cfg.get("code") == "learned"
             net = build_dcosnet(
                 torch, int(cfg["channels"]), int(cfg["stages"]), int(cfg["width"]),
                 int(cfg["unet_width"]), cfg.get("prior", "unet"),
+                code_shape=cfg["code_shape"] if learned else None,
             )  # fmt: skip
             net.load_state_dict(ckpt["model"])
+            if cfg.get("code") in ("learned", "seeded"):
+                cfg["trained_code"] = training_code(path)
         except (KeyError, TypeError, RuntimeError) as exc:
             raise ValueError(
                 f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({exc})"
@@ -461,6 +559,15 @@ class DCoSNet:
                 f"{mine['system']} with {mine['channels']} channels and a shift of {step}: "
                 f"train weights for it (tensor-cosdi train-dcosnet --system {system.name} …)"
             )
+        code = cfg.get("trained_code")
+        if code is not None:
+            own = np.asarray(B.to_numpy(system.code))
+            if own.ndim != 2 or not np.array_equal(own != 0, tile_code(code, own.shape) != 0):
+                raise ValueError(
+                    f"these D-CoSNet weights were trained with one {cfg['code']} "
+                    f"{code.shape[0]}×{code.shape[1]} code; build the system with it "
+                    "(tensor_cosdi.learn.dcosnet.tile_code(training_code(weights), shape))"
+                )
 
     def __call__(self, system, measurement):
         torch = self.torch

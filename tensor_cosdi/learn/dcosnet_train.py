@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .dcosnet import Sensing, _per_sample, build_dcosnet, ssim
+from .dcosnet import Sensing, _per_sample, build_dcosnet, seeded_code, ssim
 
 __all__ = [
     "DCoSNetConfig",
@@ -35,7 +35,15 @@ class DCoSNetConfig:
     in ``../shared/data/masks``), ``"random"`` (a fresh Bernoulli(½) code per
     sample), ``"mixed"`` (per sample, a TSA crop or a fresh binary code of a
     density drawn from 0.3–0.7, half and half: a network for any binary code)
-    or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    ``"seeded"`` (one fixed Bernoulli(½) code of the crop's size drawn from
+    ``seed``, :func:`~tensor_cosdi.learn.dcosnet.seeded_code`, used whole and
+    never flipped) or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    ``learn_code``: learn the code with the network (thesis §7.3), starting
+    from the ``"seeded"`` code (the only mask it takes) during the first
+    ``code_until`` of the steps, then holding it while the network adapts to
+    the final code; the learned binary code is stored with the weights
+    (:func:`~tensor_cosdi.learn.dcosnet.training_code`) and the network
+    reconstructs only through it.
     ``hold_out``: -1 trains on every tuning scene, ``k`` leaves fold ``k`` of
     ``datasets.tune_folds(4)`` out for validation.
     ``prior``: ``"unet"`` (the thesis' per-stage U-Net, from scratch) or
@@ -68,6 +76,9 @@ class DCoSNetConfig:
     seed: int = 0
     checkpoint_every: int = 100
     hold_out: int = -1
+    learn_code: bool = False
+    #: fraction of the steps during which a learned code changes (then it is held)
+    code_until: float = 0.5
 
     def check(self):
         if self.system not in TRAINABLE_SYSTEMS:
@@ -96,9 +107,25 @@ class DCoSNetConfig:
             raise ValueError(
                 f"noiseless_fraction must lie in [0, 1], got {self.noiseless_fraction}"
             )
+        if not isinstance(self.learn_code, bool):
+            raise ValueError(f"learn_code must be True or False, got {self.learn_code!r}")
+        u = self.code_until
+        if isinstance(u, bool) or not isinstance(u, (int, float)) or not 0 < u <= 1:
+            raise ValueError(f"code_until must be a fraction in (0, 1], got {u!r}")
+        if self.learn_code and self.mask != "seeded":
+            raise ValueError(
+                f"learn_code starts from the seeded code: needs mask='seeded', got {self.mask!r}"
+            )
+        if self.learn_code and self.system != "sd_cassi":
+            raise ValueError(f"learn_code is for sd_cassi, got system={self.system!r}")
         if not self.snr_min <= self.snr_max:
             raise ValueError(f"need snr_min ≤ snr_max, got {self.snr_min}, {self.snr_max}")
         return self
+
+    @property
+    def fixed_code(self) -> bool:
+        """One code used whole and never flipped (``"seeded"`` or a code being learned)."""
+        return self.mask == "seeded" or self.learn_code
 
     @property
     def margin(self) -> int:
@@ -116,7 +143,7 @@ class DCoSNetConfig:
 def _load_mask(spec, folder=None):
     """The 2-D training code named by ``spec`` (see :class:`DCoSNetConfig`), or ``None`` for
     ``"random"``."""
-    if spec == "random":
+    if spec in ("random", "seeded"):  # "seeded": made from the config (training_data)
         return None
     if spec in ("tsa", "mixed"):
         from ..datasets import data_dir
@@ -158,8 +185,8 @@ def training_data(cfg: DCoSNetConfig, folder=None):
     wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
     names = training_scenes(cfg.hold_out)
     cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in names]
-    code = _load_mask(cfg.mask, folder)
     need = (cfg.patch, cfg.patch + cfg.margin)
+    code = seeded_code(need, cfg.seed) if cfg.mask == "seeded" else _load_mask(cfg.mask, folder)
     if code is not None and (code.shape[0] < need[0] or code.shape[1] < need[1]):
         raise ValueError(f"the mask {code.shape} is smaller than a training crop {need}")
     offsets = None  # SD-CASSI: the batch's sensing is built from its codes alone
@@ -168,13 +195,15 @@ def training_data(cfg: DCoSNetConfig, folder=None):
     return cubes, code, offsets
 
 
-def sample_batch(rng, cfg: DCoSNetConfig, data):
+def sample_batch(rng, cfg: DCoSNetConfig, data, *, windows: bool = False):
     """One batch ``(clean (B, p, p, L) float32, [code (p, p + margin), …])`` drawn from the
-    random stream ``rng`` and :func:`training_data`'s ``data``."""
+    random stream ``rng`` and :func:`training_data`'s ``data``; with ``windows=True`` also
+    each code crop's ``(row, column)`` corner in the training code (a learned code is cropped
+    at the same places)."""
     cubes, code, offsets = data
     p = cfg.patch
     clean = np.empty((cfg.batch, p, p, cfg.n_bands), dtype=np.float32)
-    codes = []
+    codes, corners = [], []
     for i in range(cfg.batch):
         c = cubes[int(rng.integers(len(cubes)))]
         r0 = int(rng.integers(0, c.shape[0] - p + 1))
@@ -188,14 +217,16 @@ def sample_batch(rng, cfg: DCoSNetConfig, data):
             density, fresh = 0.5, code is None
         if fresh:
             crop = (rng.random((p, w)) < density).astype(np.float64)
+            corners.append(None)
         else:
             r0 = int(rng.integers(0, code.shape[0] - p + 1))
             c0 = int(rng.integers(0, code.shape[1] - w + 1))
             crop = code[r0 : r0 + p, c0 : c0 + w]
-            if rng.random() < 0.5:
+            if rng.random() < 0.5 and not cfg.fixed_code:
                 crop = crop[::-1]
+            corners.append((r0, c0))
         codes.append(np.ascontiguousarray(crop))
-    return clean, codes
+    return (clean, codes, corners) if windows else (clean, codes)
 
 
 def _sensing(codes, offsets, cfg: DCoSNetConfig, dev):
@@ -215,9 +246,17 @@ def _loss_terms(torch, est, truth, g_est, g_true, dbar, loss: str):
     return total
 
 
-def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
-    clean_np, codes = sample_batch(rng, cfg, data)
-    sensing = _sensing(codes, data[2], cfg, dev)
+def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data, step=0):
+    clean_np, codes, corners = sample_batch(rng, cfg, data, windows=True)
+    if cfg.learn_code:  # the same crops of the code being learned (binary, straight-through)
+        full = net.binary_code()
+        if step >= cfg.code_until * cfg.steps:  # held: no gradient, Adam leaves it alone
+            full = full.detach()
+        w = cfg.patch + cfg.margin
+        crops = torch.stack([full[r : r + cfg.patch, c : c + w] for r, c in corners])
+        sensing = Sensing.coded_shear(crops, data[2], device=dev)
+    else:
+        sensing = _sensing(codes, data[2], cfg, dev)
     truth = torch.from_numpy(clean_np).to(dev).permute(0, 3, 1, 2)
     with torch.no_grad():
         g = sensing.forward(truth)
@@ -236,7 +275,13 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data):
 
 def build_network(torch, cfg: DCoSNetConfig, data):
     """The network; the ``"spectral"`` prior starts from the pretrained denoiser's weights."""
-    net = build_dcosnet(torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width, cfg.prior)
+    net = build_dcosnet(
+        torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width, cfg.prior,
+        code_shape=data[1].shape if cfg.learn_code else None,
+    )  # fmt: skip
+    if cfg.learn_code:  # logits ±1/2 around the starting code: a few hundred steps flip a pixel
+        start = torch.from_numpy((np.asarray(data[1]) > 0).astype(np.float32) - 0.5)
+        net.code_logits.data.copy_(start)
     if cfg.prior == "spectral":
         from .spectral_net import SpectralDenoiser
 
@@ -249,6 +294,15 @@ def build_network(torch, cfg: DCoSNetConfig, data):
                 f"(r_max 12, width 64, 4 blocks): {exc}"
             ) from None
     return net
+
+
+def _code_record(cfg: DCoSNetConfig) -> dict:
+    """What the weights record of their training code (:func:`~.dcosnet.training_code`)."""
+    if not cfg.fixed_code:
+        return {}
+    need = [cfg.patch, cfg.patch + cfg.margin]
+    return {"code": "learned" if cfg.learn_code else "seeded", "code_shape": need,
+            "code_seed": cfg.seed}
 
 
 def train_dcosnet(
@@ -287,6 +341,7 @@ def train_dcosnet(
             "width": cfg.width,
             "unet_width": cfg.unet_width,
             "prior": cfg.prior,
+            **_code_record(cfg),
         },
         resume=resume,
         force=force,

@@ -173,7 +173,7 @@ def _nullspace_noise(torch, noise, rng, p: int):
     return (x - proj).reshape(noise.shape)
 
 
-def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes):
+def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     """One batch's loss (see the module docstring)."""
     from .spectral_net import subspace
 

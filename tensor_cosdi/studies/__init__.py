@@ -18,6 +18,7 @@ from .design import (
     cs2li_comparison,
 )
 from .imagers import vsi_comparison, vsi_ratio
+from .learned import learned_code
 from .problems import (
     SCENES,
     SYSTEMS,
@@ -52,6 +53,7 @@ __all__ = [
     "cs2li_comparison",
     "vsi_comparison",
     "vsi_ratio",
+    "learned_code",
     "zernike_design",
     "c3slfi_table",
     "c3slfi_sparsity",

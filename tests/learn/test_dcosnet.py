@@ -305,3 +305,116 @@ def test_shipped_weights_beat_least_squares_on_a_held_back_real_crop(code, snr, 
     assert net > lsq + margin, (net, lsq)
     warm = tc.reconstruct(system, g, "pnp_gap", warm="dcosnet", max_iter=10).cube
     assert metrics.psnr(cube, np.asarray(warm), data_range=1.0) > net + 0.5
+
+
+@needs_torch
+def test_a_learned_code_changes_then_is_held_and_travels_with_the_weights(tmp_path):
+    """``learn_code``: the seeded code's logits move during the first ``code_until`` of the steps
+    only; the weights record the binary code, reconstruct through it (tiled) and refuse any
+    other code; ``mask="seeded"`` alone records the fixed code it trained with."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import DCoSNet, seeded_code, tile_code, training_code
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, train_dcosnet
+
+    _real()
+    cfg = DCoSNetConfig(
+        n_bands=4, shift=1, stages=1, width=4, unet_width=4, steps=4, batch=2, patch=16,
+        mask="seeded", learn_code=True, code_until=0.5, checkpoint_every=1, warmup=1,
+        lr=0.5, lr_end=0.4, seed=3,
+    )  # fmt: skip
+    out = tmp_path / "code.pt"
+    logits = []
+    for k in range(4):
+        train_dcosnet(out, cfg, progress=False, device="cpu", resume=k > 0, stop_after=1)
+        state = torch.load(out.with_name("code.pt.ckpt"), weights_only=True)["model"]
+        logits.append(state["code_logits"].clone())
+    moved = [float((b - a).abs().max()) for a, b in zip(logits, logits[1:])]
+    assert moved[0] > 0 and moved[1:] == [0.0, 0.0], moved
+    code = training_code(out)
+    start = seeded_code((16, 16), 3)
+    assert code.shape == (16, 16) and set(np.unique(code)) <= {0.0, 1.0}
+    np.testing.assert_array_equal(code, (logits[-1] > 0).double().numpy())
+    assert not np.array_equal(code, start)  # a step of 0.5 on logits ±0.5 flips pixels
+    mine = cfg.make_system(tile_code(code, (24, 40)))
+    g = mine.forward(np.random.default_rng(1).random(mine.cube_shape))
+    cube = DCoSNet(out, device="cpu")(mine, g)
+    assert cube.shape == mine.cube_shape and np.isfinite(cube).all()
+    other = cfg.make_system(tile_code(start, (24, 40)))
+    with pytest.raises(ValueError, match="trained with one learned 16×16 code"):
+        DCoSNet(out, device="cpu")(other, g)
+    fixed = DCoSNetConfig(**{**cfg.__dict__, "learn_code": False, "steps": 1})
+    train_dcosnet(tmp_path / "fixed.pt", fixed, progress=False, device="cpu")
+    np.testing.assert_array_equal(training_code(tmp_path / "fixed.pt"), start)
+    # crops of a mask record no single code
+    mixed = DCoSNetConfig(n_bands=4, shift=1, stages=1, width=4, unet_width=4, steps=1, batch=2,
+                          patch=16, mask="random", warmup=0)  # fmt: skip
+    train_dcosnet(tmp_path / "random.pt", mixed, progress=False, device="cpu")
+    assert training_code(tmp_path / "random.pt") is None
+
+
+@needs_torch
+def test_a_code_being_learned_gets_a_gradient_through_the_closed_form_step():
+    """A torch code that requires a gradient reaches A, Aᵀ and diag(AAᵀ): the straight-through
+    code's logits get a non-zero gradient, and the binary forward equals the fixed code's."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing, build_dcosnet
+
+    rng = np.random.default_rng(0)
+    net = build_dcosnet(torch, 4, stages=1, width=4, unet_width=4, code_shape=(12, 12)).double()
+    net.code_logits.data.copy_(torch.from_numpy(rng.random((12, 12)) - 0.5))
+    code = net.binary_code()
+    np.testing.assert_array_equal(code.detach().numpy(), (net.code_logits > 0).double().numpy())
+    sen = Sensing.coded_shear(code[None], [0, 1, 2, 3], dtype=torch.float64)
+    fixed = Sensing.coded_shear(code.detach()[None].numpy(), [0, 1, 2, 3], dtype=torch.float64)
+    g = torch.from_numpy(rng.random((1, 12, 15)))
+    out, _ = net(g, sen)
+    with torch.no_grad():
+        ref, _ = net(g, fixed)
+    torch.testing.assert_close(out.detach(), ref, rtol=1e-12, atol=0)
+    out.square().sum().backward()
+    assert net.code_logits.grad is not None and float(net.code_logits.grad.abs().sum()) > 0
+
+
+def test_seeded_and_tiled_codes():
+    from tensor_cosdi.learn.dcosnet import seeded_code, tile_code
+
+    a = seeded_code((8, 6), 1)
+    np.testing.assert_array_equal(a, seeded_code((8, 6), 1))
+    assert not np.array_equal(a, seeded_code((8, 6), 2)) and set(np.unique(a)) == {0.0, 1.0}
+    t = tile_code(a, (20, 13))
+    assert t.shape == (20, 13)
+    np.testing.assert_array_equal(t[8:16, 6:12], a)
+    np.testing.assert_array_equal(t[16:, 12:], a[:4, :1])
+    with pytest.raises(ValueError, match="2-D code"):
+        tile_code(np.ones(5), (4, 4))
+    with pytest.raises(ValueError, match="positive shape"):
+        seeded_code((0, 4), 0)
+
+
+@needs_torch
+def test_learned_code_options_are_checked(tmp_path):
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import read_config, training_code
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig
+
+    with pytest.raises(ValueError, match="needs mask='seeded'"):
+        DCoSNetConfig(learn_code=True).check()
+    with pytest.raises(ValueError, match="learn_code is for sd_cassi"):
+        DCoSNetConfig(learn_code=True, mask="seeded", system="mu_cosdi").check()
+    for bad in (0, 1.5, True, "half", -0.1):
+        with pytest.raises(ValueError, match="code_until"):
+            DCoSNetConfig(code_until=bad).check()
+    with pytest.raises(ValueError, match="learn_code must be"):
+        DCoSNetConfig(learn_code="yes", mask="seeded").check()
+    torch.save({"x": 1}, tmp_path / "other.pt")
+    (tmp_path / "cut.pt").write_bytes(b"PK\x03\x04 truncated")
+    for name in ("other.pt", "cut.pt"):
+        with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
+            training_code(tmp_path / name)
+        with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
+            read_config(tmp_path / name)
+    with pytest.raises(FileNotFoundError, match="not found"):
+        training_code(tmp_path / "missing.pt")

@@ -684,6 +684,40 @@ def hostile_file_cases(folder: Path):
     out.append(Case("io.hostile", "save_bundle NaN measurement",
                     lambda: save_bundle(folder / "nan.npz", system=sd, measurement=nan_g),
                     ("nan",)))  # fmt: skip
+    out += _weights_file_cases(folder, sd)
+    return out
+
+
+class _Payload:
+    """A pickle that would run a command when unpickled without ``weights_only``."""
+
+    def __reduce__(self):
+        import os
+
+        return (os.system, ("echo pwned > /dev/null",))
+
+
+def _weights_file_cases(folder: Path, sd):
+    """Network weights that are empty, truncated, a code-running pickle, or another network."""
+    import pickle
+
+    from tensor_cosdi.learn import dcosnet
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    files = {"empty": b"", "truncated": b"PK\x03\x04 not a whole file",
+             "pickle payload": pickle.dumps({"config": _Payload()})}  # fmt: skip
+    out = []
+    g = np.random.default_rng(0).random(sd.measurement_shape)
+    for what, data in files.items():
+        path = folder / f"weights_{what.replace(' ', '_')}.pt"
+        path.write_bytes(data)
+        for name, call in (
+            ("training_code", lambda p=path: dcosnet.training_code(p)),
+            ("dcosnet weights=", lambda p=path: tc.reconstruct(sd, g, "dcosnet", weights=p)),
+            ("SpectralDenoiser", lambda p=path: SpectralDenoiser(p)),
+        ):
+            out.append(Case("learn.hostile", f"{name} of a {what} file", call,
+                            ("checkpoint", "weights", "not a")))  # fmt: skip
     return out
 
 
@@ -701,10 +735,14 @@ def option_cases():
     """Every method's numeric and boolean options given a boolean, a string or inf, and sizes
     that would allocate without bound."""
     from tensor_cosdi.io.triggers import AcquisitionPlan
+    from tensor_cosdi.learn import dcosnet, spectral_net
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig
     from tensor_cosdi.solvers import METHODS, denoisers
+    from tensor_cosdi.studies.learned import CODE_STUDY_WEIGHTS
 
     out = []
     problems = {}
+    other_code = tc.systems.SDCASSI(np.ones((64, 64)), n_bands=28, shifts=2)
 
     def problem_for(method):
         """A small problem on an imager the method is written for (SD-CASSI when any)."""
@@ -785,6 +823,39 @@ def option_cases():
         ("pnp_gap pan_iter with a GAP-TV start",
          lambda: tc.reconstruct(*problem_for("pnp_gap"), "pnp_gap", warm="gap_tv", pan_iter=30),
          ("pan_iter",)),
+        ("train-dcosnet learn_code on TSA crops",
+         lambda: DCoSNetConfig(learn_code=True, mask="tsa").check(), ("seeded",)),
+        ("train-dcosnet learn_code for Mu-CoSDI",
+         lambda: DCoSNetConfig(learn_code=True, mask="seeded", system="mu_cosdi").check(),
+         ("sd_cassi",)),
+        ("train-dcosnet code_until=0", lambda: DCoSNetConfig(code_until=0).check(),
+         ("code_until",)),
+        ("train-dcosnet code_until=nan", lambda: DCoSNetConfig(code_until=np.nan).check(),
+         ("code_until",)),
+        ("train-dcosnet code_until=True", lambda: DCoSNetConfig(code_until=True).check(),
+         ("code_until",)),
+        ("train-dcosnet learn_code='yes'",
+         lambda: DCoSNetConfig(learn_code="yes", mask="seeded").check(), ("learn_code",)),
+        ("tile_code of a 1-D code", lambda: dcosnet.tile_code(np.ones(3), (4, 4)), ("2-d",)),
+        ("tile_code of an empty code", lambda: dcosnet.tile_code(np.ones((0, 3)), (4, 4)),
+         ("2-d",)),
+        ("seeded_code of shape (0, 5)", lambda: dcosnet.seeded_code((0, 5), 0), ("shape",)),
+        ("learned_code without weights", lambda: studies.learned_code({}, progress=False),
+         ("weights",)),
+        ("learned_code with a missing weights file",
+         lambda: studies.learned_code({"x": "/nonexistent/w.pt"}, progress=False), ("not found",)),
+        ("learned_code with one scene name as a string",
+         lambda: studies.learned_code(scenes="cave.face", progress=False), ("scenes",)),
+        ("learned_code with the spectral denoiser's weights",
+         lambda: studies.learned_code({"x": spectral_net.default_weights()}, progress=False),
+         ("checkpoint", "d-cosnet")),
+        ("learned_code with D-CoSNet weights of TSA crops",
+         lambda: studies.learned_code({"x": dcosnet.default_weights("sd_cassi")},
+                                             progress=False),
+         ("seeded or learned",)),
+        ("learned-code D-CoSNet through another code",
+         lambda: tc.reconstruct(other_code, np.ones(other_code.measurement_shape), "dcosnet",
+                                weights=CODE_STUDY_WEIGHTS["learned"]), ("code",)),
     ]:  # fmt: skip
         out.append(Case("options", name, call, words))
     system, g = problem_for("lsq")

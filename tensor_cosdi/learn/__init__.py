@@ -17,7 +17,7 @@ raise an ``ImportError`` naming the extra to install.
 
 from __future__ import annotations
 
-__all__ = ["require_torch"]
+__all__ = ["require_torch", "load_weights"]
 
 
 def require_torch():
@@ -29,3 +29,28 @@ def require_torch():
             "this feature needs PyTorch: pip install 'tensor_cosdi[torch]' (or pip install torch)"
         ) from None
     return torch
+
+
+def load_weights(path, kind: str, command: str) -> dict:
+    """A weights file read with ``torch.load(weights_only=True)`` (no code in a pickle can run);
+    a missing file is a ``FileNotFoundError``, an empty, truncated or foreign one a one-line
+    ``ValueError`` naming ``kind`` and the ``tensor-cosdi command`` that writes such files."""
+    from pathlib import Path
+
+    torch = require_torch()
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{kind} weights not found: {path}")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # EOFError, a zip reader's RuntimeError, UnpicklingError, …
+        why = (str(exc).splitlines() or [""])[0][:100]
+        raise ValueError(
+            f"{path} is not a {kind} checkpoint of tensor-cosdi {command} "
+            f"({type(exc).__name__}: {why})"
+        ) from None
+    if not isinstance(ckpt, dict) or "config" not in ckpt or "model" not in ckpt:
+        raise ValueError(
+            f"{path} is not a {kind} checkpoint of tensor-cosdi {command} (no config and model)"
+        )
+    return ckpt

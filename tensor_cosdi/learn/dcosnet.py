@@ -44,7 +44,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from . import require_torch
+from . import load_weights, require_torch
 
 __all__ = [
     "DCoSNet",
@@ -438,16 +438,13 @@ def tile_code(code, shape) -> np.ndarray:
 
 
 def _checkpoint(weights):
-    torch = require_torch()
     path = Path(weights)
-    if not path.is_file():
-        raise FileNotFoundError(f"D-CoSNet weights not found: {path}")
+    ckpt = load_weights(path, "D-CoSNet", "train-dcosnet")
     try:
-        ckpt = torch.load(path, map_location="cpu", weights_only=True)
         dict(ckpt["config"])["channels"]
-    except Exception as exc:  # a pickle of anything else, a truncated file, another network
+    except (KeyError, TypeError, ValueError) as exc:  # another network's weights
         raise ValueError(
-            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({exc})"
+            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet (no {exc})"
         ) from None
     return path, ckpt
 
@@ -524,9 +521,7 @@ class DCoSNet:
         path = self.path if self.path is not None else default_weights(system_name)
         if path in self._nets:
             return self._nets[path]
-        if not path.is_file():
-            raise FileNotFoundError(f"D-CoSNet weights not found: {path}")
-        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+        ckpt = _checkpoint(path)[1]  # a clear error for a missing, truncated or foreign file
         try:
             cfg = dict(ckpt["config"])
             learned = cfg.get("code") == "learned"

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
-from . import require_torch
+from . import load_weights, require_torch
 
 __all__ = [
     "SubspaceDenoiserNet",
@@ -246,9 +246,7 @@ class SpectralDenoiser:
     ):  # fmt: skip
         torch = require_torch()
         path = Path(weights) if weights is not None else default_weights()
-        if not path.is_file():
-            raise FileNotFoundError(f"denoiser weights not found: {path}")
-        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+        ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
         try:
             cfg = ckpt["config"]
             self.net = _build_net(torch, int(cfg["r_max"]), int(cfg["width"]), int(cfg["blocks"]))

@@ -418,3 +418,22 @@ def test_learned_code_options_are_checked(tmp_path):
             read_config(tmp_path / name)
     with pytest.raises(FileNotFoundError, match="not found"):
         training_code(tmp_path / "missing.pt")
+
+
+@needs_torch
+@pytest.mark.filterwarnings("ignore:Detected pickle protocol")
+@pytest.mark.parametrize("data", [b"", b"PK\x03\x04 cut", b"\x80\x04K\x01."])
+def test_a_weights_file_that_is_not_one_is_a_clear_error(tmp_path, data):
+    """Empty, truncated or a pickle of something else: one ``ValueError`` naming the file and
+    the command that writes such weights, from every reader of weights files."""
+    from tensor_cosdi.learn.dcosnet import DCoSNet, training_code
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    path = tmp_path / "w.pt"
+    path.write_bytes(data)
+    with pytest.raises(ValueError, match="not a spectral-denoiser checkpoint.*train-denoiser"):
+        SpectralDenoiser(path)
+    with pytest.raises(ValueError, match="not a D-CoSNet checkpoint.*train-dcosnet"):
+        training_code(path)
+    with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
+        DCoSNet(path)(_sd(), np.random.default_rng(0).random(_sd().measurement_shape))

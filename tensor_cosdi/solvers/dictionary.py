@@ -193,8 +193,9 @@ class PatchDictionary:
         return B.tensor_like(out.astype(np.asarray(B.to_numpy(x)).dtype, copy=False), x)
 
 
-def _sample_patches(cubes, patch, n_patches, rng):
-    """``n_patches`` random ``patch × patch × C`` patches (columns), evenly from ``cubes``."""
+def _sample_patches(cubes, patch, n_patches, rng, align=(1, 1)):
+    """``n_patches`` random ``patch × patch × C`` patches (columns), evenly from ``cubes``, their
+    corners on multiples of ``align`` (rows, columns)."""
     cubes = [np.asarray(B.to_numpy(c), dtype=np.float64) for c in cubes]
     if not cubes:
         raise ValueError("train_dictionary needs at least one training cube")
@@ -209,8 +210,8 @@ def _sample_patches(cubes, patch, n_patches, rng):
     out = []
     for k, c in enumerate(cubes):
         n = n_patches // len(cubes) + (k < n_patches % len(cubes))
-        r = rng.integers(0, c.shape[0] - patch + 1, n)
-        s = rng.integers(0, c.shape[1] - patch + 1, n)
+        r = rng.integers(0, (c.shape[0] - patch) // align[0] + 1, n) * align[0]
+        s = rng.integers(0, (c.shape[1] - patch) // align[1] + 1, n) * align[1]
         win = sliding_window_view(c, (patch, patch), axis=(0, 1))
         out.append(win[r, s].transpose(0, 2, 3, 1).reshape(n, -1))
     return np.concatenate(out).T
@@ -218,7 +219,7 @@ def _sample_patches(cubes, patch, n_patches, rng):
 
 def train_dictionary(
     cubes, *, patch: int = 8, n_atoms=None, sparsity=None, n_patches: int = 6000,
-    n_iter: int = 10, rng=0, progress: bool = False, **options,
+    n_iter: int = 10, rng=0, align=1, progress: bool = False, **options,
 ) -> PatchDictionary:  # fmt: skip
     """K-SVD on random patches of ``cubes``: the thesis' DL baseline (Section 5.3).
 
@@ -236,6 +237,13 @@ def train_dictionary(
         Atoms per training patch in the coding step (default 8).
     n_patches, n_iter, rng
         Training patches, K-SVD iterations, seed.
+    align : int or (int, int)
+        Training patches start on multiples of ``align`` (rows, columns);
+        default 1, anywhere.  On a C3SLFI lenslet image whose lenslets hold
+        ``views`` pixels, ``align=views`` makes every training patch a whole
+        number of lenslets — the 5-D patch of the thesis' DL-5D (scene points
+        × every view × bands) — and the coding grid must then stay aligned
+        too (a ``stride`` that is a multiple of ``align``; refused otherwise).
     options
         ``stride`` and ``max_nonzero`` of the returned :class:`PatchDictionary`.
 
@@ -257,7 +265,17 @@ def train_dictionary(
     patch = int(patch)
     if patch < 1 or n_iter < 1 or n_patches < 1:
         raise ValueError("patch, n_iter and n_patches must be positive integers")
-    Y = _sample_patches(cubes, patch, int(n_patches), rng)
+    pair = tuple(np.broadcast_to(np.asarray(align, dtype=object), (2,)))
+    if any(isinstance(a, bool) or not isinstance(a, (int, np.integer)) or a < 1 for a in pair):
+        raise ValueError(f"align must be a positive integer or a pair of them, got {align!r}")
+    pair = tuple(int(a) for a in pair)
+    stride = options.get("stride", max(patch // 2, 1))
+    if pair != (1, 1) and any(int(stride) % a for a in pair):
+        raise ValueError(
+            f"the coding stride {stride} must be a multiple of align {pair} so that coded "
+            "patches stay aligned as the training patches are"
+        )
+    Y = _sample_patches(cubes, patch, int(n_patches), rng, pair)
     dim, n = Y.shape
     k = 2 * dim if n_atoms is None else int(n_atoms)
     s = min(8, dim) if sparsity is None else int(sparsity)

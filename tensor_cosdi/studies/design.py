@@ -441,14 +441,20 @@ def c3slfi_sparsity(
     return out
 
 
-def c3slfi_dictionary(shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), seed=0):
-    """The DL-3D baseline's K-SVD dictionary for :func:`c3slfi_table` (cached per argument set).
+def c3slfi_dictionary(
+    shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), seed=0, aligned=False
+):
+    """The DL baselines' K-SVD dictionary for :func:`c3slfi_table` (cached per argument set).
 
     Trained (8 × 8 × ``n_bands`` patches, 2× over-complete, 3000 patches,
     4 iterations, :func:`~tensor_cosdi.solvers.dictionary.train_dictionary`)
     on the lenslet (3-D) light fields of the tuning scenes
     (:data:`tensor_cosdi.datasets.TUNE_SCENES`), or without the research data
     on the photo scenes not in ``exclude`` — never on a scene it is scored on.
+    ``aligned=False``: DL-3D, patches anywhere on the lenslet image;
+    ``True``: DL-5D, patches of whole lenslets (``align=views``), each one
+    the 5-D patch of ``8 / views`` scene points per axis × every view ×
+    every band, coded on the same aligned grid.
     """
     from .. import datasets
     from ..scenes import SCENES
@@ -461,11 +467,15 @@ def c3slfi_dictionary(shape=(64, 64), views=(4, 4), n_bands=31, *, exclude=(), s
     names = tuple(s for s in names if s not in set(exclude))
     if not names:
         raise ValueError(f"no training scene left once {list(exclude)} are excluded")
-    return _trained_dictionary(names, tuple(shape), tuple(views), int(n_bands), seed)
+    if aligned and any(8 % v for v in views):
+        raise ValueError(f"DL-5D needs views dividing the 8-pixel patch, got {tuple(views)}")
+    return _trained_dictionary(
+        names, tuple(shape), tuple(views), int(n_bands), seed, bool(aligned)
+    )
 
 
-@lru_cache(maxsize=4)
-def _trained_dictionary(names, shape, views, n_bands, seed):
+@lru_cache(maxsize=8)
+def _trained_dictionary(names, shape, views, n_bands, seed, aligned=False):
     from ..solvers.dictionary import train_dictionary
     from .problems import make_problem
 
@@ -474,7 +484,8 @@ def _trained_dictionary(names, shape, views, n_bands, seed):
                      views=tuple(views)).cube
         for s in names
     ]  # fmt: skip
-    return train_dictionary(cubes, patch=8, n_patches=3000, n_iter=4, rng=seed)
+    return train_dictionary(cubes, patch=8, n_patches=3000, n_iter=4, rng=seed,
+                            align=tuple(views) if aligned else 1)  # fmt: skip
 
 
 def c3slfi_table_run(
@@ -496,12 +507,12 @@ def c3slfi_table_run(
         n_bands=n_bands, snr_db=snr_db, rng=seed, n_snapshots=n_snapshots, views=tuple(views),
     )  # fmt: skip
     system, g = p.system, p.measurement
-    if method == "dl":  # DL-3D: a K-SVD dictionary of lenslet patches from other scenes
+    if method in ("dl", "dl5"):  # DL-3D / DL-5D: K-SVD dictionaries from other scenes
         if form != "3d":
-            raise ValueError("the DL baseline codes 3-D lenslet patches: use form='3d'")
-        options.setdefault(
-            "dictionary", c3slfi_dictionary(tuple(shape), tuple(views), n_bands, exclude=(scene,))
-        )
+            raise ValueError("the DL baselines code lenslet patches: use form='3d'")
+        options.setdefault("dictionary", c3slfi_dictionary(
+            tuple(shape), tuple(views), n_bands, exclude=(scene,), aligned=method == "dl5"))
+        method = "dl"
     if form == "5d":
         system, g = p.system.as_5d(), p.system.measurement_to_5d(g)
     t0 = time.perf_counter()
@@ -524,7 +535,9 @@ def c3slfi_table(
     (K = 5, 9); here ``n_bands`` (default 31) with K = 2, 3 gives
     6.5 % and 9.7 %.  ``options`` go to every method.  ``"dl"`` (DL-3D, the
     3-D form only) trains its K-SVD dictionary on other scenes with
-    :func:`c3slfi_dictionary` unless ``dictionary=`` is given.  ``"lytro"``
+    :func:`c3slfi_dictionary` unless ``dictionary=`` is given; ``"dl5"``
+    (DL-5D) the same with whole-lenslet patches (``aligned=True``: scene
+    points × every view × every band).  ``"lytro"``
     is the thesis' Lytro-CASSI baseline: the same lenslet cube seen by
     :class:`~tensor_cosdi.systems.LytroCASSI` (an RGB arm plus ``K`` CASSI
     snapshots, so three more frames than C3SLFI's ``K``), reconstructed with

@@ -108,3 +108,31 @@ def test_dl_errors(light_fields):
         train_dictionary([np.ones((8, 8, 2)), np.ones((8, 8, 3))], patch=4)
     with pytest.raises(ValueError, match="smaller than"):
         train_dictionary([np.ones((3, 8, 2))], patch=4)
+
+
+def test_aligned_training_patches_are_whole_lenslets():
+    """``align``: training patches start on multiples of ``align`` (DL-5D's whole lenslets).
+    On a light field whose lenslets all hold the same 4×4 block, every aligned 8×8 patch is the
+    same, so every atom is that patch; patches anywhere see 16 different ones.  A coding stride
+    that would break the alignment is refused."""
+    rng = np.random.default_rng(0)
+    block = rng.random((4, 4, 3)) + 0.5
+    cube = np.tile(block, (8, 6, 1))  # 32×24 lenslet image of identical lenslets
+
+    def spread(**kw):
+        d = train_dictionary([cube], patch=8, n_patches=200, n_iter=1, n_atoms=12,
+                             sparsity=1, **kw)  # fmt: skip
+        gram = np.abs(d.atoms.T @ d.atoms)
+        return d, float(gram.min())
+
+    d, aligned = spread(align=4)
+    assert aligned > 1 - 1e-6 and d.stride == 4  # one patch, up to the atoms' 1e-6 jitter
+    _, anywhere = spread()
+    assert anywhere < 0.99
+    _, rows_only = spread(align=(4, 1))
+    assert rows_only < 0.99  # columns still anywhere
+    with pytest.raises(ValueError, match="multiple of align"):
+        train_dictionary([cube], patch=8, n_patches=50, n_iter=1, align=4, stride=2)
+    for bad in (0, -4, 1.5, True, (4, 0)):
+        with pytest.raises(ValueError, match="align"):
+            train_dictionary([cube], patch=8, n_patches=50, n_iter=1, align=bad)

@@ -43,8 +43,10 @@ algorithms).
    the 3-D and 5-D forms, K = 2, 3 snapshots of 31 bands, 15 / 20 / 50 dB,
    on the real scenes and on two photo-derived ones; ``table1_dl``: the
    DL-3D baseline (K-SVD dictionary of lenslet patches learned on the
-   tuning scenes, ``method="dl"``) and the Lytro-CASSI baseline (``systems.LytroCASSI``,
-   ``method="lytro"``) against OTD-3D and WDCT-3D.
+   tuning scenes, ``method="dl"``), DL-5D (the same on whole lenslets: 2×2
+   scene points × 4×4 views × 31 bands, ``"dl5"``) and the Lytro-CASSI
+   baseline (``systems.LytroCASSI``, ``method="lytro"``) against OTD-3D and
+   WDCT-3D.
 5. ``dcosnet_code`` (Sec. 7.3): ``studies.learned_code`` — the shipped
    D-CoSNet pair trained on one seeded 64×64 code and learning that code
    (SD-CASSI, 28 bands, 2 px per band), each through its own code tiled

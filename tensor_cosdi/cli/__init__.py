@@ -420,7 +420,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="train D-CoSNet (thesis §7, needs torch) for one system on the tuning scenes",
     )
     _training_options(dc, steps=3000, batch=8)
-    dc.add_argument("--system", default="sd_cassi", help="sd_cassi or mu_cosdi (default sd_cassi)")
+    dc.add_argument(
+        "--system", default="sd_cassi",
+        help="sd_cassi, mu_cosdi or cassi_vsi (default sd_cassi)",
+    )  # fmt: skip
+    dc.add_argument(
+        "--alpha-t", type=float, default=0.7,
+        help="CASSI-VSI's beam-splitting ratio (--system cassi_vsi; default 0.7)",
+    )  # fmt: skip
     dc.add_argument("--bands", type=_positive_int, default=28, help="spectral bands (default 28)")
     dc.add_argument("--shift", type=_positive_int, default=2, help="pixels per band (default 2)")
     dc.add_argument("--stages", type=_positive_int, default=3, help="unfolded ADMM stages")

@@ -93,6 +93,7 @@ def run_train_dcosnet(args) -> int:
         seed=args.seed,
         hold_out=args.hold_out,
         learn_code=args.learn_code,
+        alpha_t=args.alpha_t,
         code_until=args.code_until,
     )
     return _run_training(args, train_dcosnet, cfg.check())

@@ -7,11 +7,14 @@ because ``AAᵀ`` is diagonal) — plus a U-Net.  Here the sensing layers are
 the system's own :class:`~tensor_cosdi.operators.TensorOperator` run on
 the TensorLy PyTorch backend, so autograd flows through the real ``A`` and
 ``Aᵀ`` of any system whose ``AAᵀ`` is diagonal (SD/DD-CASSI, CS2LI,
-Mu-CoSDI, CASSDI-DFA without PSFs).  One stage ``k`` is::
+Mu-CoSDI, CASSDI-DFA without PSFs) or banded along one detector axis
+(CASSI-VSI: the inverse is then a batched Cholesky solve of each detector
+row's block, :meth:`Sensing.dual_solve`, as λ-net was retrained per forward
+model in the thesis' §3.3.5).  One stage ``k`` is::
 
     r  = Aᵀg + μ̃ₖ (w − u)                     x-step right-hand side (Eq. 146)
     r' = r + d̄·Cᵢₙ(r/d̄)                        "transpose + two conv+ReLU layers"
-    s  = (μ̃ₖ + d)⁻¹ ∘ A r'                      direct and inverse layers
+    s  = (μ̃ₖI + AAᵀ)⁻¹ A r'                     direct and inverse layers
     f  = (r' − Aᵀs)/μ̃ₖ + Cₗₒ(r'/d̄) − Cᵤₚ(Aᵀs/d̄)   the two arms (3 and 4 conv layers)
     w  = UNetₖ(f + u)                           the denoising step (Eq. 147)
     u  = u + f − w                              multiplier update
@@ -104,30 +107,45 @@ class Sensing:
         self.dtype = dtype or torch.float32
         self.device = torch.device(device or "cpu")
         self.codes, self.offsets = None, _shared_offsets(systems)
+        self.blocks, self.alpha_t, self.beta = None, 1.0, 0
         if self.offsets is not None:  # single-shot SD-CASSI with a 2-D code: one batched shear
             self._set_codes(np.stack([s.code for s in systems]))
             return
-        d = []
-        for s in systems:
-            gram = s.operator.gram_dual()
+        d, grams = [], [s.operator.gram_dual() for s in systems]
+        kinds = {getattr(g, "kind", None) for g in grams}
+        if kinds == {"row_banded"} and len(mshape) == 2 and len({g.axis for g in grams}) == 1:
+            # CASSI-VSI: A Aᵀ banded along one measurement axis, one dense block per fibre
+            self.band_axis = grams[0].axis
+            blocks = np.stack([_banded_blocks(g) for g in grams])  # (B, fibres, n, n)
+            self.blocks = torch.from_numpy(blocks).to(device=self.device, dtype=self.dtype)
+            diag = torch.diagonal(self.blocks, dim1=-2, dim2=-1)  # (B, fibres, n)
+            self.d = diag if self.band_axis == 1 else diag.transpose(1, 2)
+            self.dbar = self.d.reshape(len(grams), -1).mean(dim=1)
+            return
+        for s, gram in zip(systems, grams):
             if getattr(gram, "kind", None) != "diagonal":
                 kind = "none" if gram is None else gram.kind
                 raise ValueError(
                     f"D-CoSNet needs a diagonal A Aᵀ (SD/DD-CASSI, CS2LI, Mu-CoSDI, CASSDI-DFA "
-                    f"without PSFs); {type(s).__name__} has structure {kind!r}"
+                    f"without PSFs) or one banded along a measurement axis (CASSI-VSI); "
+                    f"{type(s).__name__} has structure {kind!r}"
                 )
             d.append(np.asarray(gram.d))
         self.d = torch.from_numpy(np.stack(d)).to(device=self.device, dtype=self.dtype)
         self.dbar = self.d.reshape(len(d), -1).mean(dim=1)
 
     @classmethod
-    def coded_shear(cls, codes, offsets, *, device=None, dtype=None):
+    def coded_shear(cls, codes, offsets, *, alpha_t=1.0, beta=0, device=None, dtype=None):
         """What ``Sensing`` builds from single-shot SD-CASSI systems with the 2-D ``codes``
         ``(B, H, W)`` and the whole-pixel per-band column ``offsets`` (one per band, the
         systems' ``shifts``), without building the systems (a training batch).
 
+        ``alpha_t < 1`` is CASSI-VSI (Eq. 40): ``αT`` times that dispersed arm
+        plus ``1 − αT`` times the coded grayscale arm landing ``beta``
+        columns right; ``A Aᵀ`` is then one dense ``n × n`` block per detector
+        row (banded inside), built as ``A_x A_xᵀ`` per row.
         ``codes`` may be a torch tensor that requires a gradient (a code being
-        learned): ``A``, ``Aᵀ`` and ``diag(AAᵀ)`` are then differentiable in it."""
+        learned): ``A``, ``Aᵀ`` and ``A Aᵀ`` are then differentiable in it."""
         torch = require_torch()
         if not isinstance(codes, torch.Tensor):
             codes = np.asarray(codes)
@@ -137,7 +155,7 @@ class Sensing:
                 f"need codes (B, H, W) and non-negative offsets, got {codes.shape}, {offsets}"
             )
         self = cls.__new__(cls)
-        self.systems = self.ops = None
+        self.systems = self.ops = self.blocks = None
         h, w = codes.shape[1:]
         self.cube_shape = (h, w, len(offsets))
         self.measurement_shape = (h, w + max(offsets))
@@ -145,6 +163,10 @@ class Sensing:
         self.dtype = dtype or torch.float32
         self.device = torch.device(device or "cpu")
         self.offsets = offsets
+        if not 0 < alpha_t <= 1 or not 0 <= int(beta) <= max(offsets):
+            raise ValueError(f"need 0 < alpha_t ≤ 1 and 0 ≤ beta ≤ {max(offsets)}, got "
+                             f"{alpha_t}, {beta}")  # fmt: skip
+        self.alpha_t, self.beta = float(alpha_t), int(beta)
         self._set_codes(codes)
         return self
 
@@ -153,7 +175,21 @@ class Sensing:
         if not isinstance(codes, torch.Tensor):
             codes = torch.from_numpy(np.ascontiguousarray(codes))
         self.codes = codes.to(device=self.device, dtype=self.dtype)
-        self.d = self._shear_sum(self.codes[:, None] ** 2)
+        if getattr(self, "alpha_t", 1.0) == 1.0:
+            self.d = self._shear_sum(self.codes[:, None] ** 2)
+        else:  # CASSI-VSI: rows of A (one detector row at a time) → A Aᵀ per row
+            h, w = self.cube_shape[:2]
+            n = self.measurement_shape[1]
+            cols = torch.arange(w, device=self.device)
+            hit = torch.zeros(n, w, len(self.offsets), dtype=self.dtype, device=self.device)
+            for k, o in enumerate(self.offsets):
+                hit[cols + o, cols, k] += self.alpha_t
+            hit[cols + self.beta, cols, :] += 1 - self.alpha_t
+            rows = self.codes[:, :, None, :, None] * hit  # (B, H, n, W, L): A's rows per row
+            rows = rows.reshape(*rows.shape[:3], -1)
+            self.band_axis = 1
+            self.blocks = rows @ rows.transpose(-1, -2)  # (B, H, n, n)
+            self.d = torch.diagonal(self.blocks, dim1=-2, dim2=-1)
         self.dbar = self.d.reshape(len(codes), -1).mean(dim=1)
 
     def _cube(self, x):
@@ -178,7 +214,13 @@ class Sensing:
         """``A x`` for ``x (B, C, H, W)``."""
         torch = require_torch()
         if self.codes is not None:
-            return self._shear_sum(x * self.codes[:, None])
+            coded = x * self.codes[:, None]
+            if self.alpha_t == 1.0:
+                return self._shear_sum(coded)
+            grey = torch.nn.functional.pad(
+                coded.sum(dim=1), (self.beta, self.measurement_shape[1] - x.shape[-1] - self.beta)
+            )
+            return self.alpha_t * self._shear_sum(coded) + (1 - self.alpha_t) * grey
         with tl.backend_context("pytorch"):
             return torch.stack([op.forward(self._cube(xi)) for op, xi in zip(self.ops, x)])
 
@@ -187,11 +229,28 @@ class Sensing:
         torch = require_torch()
         if self.codes is not None:
             w = self.cube_shape[1]
-            return (
-                torch.stack([y[..., o : o + w] for o in self.offsets], dim=1) * self.codes[:, None]
-            )
+            out = torch.stack([y[..., o : o + w] for o in self.offsets], dim=1)
+            if self.alpha_t != 1.0:
+                grey = y[..., self.beta : self.beta + w][:, None]
+                out = self.alpha_t * out + (1 - self.alpha_t) * grey
+            return out * self.codes[:, None]
         with tl.backend_context("pytorch"):
             return torch.stack([self._batch(op.adjoint(yi)) for op, yi in zip(self.ops, y)])
+
+    def dual_solve(self, y, mu):
+        """``(μ I + A Aᵀ)⁻¹ y`` for a measurement batch ``y`` and per-sample ``μ`` ``(B,)``: a
+        division for a diagonal ``A Aᵀ``, a batched Cholesky solve per fibre for a banded one
+        (differentiable in ``y`` and ``μ``)."""
+        torch = require_torch()
+        if self.blocks is None:
+            d = self.d.to(y.dtype)
+            return y / (_per_sample(mu, d) + d)
+        m = self.blocks.to(y.dtype)
+        eye = torch.eye(m.shape[-1], dtype=y.dtype, device=y.device)
+        factor = torch.linalg.cholesky(m + mu.reshape(-1, 1, 1, 1) * eye)
+        yy = y if self.band_axis == 1 else y.transpose(1, 2)  # (B, fibres, n)
+        x = torch.cholesky_solve(yy.unsqueeze(-1), factor).squeeze(-1)
+        return x if self.band_axis == 1 else x.transpose(1, 2)
 
     def scale(self, g):
         """Per-sample ``s``: the 99.9th percentile of ``g / d`` where ``d > 0`` (``(B,)``)."""
@@ -203,6 +262,19 @@ class Sensing:
         top = torch.nan_to_num(v.nan_to_num(nan=-1.0).amax(dim=1).clamp_min(0), nan=0.0)
         out = torch.where(q > 0, q, torch.where(top > 0, top, 1.0))
         return out.to(dtype=g.dtype).clamp_min(1e-12)
+
+
+def _banded_blocks(gram) -> np.ndarray:
+    """A :class:`~tensor_cosdi.operators.woodbury.RowBanded` ``A Aᵀ`` of a 2-D measurement as
+    one dense symmetric matrix per fibre, ``(fibres, n, n)`` with the band axis last."""
+    bands = np.asarray(gram.bands)  # (b + 1, other axis, n): bands[o, f, p] = M_f[p, p + o]
+    n = bands.shape[-1]
+    out = np.zeros((bands.shape[1], n, n))
+    idx = np.arange(n)
+    for o in range(bands.shape[0]):
+        out[:, idx[: n - o], idx[o:]] = bands[o, :, : n - o]
+        out[:, idx[o:], idx[: n - o]] = bands[o, :, : n - o]
+    return out
 
 
 def _shared_offsets(systems):
@@ -392,7 +464,6 @@ def build_dcosnet(
                     f"the network was built for {self.channels} channels; the system's cube has "
                     f"{sensing.channels}"
                 )
-            d = sensing.d.to(g.dtype)
             dbar = sensing.dbar.to(g.dtype)
             atg = sensing.adjoint(g)
             db = _per_sample(dbar, atg)
@@ -403,7 +474,7 @@ def build_dcosnet(
                 muc = _per_sample(mu, atg)
                 r = atg + muc * (w - u)
                 r = r + db * self.c_in[k](r / db)
-                s = sensing.forward(r) / (_per_sample(mu, d) + d)
+                s = sensing.dual_solve(sensing.forward(r), mu)
                 ats = sensing.adjoint(s)
                 f = (r - ats) / muc + self.c_lo[k](r / db) - self.c_up[k](ats / db)
                 w = self.denoise(f + u, k)
@@ -547,11 +618,16 @@ class DCoSNet:
         step = float(shifts[1] - shifts[0]) if shifts.size > 1 else None
         mine = {"system": system.name, "channels": int(np.prod(system.cube_shape[2:]))}
         theirs = {"system": cfg["system"], "channels": int(cfg["channels"])}
+        if "alpha_t" in cfg:  # CASSI-VSI: the splitting ratio shapes A Aᵀ
+            mine["alpha_t"] = round(float(getattr(system, "alpha_t", -1.0)), 6)
+            theirs["alpha_t"] = round(float(cfg["alpha_t"]), 6)
         if mine != theirs or (step is not None and step != float(cfg["shift"])):
             raise ValueError(
                 f"these D-CoSNet weights were trained for {cfg['system']} with "
-                f"{cfg['channels']} channels and a shift of {cfg['shift']} px per band; this is "
-                f"{mine['system']} with {mine['channels']} channels and a shift of {step}: "
+                f"{cfg['channels']} channels and a shift of {cfg['shift']} px per band"
+                + (f", αT {theirs['alpha_t']:g}" if "alpha_t" in theirs else "")
+                + f"; this is {mine['system']} with {mine['channels']} channels and a shift of "
+                f"{step}" + (f", αT {mine['alpha_t']:g}" if "alpha_t" in mine else "") + ": "
                 f"train weights for it (tensor-cosdi train-dcosnet --system {system.name} …)"
             )
         code = cfg.get("trained_code")

@@ -22,7 +22,7 @@ __all__ = [
 ]
 
 #: Systems :func:`train_dcosnet` builds from crops of a coded aperture.
-TRAINABLE_SYSTEMS = ("sd_cassi", "mu_cosdi")
+TRAINABLE_SYSTEMS = ("sd_cassi", "mu_cosdi", "cassi_vsi")
 #: Loss choices (Eq. 152 and the thesis' Table 2 ablation).
 LOSSES = ("l1+ssim", "l1", "ssim")
 
@@ -76,6 +76,8 @@ class DCoSNetConfig:
     seed: int = 0
     checkpoint_every: int = 100
     hold_out: int = -1
+    #: CASSI-VSI's beam-splitting ratio (``system="cassi_vsi"`` only)
+    alpha_t: float = 0.7
     learn_code: bool = False
     #: fraction of the steps during which a learned code changes (then it is held)
     code_until: float = 0.5
@@ -109,6 +111,9 @@ class DCoSNetConfig:
             )
         if not isinstance(self.learn_code, bool):
             raise ValueError(f"learn_code must be True or False, got {self.learn_code!r}")
+        a = self.alpha_t
+        if isinstance(a, bool) or not isinstance(a, (int, float)) or not 0 < a < 1:
+            raise ValueError(f"alpha_t must be a number in (0, 1), got {a!r}")
         u = self.code_until
         if isinstance(u, bool) or not isinstance(u, (int, float)) or not 0 < u <= 1:
             raise ValueError(f"code_until must be a fraction in (0, 1], got {u!r}")
@@ -116,8 +121,10 @@ class DCoSNetConfig:
             raise ValueError(
                 f"learn_code starts from the seeded code: needs mask='seeded', got {self.mask!r}"
             )
-        if self.learn_code and self.system != "sd_cassi":
-            raise ValueError(f"learn_code is for sd_cassi, got system={self.system!r}")
+        if self.learn_code and self.system not in ("sd_cassi", "cassi_vsi"):
+            raise ValueError(
+                f"learn_code is for sd_cassi and cassi_vsi, got system={self.system!r}"
+            )
         if not self.snr_min <= self.snr_max:
             raise ValueError(f"need snr_min ≤ snr_max, got {self.snr_min}, {self.snr_max}")
         return self
@@ -137,6 +144,8 @@ class DCoSNetConfig:
 
         cls = REGISTRY[self.system]
         extra = {"modality": "monocular"} if self.system == "mu_cosdi" else {}
+        if self.system == "cassi_vsi":
+            extra = {"alpha_t": self.alpha_t}
         return cls(code, n_bands=self.n_bands, shifts=self.shift, **extra)
 
 
@@ -189,8 +198,8 @@ def training_data(cfg: DCoSNetConfig, folder=None):
     code = seeded_code(need, cfg.seed) if cfg.mask == "seeded" else _load_mask(cfg.mask, folder)
     if code is not None and (code.shape[0] < need[0] or code.shape[1] < need[1]):
         raise ValueError(f"the mask {code.shape} is smaller than a training crop {need}")
-    offsets = None  # SD-CASSI: the batch's sensing is built from its codes alone
-    if cfg.system == "sd_cassi":
+    offsets = None  # SD-CASSI, CASSI-VSI: the batch's sensing is built from its codes alone
+    if cfg.system in ("sd_cassi", "cassi_vsi"):
         offsets = tuple(int(v) for v in cfg.make_system(np.ones(need)).shifts)
     return cubes, code, offsets
 
@@ -231,7 +240,8 @@ def sample_batch(rng, cfg: DCoSNetConfig, data, *, windows: bool = False):
 
 def _sensing(codes, offsets, cfg: DCoSNetConfig, dev):
     if offsets is not None:
-        return Sensing.coded_shear(np.stack(codes), offsets, device=dev)
+        alpha = cfg.alpha_t if cfg.system == "cassi_vsi" else 1.0
+        return Sensing.coded_shear(np.stack(codes), offsets, alpha_t=alpha, device=dev)
     return Sensing([cfg.make_system(c) for c in codes], device=dev)
 
 
@@ -254,7 +264,8 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data, step=0):
             full = full.detach()
         w = cfg.patch + cfg.margin
         crops = torch.stack([full[r : r + cfg.patch, c : c + w] for r, c in corners])
-        sensing = Sensing.coded_shear(crops, data[2], device=dev)
+        alpha = cfg.alpha_t if cfg.system == "cassi_vsi" else 1.0
+        sensing = Sensing.coded_shear(crops, data[2], alpha_t=alpha, device=dev)
     else:
         sensing = _sensing(codes, data[2], cfg, dev)
     truth = torch.from_numpy(clean_np).to(dev).permute(0, 3, 1, 2)
@@ -341,6 +352,7 @@ def train_dcosnet(
             "width": cfg.width,
             "unet_width": cfg.unet_width,
             "prior": cfg.prior,
+            **({"alpha_t": cfg.alpha_t} if cfg.system == "cassi_vsi" else {}),
             **_code_record(cfg),
         },
         resume=resume,

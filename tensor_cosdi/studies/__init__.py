@@ -18,7 +18,7 @@ from .design import (
     cs2li_comparison,
 )
 from .imagers import vsi_comparison, vsi_ratio
-from .learned import learned_code
+from .learned import learned_code, learned_imagers
 from .problems import (
     SCENES,
     SYSTEMS,
@@ -54,6 +54,7 @@ __all__ = [
     "vsi_comparison",
     "vsi_ratio",
     "learned_code",
+    "learned_imagers",
     "zernike_design",
     "c3slfi_table",
     "c3slfi_sparsity",

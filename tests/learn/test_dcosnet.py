@@ -144,7 +144,8 @@ def test_ssim_equals_scikit_image():
 
 @needs_torch
 @pytest.mark.parametrize(
-    "system, prior", [("sd_cassi", "unet"), ("mu_cosdi", "unet"), ("sd_cassi", "spectral")]
+    "system, prior",
+    [("sd_cassi", "unet"), ("mu_cosdi", "unet"), ("sd_cassi", "spectral"), ("cassi_vsi", "unet")],
 )
 def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system, prior):
     import torch
@@ -176,6 +177,10 @@ def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system, pr
     other = _sd(bands=4, shift=1) if system == "mu_cosdi" else _sd(bands=6, shift=1)
     with pytest.raises(ValueError, match="trained for"):
         DCoSNet(tmp_path / "a.pt")(other, np.ones(other.measurement_shape))
+    if system == "cassi_vsi":  # the splitting ratio is part of A Aᵀ
+        vsi = tc.systems.CASSIVSI(np.ones((16, 16)), n_bands=4, shifts=1, alpha_t=0.5)
+        with pytest.raises(ValueError, match="αT 0.7; this is cassi_vsi .* αT 0.5"):
+            DCoSNet(tmp_path / "a.pt")(vsi, np.ones(vsi.measurement_shape))
 
 
 @needs_torch
@@ -437,3 +442,40 @@ def test_a_weights_file_that_is_not_one_is_a_clear_error(tmp_path, data):
         training_code(path)
     with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
         DCoSNet(path)(_sd(), np.random.default_rng(0).random(_sd().measurement_shape))
+
+
+@needs_torch
+def test_cassi_vsi_sensing_and_its_banded_woodbury_step():
+    """CASSI-VSI (A Aᵀ banded along each detector row): the batched training path equals the
+    systems' operators (A, Aᵀ, the per-row blocks, the dual solve against a dense solve), and
+    the untrained network is the exact Woodbury ADMM step through the banded solve."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing, build_dcosnet
+
+    rng = np.random.default_rng(1)
+    codes = (rng.random((3, 12, 10)) < 0.5).astype(float)
+    systems = [tc.systems.CASSIVSI(c, n_bands=5, shifts=2, alpha_t=0.7) for c in codes]
+    fast = Sensing.coded_shear(codes, systems[0].shifts, alpha_t=0.7, dtype=torch.float64)
+    slow = Sensing(systems, dtype=torch.float64)
+    x = torch.from_numpy(rng.random((3, 5, 12, 10)))
+    y = torch.from_numpy(rng.random((3, *systems[0].measurement_shape)))
+    torch.testing.assert_close(fast.forward(x), slow.forward(x), rtol=1e-12, atol=1e-14)
+    torch.testing.assert_close(fast.adjoint(y), slow.adjoint(y), rtol=1e-12, atol=1e-14)
+    torch.testing.assert_close(fast.blocks, slow.blocks, rtol=1e-12, atol=1e-14)
+    mu = torch.tensor([0.2, 0.3, 0.4], dtype=torch.float64)
+    for i, s in enumerate(systems):
+        dense = s.gram_dual().to_dense()
+        want = np.linalg.solve(dense + float(mu[i]) * np.eye(len(dense)),
+                               y[i].numpy().ravel(order="F"))  # fmt: skip
+        got = fast.dual_solve(y, mu)[i].numpy().ravel(order="F")
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
+    net = build_dcosnet(torch, 5, stages=1, width=4, unet_width=4).double()
+    g = rng.random(systems[0].measurement_shape)
+    with torch.no_grad():
+        out, _ = net(torch.from_numpy(g)[None], Sensing(systems[:1], dtype=torch.float64))
+    m = float(torch.nn.functional.softplus(net.mu[0].detach())) * float(slow.dbar[0])
+    want = systems[0].solve_normal(systems[0].operator.adjoint(g), m)
+    np.testing.assert_allclose(out[0].permute(1, 2, 0).numpy(), want, rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="0 < alpha_t"):
+        Sensing.coded_shear(codes, systems[0].shifts, alpha_t=0.0)

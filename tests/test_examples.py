@@ -204,6 +204,13 @@ def _dcosnet_learned_code(ns):
     assert len(ns["psnr"]) == 4 and min(ns["psnr"].values()) > floor, ns["psnr"]
 
 
+def _vsi_learned(ns):
+    p = ns["psnr"]
+    assert len(p) == 4 and all(np.isfinite(v) for v in p.values())
+    floor = 22.0 if ns["scene"] == "cave.face" else 14.0
+    assert min(p.values()) > floor, p
+
+
 def _vsi_comparison(ns):
     m = ns["mean"]
     # cave.face 48×48×16, 30 dB, seeds 0-1: SD-CASSI 29.12 dB, CASSI-VSI 31.15, dual arm 35.36;
@@ -270,6 +277,7 @@ CHECKS = {
     "plot_colour_code_design": _colour_code_design,
     "plot_vsi_comparison": _vsi_comparison,
     "plot_dcosnet_learned_code": _dcosnet_learned_code,
+    "plot_vsi_learned": _vsi_learned,
     "plot_vsi_ratio": _vsi_ratio,
     "plot_c3slfi_sparsity": _c3slfi_sparsity,
     "plot_cs2li_comparison": _cs2li_comparison,

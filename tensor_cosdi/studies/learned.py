@@ -35,7 +35,8 @@ REPORT_CAVE_SCENES = ("cave.beads", "cave.face", "cave.real_and_fake_apples")
 
 
 def learned_code_run(
-    weights, *, scene="cave.face", shape=(256, 256), snr_db=None, seed=0, device="cpu"
+    weights, *, scene="cave.face", shape=(256, 256), snr_db=None, seed=0, device="cpu",
+    reference=None,
 ) -> dict:
     """One cell of :func:`learned_code` and :func:`learned_imagers`: the D-CoSNet ``weights``
     reconstruct ``scene`` imaged by their system (SD-CASSI or CASSI-VSI) through the code
@@ -43,7 +44,9 @@ def learned_code_run(
 
     Returns PSNR / SSIM / SAM / RMSE, seconds, the system's name, and the
     code's kind (``"seeded"`` or ``"learned"``), open fraction (``density``)
-    and the dispersion step (``shift``, px per band).
+    and the dispersion step (``shift``, px per band); with ``reference`` (a
+    method name, e.g. ``"otd"``) also ``reference_psnr``, that method on the
+    same measurement.
     """
     from .. import scenes
     from ..datasets import KAIST_WAVELENGTHS
@@ -71,16 +74,21 @@ def learned_code_run(
     t0 = time.perf_counter()
     est = DCoSNet(weights, device=device)(system, g)
     seconds = time.perf_counter() - t0
-    p = Problem(f"sd_cassi/{scene}", system, cube, g, wl, snr_db, cube)
-    return {
+    p = Problem(f"{cfg['system']}/{scene}", system, cube, g, wl, snr_db, cube)
+    out = {
         **score(p, est), "seconds": seconds, "system": cfg["system"], "code": cfg["code"],
         "density": float(code.mean()), "shift": int(cfg["shift"]),
     }  # fmt: skip
+    if reference is not None:
+        from ..solvers import reconstruct
+
+        out["reference_psnr"] = score(p, reconstruct(system, g, reference).cube)["psnr"]
+    return out
 
 
 def learned_code(
     weights=None, scenes=REPORT_CAVE_SCENES, *, shape=(256, 256), snrs=(None, 30.0), seeds=(0,),
-    device="cpu", client=None, progress=True,
+    device="cpu", reference=None, client=None, progress=True,
 ) -> list[dict]:  # fmt: skip
     """D-CoSNet trained with a learned coded aperture against a fixed one (thesis §7.3).
 
@@ -105,12 +113,15 @@ def learned_code(
         noiseless) and noise seeds.
     device, client, progress
         Torch device; as in :func:`~tensor_cosdi.studies.sweep`.
+    reference : str, optional
+        A method run on the same measurements too (``reference_psnr``).
 
     Returns
     -------
     list of dict
         One record per weights × scene × SNR × seed: the parameters, PSNR,
-        SSIM, SAM, RMSE, seconds, ``code``, ``density`` and ``shift``.
+        SSIM, SAM, RMSE, seconds, ``system``, ``code``, ``density`` and
+        ``shift`` (and ``reference_psnr``).
 
     Examples
     --------
@@ -134,13 +145,13 @@ def learned_code(
     paths = {str(k): str(v) for k, v in weights.items()}
     grid = {"weights": list(paths), "scene": list(scenes), "snr_db": snrs,
             "seed": seed_list(seeds)}  # fmt: skip
-    return sweep(grid, partial(_cell, paths=paths, shape=tuple(shape), device=device),
-                 client=client, progress=progress)  # fmt: skip
+    return sweep(grid, partial(_cell, paths=paths, shape=tuple(shape), device=device,
+                               reference=reference), client=client, progress=progress)  # fmt: skip
 
 
 def learned_imagers(
     weights=None, scenes=REPORT_CAVE_SCENES, *, shape=(256, 256), snrs=(20.0, 30.0),
-    seeds=(0,), device="cpu", client=None, progress=True,
+    seeds=(0,), device="cpu", reference="otd", client=None, progress=True,
 ) -> list[dict]:  # fmt: skip
     """One learned reconstructor trained for SD-CASSI and for CASSI-VSI (thesis §3.3.5).
 
@@ -151,15 +162,17 @@ def learned_imagers(
     SD-CASSI, a Cholesky solve of each detector row's banded block for
     CASSI-VSI — trained identically for both on one fixed seeded code
     (``tensor-cosdi train-dcosnet --mask seeded --system …``).  Same scenes,
-    code (tiled), noise levels and seeds for both.
+    code (tiled), noise levels and seeds for both.  ``reference`` (default
+    OTD) runs on the same measurements: what the forward models give a
+    training-free method, beside what the networks learned.
 
     Parameters
     ----------
     weights : mapping of label → path, optional
         Default :data:`IMAGER_STUDY_WEIGHTS` (the shipped pair).
-    scenes, shape, snrs, seeds, device, client, progress
+    scenes, shape, snrs, seeds, device, reference, client, progress
         As for :func:`learned_code` (default 20 and 30 dB, the thesis'
-        Fig. 26-27).
+        Fig. 26-27; ``reference=None`` skips it).
 
     Returns
     -------
@@ -175,7 +188,7 @@ def learned_imagers(
     """
     return learned_code(
         IMAGER_STUDY_WEIGHTS if weights is None else weights, scenes, shape=shape, snrs=snrs,
-        seeds=seeds, device=device, client=client, progress=progress,
+        seeds=seeds, device=device, reference=reference, client=client, progress=progress,
     )  # fmt: skip
 
 

@@ -254,9 +254,9 @@ def test_bad_inputs_are_clear_errors(tmp_path):
         DCoSNetConfig(loss="l2").check()
     with pytest.raises(ValueError, match="multiple of 4"):
         DCoSNetConfig(patch=30).check()
-    vsi = tc.studies.make_problem("cassi_vsi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
-    with pytest.raises(ValueError, match="diagonal A Aᵀ"):
-        Sensing([vsi.system])
+    c3 = tc.studies.make_problem("c3slfi", "chelsea", shape=(16, 16), n_bands=4, rng=0)
+    with pytest.raises(ValueError, match="diagonal A Aᵀ .* banded .* 'pixel_blocks'"):
+        Sensing([c3.system])  # per-pixel blocks across snapshots: neither structure
     mu = tc.systems.MuCoSDI(np.ones((8, 11)), n_bands=4, modality="monocular")
     with pytest.raises(FileNotFoundError, match="train-dcosnet --system mu_cosdi"):
         tc.reconstruct(mu, np.random.default_rng(0).random(mu.measurement_shape), "dcosnet")

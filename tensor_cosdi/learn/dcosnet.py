@@ -618,22 +618,25 @@ class DCoSNet:
         step = float(shifts[1] - shifts[0]) if shifts.size > 1 else None
         mine = {"system": system.name, "channels": int(np.prod(system.cube_shape[2:]))}
         theirs = {"system": cfg["system"], "channels": int(cfg["channels"])}
-        if "alpha_t" in cfg:  # CASSI-VSI: the splitting ratio shapes A Aᵀ
+        if "alpha_t" in cfg:  # CASSI-VSI: the splitting ratio and the grey arm's column shape A
             mine["alpha_t"] = round(float(getattr(system, "alpha_t", -1.0)), 6)
             theirs["alpha_t"] = round(float(cfg["alpha_t"]), 6)
+            mine["beta"], theirs["beta"] = int(getattr(system, "beta", -1)), 0
         if mine != theirs or (step is not None and step != float(cfg["shift"])):
             raise ValueError(
                 f"these D-CoSNet weights were trained for {cfg['system']} with "
                 f"{cfg['channels']} channels and a shift of {cfg['shift']} px per band"
-                + (f", αT {theirs['alpha_t']:g}" if "alpha_t" in theirs else "")
+                + (f", αT {theirs['alpha_t']:g}, β 0" if "alpha_t" in theirs else "")
                 + f"; this is {mine['system']} with {mine['channels']} channels and a shift of "
-                f"{step}" + (f", αT {mine['alpha_t']:g}" if "alpha_t" in mine else "") + ": "
+                f"{step}"
+                + (f", αT {mine['alpha_t']:g}, β {mine['beta']}" if "alpha_t" in mine else "")
+                + ": "
                 f"train weights for it (tensor-cosdi train-dcosnet --system {system.name} …)"
             )
         code = cfg.get("trained_code")
         if code is not None:
             own = np.asarray(B.to_numpy(system.code))
-            if own.ndim != 2 or not np.array_equal(own != 0, tile_code(code, own.shape) != 0):
+            if own.ndim != 2 or not np.array_equal(own.astype(float), tile_code(code, own.shape)):
                 raise ValueError(
                     f"these D-CoSNet weights were trained with one {cfg['code']} "
                     f"{code.shape[0]}×{code.shape[1]} code; build the system with it "

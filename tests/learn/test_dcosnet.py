@@ -179,8 +179,11 @@ def test_training_resumes_exactly_for_each_trainable_system(tmp_path, system, pr
         DCoSNet(tmp_path / "a.pt")(other, np.ones(other.measurement_shape))
     if system == "cassi_vsi":  # the splitting ratio is part of A Aᵀ
         vsi = tc.systems.CASSIVSI(np.ones((16, 16)), n_bands=4, shifts=1, alpha_t=0.5)
-        with pytest.raises(ValueError, match="αT 0.7; this is cassi_vsi .* αT 0.5"):
+        with pytest.raises(ValueError, match="αT 0.7, β 0; this is cassi_vsi .* αT 0.5"):
             DCoSNet(tmp_path / "a.pt")(vsi, np.ones(vsi.measurement_shape))
+        moved = tc.systems.CASSIVSI(np.ones((16, 16)), n_bands=4, shifts=1, beta=2)
+        with pytest.raises(ValueError, match="β 2"):  # the grey arm lands elsewhere
+            DCoSNet(tmp_path / "a.pt")(moved, np.ones(moved.measurement_shape))
 
 
 @needs_torch
@@ -348,6 +351,9 @@ def test_a_learned_code_changes_then_is_held_and_travels_with_the_weights(tmp_pa
     other = cfg.make_system(tile_code(start, (24, 40)))
     with pytest.raises(ValueError, match="trained with one learned 16×16 code"):
         DCoSNet(out, device="cpu")(other, g)
+    grey = cfg.make_system(0.5 * tile_code(code, (24, 40)))  # the same support, other values
+    with pytest.raises(ValueError, match="trained with one learned 16×16 code"):
+        DCoSNet(out, device="cpu")(grey, g)
     fixed = DCoSNetConfig(**{**cfg.__dict__, "learn_code": False, "steps": 1})
     train_dcosnet(tmp_path / "fixed.pt", fixed, progress=False, device="cpu")
     np.testing.assert_array_equal(training_code(tmp_path / "fixed.pt"), start)

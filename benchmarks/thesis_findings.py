@@ -1030,16 +1030,17 @@ def _per_seed(rows, fn) -> np.ndarray:
     return np.array([fn([r for r in rows if r["seed"] == q]) for q in seeds])
 
 
-def _gain_verdict(values) -> str:
-    """A "better" finding from its per-seed gains: reproduced when every seed gains, contradicted
-    when every seed loses, else how many seeds gained."""
+def _gain_verdict(values, over="seeds") -> str:
+    """A "better" finding from its gains per seed (or per ``over``: ``"cases"`` for scene ×
+    noise level with one trained network per arm): reproduced when every one gains,
+    contradicted when every one loses, else how many gained."""
     values = np.asarray(values, dtype=float)
     n, k = len(values), int((values > 0).sum())
     if k == n:
         return "reproduced"
     if k == 0:
         return "contradicted"
-    return f"inconclusive ({k} of {n} seeds gain)"
+    return f"inconclusive ({k} of {n} {over} gain)"
 
 
 def _range_verdict(values, lo, hi) -> str:
@@ -1074,10 +1075,10 @@ def _direction(values) -> str:
     return f"positive in {int((values > 0).sum())} of {len(values)} seeds"
 
 
-def _spread(values, fmt="{:+.2f}", unit="") -> str:
+def _spread(values, fmt="{:+.2f}", unit="", over="seeds") -> str:
     values = np.asarray(values, dtype=float)
     sd = float(values.std(ddof=1)) if len(values) > 1 else 0.0
-    return f"{fmt.format(values.mean())} ± {sd:.2f}{unit} (seeds: " + ", ".join(
+    return f"{fmt.format(values.mean())} ± {sd:.2f}{unit} ({over}: " + ", ".join(
         fmt.format(v) for v in values
     ) + ")"
 
@@ -1094,23 +1095,12 @@ def _form_verdict(values) -> str:
     return f"inconclusive (the printed form better in {k} of {n} seeds)"
 
 
-def _case_gain_verdict(values) -> str:
-    """A "better" finding from per-case gains (scene × noise level, one trained network per
-    arm): reproduced when every case gains, contradicted when every case loses."""
-    values = np.asarray(values, dtype=float)
-    n, k = len(values), int((values > 0).sum())
-    if k == n:
-        return "reproduced"
-    if k == 0:
-        return "contradicted"
-    return f"inconclusive ({k} of {n} cases gain)"
-
-
-def _case_spread(values) -> str:
-    values = np.asarray(values, dtype=float)
-    sd = float(values.std(ddof=1)) if len(values) > 1 else 0.0
-    return f"{values.mean():+.2f} ± {sd:.2f} dB (cases: " + ", ".join(
-        f"{v:+.2f}" for v in values) + ")"  # fmt: skip
+def _case_gains(rows, field, a, b, key="psnr") -> list:
+    """``key`` of the row whose ``field`` is ``a`` minus that of ``b``, per scene × noise level
+    (the cases of a study with one trained network per arm), in a fixed order."""
+    value = {(x[field], x["scene"], str(x["snr_db"])): x[key] for x in rows}
+    cases = sorted({(x["scene"], str(x["snr_db"])) for x in rows})
+    return [value[(a, *c)] - value[(b, *c)] for c in cases]
 
 
 def _case_name(mode, amplitude) -> str:
@@ -1419,40 +1409,27 @@ def verdicts(data):
             )  # fmt: skip
     if "dcosnet_code" in data:
         r = data["dcosnet_code"]["rows"]
-        cases = sorted({(x["scene"], str(x["snr_db"])) for x in r})
-
-        def psnr(code, case):
-            return next(x["psnr"] for x in r if x["code"] == code
-                        and (x["scene"], str(x["snr_db"])) == case)  # fmt: skip
-
-        gain = [psnr("learned", c) - psnr("seeded", c) for c in cases]
+        gain = _case_gains(r, "code", "learned", "seeded")
         dens = {x["code"]: x["density"] for x in r}
         row(
             "D-CoSNet with a code learned with it over the same network on a fixed random "
             "code (Sec. 7.3)", "the code is trained with the network (no figure against a "
-            "fixed code)", _case_spread(gain), _case_gain_verdict(gain),
+            "fixed code)", _spread(gain, unit=" dB", over="cases"),
+            _gain_verdict(gain, over="cases"),
             f"one network per arm, scene × noise-level cases; open fraction "
             f"{dens['seeded']:.3f} → {dens['learned']:.3f}; other shears: "
             "benchmarks/results/dcosnet_code.md",
         )  # fmt: skip
     if "vsi_learned" in data:
         r = data["vsi_learned"]["rows"]
-        cases = sorted({(x["scene"], x["snr_db"]) for x in r})
-
-        def psnr_of(system, case):
-            return next(x["psnr"] for x in r if x["system"] == system
-                        and (x["scene"], x["snr_db"]) == case)  # fmt: skip
-
-        gain = [psnr_of("cassi_vsi", c) - psnr_of("sd_cassi", c) for c in cases]
-        ref = [next(x["reference_psnr"] for x in r if x["system"] == s
-                    and (x["scene"], x["snr_db"]) == c) for s in ("cassi_vsi", "sd_cassi")
-               for c in cases]  # fmt: skip
-        otd_gain = float(np.mean(ref[: len(cases)]) - np.mean(ref[len(cases):]))
-        below = float(np.mean(ref) - np.mean([x["psnr"] for x in r]))
+        gain = _case_gains(r, "system", "cassi_vsi", "sd_cassi")
+        otd_gain = float(np.mean(_case_gains(r, "system", "cassi_vsi", "sd_cassi",
+                                             key="reference_psnr")))  # fmt: skip
+        below = float(np.mean([x["reference_psnr"] - x["psnr"] for x in r]))
         row(
             "a learned reconstructor trained for CASSI-VSI over the same for SD-CASSI, 20 and "
             "30 dB (Sec. 3.3.5, Fig. 25-27)", "better, up to +3.49 dB (λ-net)",
-            _case_spread(gain), _case_gain_verdict(gain),
+            _spread(gain, unit=" dB", over="cases"), _gain_verdict(gain, over="cases"),
             "D-CoSNet (x-step through each system's exact solve), one network per imager, "
             f"scene × noise-level cases; the networks {below:.1f} dB under OTD on the same "
             f"measurements, where CASSI-VSI leads SD-CASSI by {otd_gain:+.2f} dB",

@@ -152,7 +152,7 @@ class DCoSNetConfig:
 def _load_mask(spec, folder=None):
     """The 2-D training code named by ``spec`` (see :class:`DCoSNetConfig`), or ``None`` for
     ``"random"``."""
-    if spec in ("random", "seeded"):  # "seeded": made from the config (training_data)
+    if spec == "random":
         return None
     if spec in ("tsa", "mixed"):
         from ..datasets import data_dir

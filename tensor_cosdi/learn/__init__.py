@@ -32,9 +32,29 @@ def require_torch():
 
 
 def load_weights(path, kind: str, command: str) -> dict:
-    """A weights file read with ``torch.load(weights_only=True)`` (no code in a pickle can run);
-    a missing file is a ``FileNotFoundError``, an empty, truncated or foreign one a one-line
-    ``ValueError`` naming ``kind`` and the ``tensor-cosdi command`` that writes such files."""
+    """A weights file read with ``torch.load(weights_only=True)`` (no code in a pickle can run).
+
+    Parameters
+    ----------
+    path : path
+    kind : str
+        What the file should hold, for the message (``"D-CoSNet"``, …).
+    command : str
+        The ``tensor-cosdi`` command that writes such files, for the message.
+
+    Returns
+    -------
+    dict
+        The checkpoint, with at least ``config`` and ``model``.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    ValueError
+        An empty, truncated or foreign file (one line naming ``kind`` and
+        ``command``).
+    """
     from pathlib import Path
 
     torch = require_torch()

@@ -175,7 +175,7 @@ class Sensing:
         if not isinstance(codes, torch.Tensor):
             codes = torch.from_numpy(np.ascontiguousarray(codes))
         self.codes = codes.to(device=self.device, dtype=self.dtype)
-        if getattr(self, "alpha_t", 1.0) == 1.0:
+        if self.alpha_t == 1.0:
             self.d = self._shear_sum(self.codes[:, None] ** 2)
         else:  # CASSI-VSI: rows of A (one detector row at a time) → A Aᵀ per row
             h, w = self.cube_shape[:2]
@@ -489,8 +489,24 @@ CODE_TEMPERATURE = 0.25
 
 
 def seeded_code(shape, seed: int) -> np.ndarray:
-    """The fixed Bernoulli(½) code ``mask="seeded"`` trains with (and a learned code starts
-    from): ``shape`` ``(rows, columns)`` drawn from ``numpy.random.default_rng(seed)``."""
+    """The fixed Bernoulli(½) code ``mask="seeded"`` trains with (and a learned code starts from).
+
+    Parameters
+    ----------
+    shape : (rows, columns)
+    seed : int
+        Seed of ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    ndarray of float64, 0/1
+
+    Examples
+    --------
+    >>> seeded_code((2, 3), 0)
+    array([[0., 1., 1.],
+           [1., 0., 0.]])
+    """
     rows, cols = (int(n) for n in shape)
     if rows < 1 or cols < 1:
         raise ValueError(f"a code needs a positive shape, got {shape}")
@@ -499,7 +515,23 @@ def seeded_code(shape, seed: int) -> np.ndarray:
 
 def tile_code(code, shape) -> np.ndarray:
     """``code`` repeated periodically (from its top-left corner) to cover ``shape`` — how a
-    network trained on one patch-sized code is used on a larger scene."""
+    network trained on one patch-sized code is used on a larger scene.
+
+    Parameters
+    ----------
+    code : array_like, 2-D
+    shape : (rows, columns)
+
+    Returns
+    -------
+    ndarray of ``shape``
+
+    Examples
+    --------
+    >>> tile_code([[1, 0]], (2, 3))
+    array([[1, 0, 1],
+           [1, 0, 1]])
+    """
     code = np.asarray(code)
     if code.ndim != 2 or code.size == 0:
         raise ValueError(f"need a non-empty 2-D code, got shape {code.shape}")
@@ -521,14 +553,43 @@ def _checkpoint(weights):
 
 
 def read_config(weights) -> dict:
-    """The configuration D-CoSNet ``weights`` record (system, channels, shift, stages, widths,
-    prior and, for one seeded or learned code, ``code``/``code_shape``/``code_seed``)."""
+    """The configuration D-CoSNet ``weights`` record.
+
+    Parameters
+    ----------
+    weights : path
+        A file of ``tensor-cosdi train-dcosnet``.
+
+    Returns
+    -------
+    dict
+        System, channels, shift, stages, widths, prior; ``alpha_t`` for
+        CASSI-VSI; for one seeded or learned code ``code``, ``code_shape``,
+        ``code_seed``.
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        A missing file; an empty, truncated or foreign one.
+    """
     return dict(_checkpoint(weights)[1]["config"])
 
 
 def training_code(weights):
-    """The binary code that D-CoSNet ``weights`` were trained with when it was one fixed code
-    (``mask="seeded"``) or a learned one, else ``None`` (crops of a mask or random codes)."""
+    """The binary code that D-CoSNet ``weights`` were trained with.
+
+    Parameters
+    ----------
+    weights : path
+        A file of ``tensor-cosdi train-dcosnet``.
+
+    Returns
+    -------
+    ndarray of 0/1 or None
+        The code for one fixed code (``mask="seeded"``) or a learned one;
+        ``None`` for crops of a mask or random codes.  Build the system with
+        ``tile_code(training_code(weights), shape)``.
+    """
     path, ckpt = _checkpoint(weights)
     try:
         cfg = dict(ckpt["config"])

@@ -5,7 +5,7 @@ import pytest
 
 import tensor_cosdi as tc
 from tensor_cosdi import datasets, studies
-from tensor_cosdi.solvers.dictionary import PatchDictionary, omp, train_dictionary
+from tensor_cosdi.solvers.dictionary import PatchDictionary, omp, omp_codes, train_dictionary
 
 
 def _dictionary(rng, dim=40, k=80):
@@ -31,6 +31,33 @@ def test_omp_recovers_sparse_codes_and_stops_at_the_tolerance():
     for n in np.flatnonzero(used > 1)[:20]:
         fewer = omp(D, Y[:, [n]], n_nonzero=int(used[n]) - 1)
         assert ((Y[:, n] - D @ fewer[:, 0]) ** 2).sum() > tol
+
+
+def test_omp_codes_are_the_dense_codes_and_the_denoiser_synthesises_them():
+    rng = np.random.default_rng(2)
+    D = _dictionary(rng, dim=4 * 4 * 3, k=96)
+    Y = rng.standard_normal((48, 150))
+    idx, coef, used = omp_codes(D, Y, n_nonzero=6, tol=20.0, chunk=32)
+    X = omp(D, Y, n_nonzero=6, tol=20.0)
+    assert used.min() >= 1 and used.max() <= 6 and 1 < used.mean() < 6  # stops vary
+    dense = np.zeros_like(X)
+    for j in range(Y.shape[1]):
+        assert np.all(coef[j, used[j] :] == 0)
+        dense[idx[j, : used[j]], j] = coef[j, : used[j]]
+    np.testing.assert_array_equal(dense, X)
+    # the denoiser's sparse synthesis equals averaging the dense codes' patches
+    d = PatchDictionary(D, 4, 3, stride=2, max_nonzero=6)
+    cube = rng.random((10, 12, 3))
+    sigma = 0.2
+    grid = [d._grid(n) for n in cube.shape[:2]]
+    patches = np.stack([cube[r : r + 4, c : c + 4].ravel() for r in grid[0] for c in grid[1]], 1)
+    codes = omp(d.atoms, patches, n_nonzero=6, tol=48 * (1.15 * sigma) ** 2)
+    synth = (d.atoms @ codes).T
+    want, weight = np.zeros_like(cube), np.zeros(cube.shape[:2])
+    for n, (r, c) in enumerate((r, c) for r in grid[0] for c in grid[1]):
+        want[r : r + 4, c : c + 4] += synth[n].reshape(4, 4, 3)
+        weight[r : r + 4, c : c + 4] += 1
+    np.testing.assert_allclose(d(cube, sigma), want / weight[:, :, None], atol=1e-12)
 
 
 def test_ksvd_lowers_the_representation_error():

@@ -49,7 +49,7 @@ def test_omp_codes_are_the_dense_codes_and_the_denoiser_synthesises_them():
     d = PatchDictionary(D, 4, 3, stride=2, max_nonzero=6)
     cube = rng.random((10, 12, 3))
     sigma = 0.2
-    grid = [d._grid(n) for n in cube.shape[:2]]
+    grid = [np.r_[np.arange(0, n - 4, 2), n - 4] for n in cube.shape[:2]]  # stride 2, to the edge
     patches = np.stack([cube[r : r + 4, c : c + 4].ravel() for r in grid[0] for c in grid[1]], 1)
     codes = omp(d.atoms, patches, n_nonzero=6, tol=48 * (1.15 * sigma) ** 2)
     synth = (d.atoms @ codes).T

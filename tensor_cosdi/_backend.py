@@ -194,6 +194,15 @@ def thread_limit() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def contiguous(x):
+    """``x`` with its memory in C order (a copy only when it is not)."""
+    if isinstance(x, np.ndarray):
+        return np.ascontiguousarray(x)
+    if backend_name() == "pytorch":
+        return x.contiguous()
+    return x
+
+
 def rfftn(x, s, axes):
     """Real FFT over ``axes`` with zero padding to sizes ``s`` (any backend)."""
     if isinstance(x, np.ndarray):

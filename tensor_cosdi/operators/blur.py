@@ -119,6 +119,13 @@ class Blur(TensorOperator):
         state["_spectra"] = {}
         return state
 
+    def _fuse_with(self, inner):
+        # a blur of copies (a PSF per copy): one transform of the input, not one per copy
+        if isinstance(inner, Replicate) and inner.axis not in self.axes:
+            if self.kernel.shape[inner.axis] == inner.n:
+                return _ReplicatedBlur(self, (inner.axis,))
+        return None
+
     def _to_matrix(self):
         shape = self.input_shape
         idx = vec_index(shape)
@@ -148,6 +155,63 @@ class Blur(TensorOperator):
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=self.shape
         )
         return m.tocsr()
+
+
+class _ReplicatedBlur(TensorOperator):
+    """Fused ``Blur ∘ Replicate ∘ …`` (execution plans only): copies of the input along
+    ``removed`` (axes of the blur's input), each blurred by its own PSF.
+
+    Forward: one FFT of the input, multiplied by every copy's spectrum, and one inverse
+    FFT per copy; adjoint: one FFT per copy, the copies summed in the Fourier domain and
+    one inverse FFT — against one pair per copy each way for the factors run in turn.
+    """
+
+    def __init__(self, blur, removed):
+        self.blur, self.removed = blur, tuple(sorted(removed))
+        shape = tuple(n for a, n in enumerate(blur.input_shape) if a not in self.removed)
+        super().__init__(shape, blur.input_shape)
+        self.in_axes = tuple(a - sum(r < a for r in self.removed) for a in blur.axes)
+
+    def _fuse_with(self, inner):
+        if not isinstance(inner, Replicate):
+            return None
+        # the replicated axis in the blur's input numbering
+        kept = [a for a in range(len(self.blur.input_shape)) if a not in self.removed]
+        axis = kept[inner.axis]
+        if axis in self.blur.axes or self.blur.kernel.shape[axis] != inner.n:
+            return None
+        return _ReplicatedBlur(self.blur, self.removed + (axis,))
+
+    def _forward(self, x):
+        b = self.blur
+        X = B.rfftn(x, s=b.padded, axes=self.in_axes)
+        shape = list(X.shape)
+        for r in self.removed:
+            shape.insert(r, 1)
+        full = B.irfftn(tl.reshape(X, tuple(shape)) * b._spectrum(x), s=b.padded, axes=b.axes)
+        return _crop(full, b.axes, b.input_shape, b.centre)
+
+    def _adjoint(self, y):
+        b = self.blur
+        shape = list(b.input_shape)
+        for a, p in zip(b.axes, b.padded):
+            shape[a] = p
+        e = B.zeros_like_shape(shape, y)
+        e[tuple(slice(o, o + b.input_shape[a]) if a in b.axes else slice(None)
+                for a, o in zip(range(len(shape)), _offsets(b)))] = y  # fmt: skip
+        Z = B.rfftn(e, s=b.padded, axes=b.axes) * tl.conj(b._spectrum(y))
+        for r in reversed(self.removed):
+            Z = tl.sum(Z, axis=r)
+        full = B.irfftn(Z, s=b.padded, axes=self.in_axes)
+        return _crop(full, self.in_axes, self.input_shape, (0, 0))
+
+
+def _offsets(blur):
+    """Per input axis the blur's centre offset (0 off the spatial axes)."""
+    off = [0] * len(blur.input_shape)
+    for a, o in zip(blur.axes, blur.centre):
+        off[a] = o
+    return off
 
 
 class BlurSum(TensorOperator):

@@ -277,8 +277,8 @@ def multiresolution_dfa(
     add = hist.extend
 
     # 1. all-in-focus grayscale
-    lift_g = (1.0 / (nl * nz)) * (Replicate((nx, ny, nl), 3, nz) @ Replicate((nx, ny), 2, nl))
-    a_g = op @ lift_g
+    # the scale outside the composition, so that a blur meets the copies it blurs (fused)
+    a_g = (1.0 / (nl * nz)) * (op @ Replicate((nx, ny, nl), 3, nz) @ Replicate((nx, ny), 2, nl))
     fg0 = a_g.solve_normal(
         a_g.apply_adjoint(g),
         1e-2 * float(tl.norm(a_g.apply(B.tensor_like(np.ones((nx, ny)), g)))) ** 2 / (nx * ny),
@@ -293,7 +293,7 @@ def multiresolution_dfa(
         fg = tl.clip(fg, 0, None)
     add(h)
     # 2. focal stack tied to fg
-    lift_f = (1.0 / nl) * Replicate((nx, ny, nz), 2, nl)
+    a_f = (1.0 / nl) * (op @ Replicate((nx, ny, nz), 2, nl))
 
     def tie_stack(x):
         return x + ((fg - tl.sum(x, axis=2)) / nz)[..., None]
@@ -302,11 +302,11 @@ def multiresolution_dfa(
     if form == "admm":  # Eq. 66: σ‖fg − Σ_z ff‖² instead of the projection
         tie = [(SumAxis((nx, ny, nz), 2), fg, sigma)]
         ff, h, c2 = admm_stage(
-            op @ lift_f, g, ff0, basis={**spatial, 2: "dct"}, couplings=tie,
+            a_f, g, ff0, basis={**spatial, 2: "dct"}, couplings=tie,
             desc="DFA ff (Alg. 3)", **akw,
         )  # fmt: skip
     else:
-        ff, h, c2 = fista_tv(op @ lift_f, g, ff0, project=tie_stack, desc="DFA ff", **kw)
+        ff, h, c2 = fista_tv(a_f, g, ff0, project=tie_stack, desc="DFA ff", **kw)
     ff = tl.clip(ff, 0, None)
     add(h)
     # 3. all-in-focus spectral with the depth weights of the focal stack

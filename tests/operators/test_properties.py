@@ -140,6 +140,35 @@ def test_blur_sum_is_the_blurred_stack_summed(shape, psf, steps, data, seed):
 
 
 @given(
+    shape=st.tuples(st.integers(2, 6), st.integers(2, 6), st.integers(1, 3), st.integers(1, 3)),
+    psf=st.tuples(st.integers(1, 4), st.integers(1, 4)),
+    data=st.data(),
+    seed=st.integers(0, 2**16),
+)
+def test_a_blur_of_copies_runs_fused_and_equals_its_factors(shape, psf, data, seed):
+    """Blur ∘ Replicate (one or two copied axes, any spatial pair): the fused plan (one
+    transform of the input) against the explicit matrix of the factors."""
+    g = np.random.default_rng(seed)
+    axes = tuple(data.draw(st.permutations(range(4)))[:2])
+    rest = [a for a in range(4) if a not in axes]
+    sizes_ = tuple(data.draw(st.sampled_from((1, shape[a]))) for a in rest)
+    blur = Blur(shape, g.random(psf + sizes_), axes=axes)
+    op = blur @ Replicate(tuple(n for a, n in enumerate(shape) if a != rest[1]), rest[1],
+                          shape[rest[1]])  # fmt: skip
+    if data.draw(st.booleans()):  # copy a second axis too
+        inner = op.input_shape
+        op = op @ Replicate(tuple(n for a, n in enumerate(inner) if a != rest[0]), rest[0],
+                            inner[rest[0]])  # fmt: skip
+    copied = [rest[1]] + ([rest[0]] if len(op.input_shape) == 2 else [])
+    varies = [sizes_[rest.index(a)] == shape[a] for a in copied]  # a PSF per copy
+    names = [type(f).__name__ for f in op._plan]
+    # fused while every copy has its own PSF, from the innermost copy outwards
+    assert names.count("_ReplicatedBlur") == varies[0], names
+    assert len(names) == 1 + (not varies[0]) + (len(copied) == 2 and not all(varies)), names
+    check_matrix_path(op, seed)
+
+
+@given(
     n=st.tuples(sizes, sizes, st.integers(1, 3), sizes, sizes),
     layout=st.sampled_from(["interleaved", "tiled"]),
     seed=st.integers(0, 2**16),

@@ -86,10 +86,13 @@ class Sensing:
 
     Cubes are batches ``(B, C, H, W)`` with ``C`` the product of the cube's
     trailing axes (bands, patterns…); measurements ``(B, *measurement_shape)``.
-    Each system's operator runs on the TensorLy PyTorch backend.
+    Single-shot SD-CASSI and CASSI-VSI systems with 2-D codes and the same
+    whole-pixel shifts (and ``αT``, ``β``) run as one batched coded shear
+    (:meth:`coded_shear`); any other system (or ``batched=False``) runs its
+    own operator on the TensorLy PyTorch backend.
     """
 
-    def __init__(self, systems, *, device=None, dtype=None):
+    def __init__(self, systems, *, device=None, dtype=None, batched: bool = True):
         torch = require_torch()
         systems = list(systems)
         if not systems:
@@ -106,9 +109,10 @@ class Sensing:
         self.channels = int(np.prod(shape[2:]))
         self.dtype = dtype or torch.float32
         self.device = torch.device(device or "cpu")
-        self.codes, self.offsets = None, _shared_offsets(systems)
-        self.blocks, self.alpha_t, self.beta = None, 1.0, 0
-        if self.offsets is not None:  # single-shot SD-CASSI with a 2-D code: one batched shear
+        self.codes, self.blocks = None, None
+        shared = _shared_offsets(systems) if batched else None
+        self.offsets, self.alpha_t, self.beta = (None, 1.0, 0) if shared is None else shared
+        if self.offsets is not None:  # SD-CASSI or CASSI-VSI with a 2-D code: a batched shear
             self._set_codes(np.stack([s.code for s in systems]))
             return
         d, grams = [], [s.operator.gram_dual() for s in systems]
@@ -177,18 +181,28 @@ class Sensing:
         self.codes = codes.to(device=self.device, dtype=self.dtype)
         if self.alpha_t == 1.0:
             self.d = self._shear_sum(self.codes[:, None] ** 2)
-        else:  # CASSI-VSI: rows of A (one detector row at a time) → A Aᵀ per row
-            h, w = self.cube_shape[:2]
+        else:  # CASSI-VSI: A Aᵀ per detector row, one n × n block each
+            # voxel (column c, band l) reaches detector column c + offsets[l] with αT·code and
+            # c + β with (1 − αT)·code, so it adds code² times αT², (1 − αT)² and αT(1 − αT)
+            # (twice, symmetric) to four entries of its row's block: a scatter-add of
+            # 4·W·L values per row (differentiable in the code), not the product of A's rows
+            w = self.cube_shape[1]
             n = self.measurement_shape[1]
+            a, r = self.alpha_t, 1.0 - self.alpha_t
             cols = torch.arange(w, device=self.device)
-            hit = torch.zeros(n, w, len(self.offsets), dtype=self.dtype, device=self.device)
-            for k, o in enumerate(self.offsets):
-                hit[cols + o, cols, k] += self.alpha_t
-            hit[cols + self.beta, cols, :] += 1 - self.alpha_t
-            rows = self.codes[:, :, None, :, None] * hit  # (B, H, n, W, L): A's rows per row
-            rows = rows.reshape(*rows.shape[:3], -1)
+            p1 = cols[None, :] + torch.tensor(self.offsets, device=self.device)[:, None]  # (L, W)
+            p2 = (cols + self.beta)[None, :].expand_as(p1)
+            flat = torch.cat([p1 * n + p1, p2 * n + p2, p1 * n + p2, p2 * n + p1]).reshape(-1)
+            weight = torch.tensor([a * a, r * r, a * r, a * r], dtype=self.dtype,
+                                  device=self.device)  # fmt: skip
+            c2 = self.codes**2  # (B, H, W)
+            values = (weight[:, None, None, None, None] * c2[None, :, :, None, :]).expand(
+                4, *c2.shape[:2], len(self.offsets), w
+            )  # (4, B, H, L, W) in the order of flat
+            values = values.permute(1, 2, 0, 3, 4).reshape(*c2.shape[:2], -1)
+            blocks = torch.zeros(*c2.shape[:2], n * n, dtype=self.dtype, device=self.device)
             self.band_axis = 1
-            self.blocks = rows @ rows.transpose(-1, -2)  # (B, H, n, n)
+            self.blocks = blocks.index_add(2, flat, values).reshape(*c2.shape[:2], n, n)
             self.d = torch.diagonal(self.blocks, dim1=-2, dim2=-1)
         self.dbar = self.d.reshape(len(codes), -1).mean(dim=1)
 
@@ -278,22 +292,30 @@ def _banded_blocks(gram) -> np.ndarray:
 
 
 def _shared_offsets(systems):
-    """The per-band column offsets (Python ints) when every system is a single-shot SD-CASSI
-    with a 2-D code and the same whole-pixel shifts — ``A`` is then one batched shear of the
-    coded bands (:meth:`Sensing.forward`) — else ``None`` (each system's own operator)."""
-    from ..systems import SDCASSI
+    """``(offsets, αT, β)`` when every system is a single-shot SD-CASSI (``αT`` 1, ``β`` 0) or
+    CASSI-VSI with a 2-D code and the same whole-pixel per-band column ``offsets`` (Python
+    ints), ``αT`` and ``β`` — ``A`` is then one batched shear of the coded bands, plus the
+    coded grayscale arm for CASSI-VSI (:meth:`Sensing.forward`) — else ``None`` (each
+    system's own operator)."""
+    from ..systems import CASSIVSI, SDCASSI
 
     first = None
     for s in systems:
-        if type(s) is not SDCASSI or s.colour or np.ndim(s.code) != 2:
+        if type(s) is SDCASSI and not s.colour and np.ndim(s.code) == 2:
+            arms = (1.0, 0)
+        elif type(s) is CASSIVSI and np.ndim(s.code) == 2:
+            arms = (float(s.alpha_t), int(s.beta))
+        else:
             return None
         shifts = np.asarray(s.shifts, dtype=np.float64)
-        if not np.array_equal(shifts, np.round(shifts)):
+        if not np.array_equal(shifts, np.round(shifts)) or (shifts < 0).any():
             return None
-        offsets = tuple(int(v) for v in shifts)
+        key = (tuple(int(v) for v in shifts),) + arms
+        if not 0 < key[1] <= 1:  # αT = 0 leaves no dispersed arm: the systems' own operators
+            return None
         if first is None:
-            first = offsets
-        elif offsets != first:
+            first = key
+        elif key != first:
             return None
     return first
 

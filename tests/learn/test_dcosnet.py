@@ -198,8 +198,7 @@ def test_sensing_from_codes_alone_is_the_sd_cassi_operator():
     codes = (rng.random((3, 12, 10)) < 0.5).astype(np.float64)
     systems = [tc.systems.SDCASSI(c, n_bands=6, shifts=[0, 1, 3, 4, 6, 9]) for c in codes]
     fast = Sensing.coded_shear(codes, systems[0].shifts, dtype=torch.float64)
-    slow = Sensing(systems, dtype=torch.float64)
-    slow.codes = None  # the systems' operators on the TensorLy PyTorch backend
+    slow = Sensing(systems, dtype=torch.float64, batched=False)  # the systems' operators
     assert fast.measurement_shape == slow.measurement_shape == systems[0].measurement_shape
     x = torch.from_numpy(rng.random((3, 6, 12, 10)))
     y = torch.from_numpy(rng.random((3, *systems[0].measurement_shape)))
@@ -463,7 +462,8 @@ def test_cassi_vsi_sensing_and_its_banded_woodbury_step():
     codes = (rng.random((3, 12, 10)) < 0.5).astype(float)
     systems = [tc.systems.CASSIVSI(c, n_bands=5, shifts=2, alpha_t=0.7) for c in codes]
     fast = Sensing.coded_shear(codes, systems[0].shifts, alpha_t=0.7, dtype=torch.float64)
-    slow = Sensing(systems, dtype=torch.float64)
+    slow = Sensing(systems, dtype=torch.float64, batched=False)
+    assert slow.codes is None and Sensing(systems).codes is not None  # systems run batched
     x = torch.from_numpy(rng.random((3, 5, 12, 10)))
     y = torch.from_numpy(rng.random((3, *systems[0].measurement_shape)))
     torch.testing.assert_close(fast.forward(x), slow.forward(x), rtol=1e-12, atol=1e-14)

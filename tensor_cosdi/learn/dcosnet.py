@@ -97,6 +97,8 @@ class Sensing:
         systems = list(systems)
         if not systems:
             raise ValueError("Sensing needs at least one system")
+        if not isinstance(batched, (bool, np.bool_)):
+            raise ValueError(f"batched must be True or False, got {batched!r}")
         shape = tuple(systems[0].cube_shape)
         mshape = tuple(systems[0].measurement_shape)
         for s in systems[1:]:

@@ -207,8 +207,10 @@ class _ReplicatedBlur(TensorOperator):
         for a, p in zip(b.axes, b.padded):
             shape[a] = p
         e = B.zeros_like_shape(shape, y)
-        e[tuple(slice(o, o + b.input_shape[a]) if a in b.axes else slice(None)
-                for a, o in zip(range(len(shape)), _offsets(b)))] = y  # fmt: skip
+        window = [slice(None)] * len(shape)  # y sits at the PSF's centre of the padded grid
+        for a, o in zip(b.axes, b.centre):
+            window[a] = slice(o, o + b.input_shape[a])
+        e[tuple(window)] = y
         E = B.rfftn(e, s=b.padded, axes=b.axes)
         # Σ over the copies of E · conj(H) in one contraction (3-10× a product and a sum)
         letters = "abcdefghijklmnopqrstuvwxyz"[: E.ndim]
@@ -216,14 +218,6 @@ class _ReplicatedBlur(TensorOperator):
         Z = tl.einsum(f"{letters},{letters}->{out}", E, self._conj_spectrum(y))
         full = B.irfftn(Z, s=b.padded, axes=self.in_axes)
         return _crop(full, self.in_axes, self.input_shape, (0, 0))
-
-
-def _offsets(blur):
-    """Per input axis the blur's centre offset (0 off the spatial axes)."""
-    off = [0] * len(blur.input_shape)
-    for a, o in zip(blur.axes, blur.centre):
-        off[a] = o
-    return off
 
 
 class BlurSum(TensorOperator):

@@ -464,6 +464,8 @@ def test_cassi_vsi_sensing_and_its_banded_woodbury_step():
     fast = Sensing.coded_shear(codes, systems[0].shifts, alpha_t=0.7, dtype=torch.float64)
     slow = Sensing(systems, dtype=torch.float64, batched=False)
     assert slow.codes is None and Sensing(systems).codes is not None  # systems run batched
+    with pytest.raises(ValueError, match="batched must be True or False"):
+        Sensing(systems, batched="no")
     x = torch.from_numpy(rng.random((3, 5, 12, 10)))
     y = torch.from_numpy(rng.random((3, *systems[0].measurement_shape)))
     torch.testing.assert_close(fast.forward(x), slow.forward(x), rtol=1e-12, atol=1e-14)

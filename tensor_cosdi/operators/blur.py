@@ -105,15 +105,7 @@ class Blur(TensorOperator):
         return self._crop(full, self.centre)
 
     def _adjoint(self, y):
-        shape = list(self.input_shape)
-        for a, p in zip(self.axes, self.padded):
-            shape[a] = p
-        e = B.zeros_like_shape(shape, y)
-        idx = [slice(None)] * len(shape)
-        for a, o in zip(self.axes, self.centre):
-            idx[a] = slice(o, o + self.input_shape[a])
-        e[tuple(idx)] = y
-        E = B.rfftn(e, s=self.padded, axes=self.axes)
+        E = _centred_spectrum(y, self.axes, self.padded, self.centre)
         full = B.irfftn(E * tl.conj(self._spectrum(y)), s=self.padded, axes=self.axes)
         return self._crop(full, (0, 0))
 
@@ -203,15 +195,7 @@ class _ReplicatedBlur(TensorOperator):
 
     def _adjoint(self, y):
         b = self.blur
-        shape = list(b.input_shape)
-        for a, p in zip(b.axes, b.padded):
-            shape[a] = p
-        e = B.zeros_like_shape(shape, y)
-        window = [slice(None)] * len(shape)  # y sits at the PSF's centre of the padded grid
-        for a, o in zip(b.axes, b.centre):
-            window[a] = slice(o, o + b.input_shape[a])
-        e[tuple(window)] = y
-        E = B.rfftn(e, s=b.padded, axes=b.axes)
+        E = _centred_spectrum(y, b.axes, b.padded, b.centre)
         # Σ over the copies of E · conj(H) in one contraction (3-10× a product and a sum)
         letters = "abcdefghijklmnopqrstuvwxyz"[: E.ndim]
         out = "".join(c for a, c in enumerate(letters) if a not in self.removed)
@@ -313,15 +297,7 @@ class BlurSum(TensorOperator):
         return _crop(full, self.out_axes, self.output_shape, self.centre)
 
     def _adjoint(self, y):
-        shape = list(self.output_shape)
-        for a, p in zip(self.out_axes, self.padded):
-            shape[a] = p
-        e = B.zeros_like_shape(shape, y)
-        idx = [slice(None)] * len(shape)
-        for a, o in zip(self.out_axes, self.centre):
-            idx[a] = slice(o, o + self.output_shape[a])
-        e[tuple(idx)] = y
-        E = B.rfftn(e, s=self.padded, axes=self.out_axes)
+        E = _centred_spectrum(y, self.out_axes, self.padded, self.centre)
         X = tl.matmul(self._mixing(y)[1], E[..., None])[..., 0]  # Σ_k conj(H[…, a, k]) E[…, k]
         X = tl.moveaxis(X, -1, self.sum_axis)
         full = B.irfftn(X, s=self.padded, axes=self.axes)
@@ -337,6 +313,19 @@ class BlurSum(TensorOperator):
 
     def _to_matrix(self):
         return self._composite().to_matrix()
+
+
+def _centred_spectrum(y, axes, padded, centre):
+    """The real FFT of ``y`` zero-padded to ``padded`` along ``axes``, placed at the PSF's
+    ``centre`` (the first step of every blur adjoint: the correlation's input)."""
+    shape = list(y.shape)
+    window = [slice(None)] * len(shape)
+    for a, p, o in zip(axes, padded, centre):
+        window[a] = slice(o, o + shape[a])
+        shape[a] = p
+    e = B.zeros_like_shape(shape, y)
+    e[tuple(window)] = y
+    return B.rfftn(e, s=padded, axes=axes)
 
 
 def _crop(z, axes, shape, offsets):

@@ -21,7 +21,7 @@ import numbers
 
 import numpy as np
 
-__all__ = ["number", "integer", "flag", "option_types"]
+__all__ = ["number", "integer", "flag", "precision", "option_types"]
 
 
 def _range_text(low, high, low_open, high_open) -> str:
@@ -76,6 +76,18 @@ def flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {value!r}")
     return bool(value)
+
+
+def precision(name: str, value) -> np.dtype:
+    """``value`` as the NumPy dtype ``float32`` or ``float64`` (a name or a dtype-like), or a
+    ``ValueError`` naming ``name``: the float precision a study or a measurement runs in."""
+    try:
+        dt = np.dtype(value) if isinstance(value, (str, type, np.dtype)) else None
+    except TypeError:
+        dt = None
+    if dt is None or dt not in (np.dtype(np.float32), np.dtype(np.float64)):
+        raise ValueError(f"{name} must be 'float32' or 'float64', got {value!r}")
+    return dt
 
 
 def option_types(where: str, options: dict, defaults: dict) -> None:

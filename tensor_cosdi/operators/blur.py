@@ -276,30 +276,46 @@ class BlurSum(TensorOperator):
     __getstate__ = Blur.__getstate__
 
     def _mixing(self, like):
-        """The spectra as batched matrices: ``(…, a, k)`` (the summed axis moved before the
-        steps) and its conjugate, cached like the spectra."""
+        """The spectra ``H[…, a, k]`` laid out for the plane → step mixing, and their conjugate,
+        cached like the spectra: ``(a, k, …)`` (each (plane, step) pair one contiguous slab) for
+        few pairs, batched ``(…, a, k)`` matrices otherwise."""
         key = ("mixing",) + B.context_key(like)
         hit = self._spectra.get(key)
         if hit is None:
             H = tl.moveaxis(self._spectrum(like), self.sum_axis, -2)
+            if self._pairwise():
+                H = tl.moveaxis(tl.moveaxis(H, -1, 0), -1, 0)  # (a, k, …)
             hit = (H, tl.conj(H))
             hit = tuple(B.contiguous(h) for h in hit)
             self._spectra[key] = hit
         return hit
 
+    def _pairwise(self) -> bool:
+        """Mix by one multiply-add of whole slabs per (plane, step) pair: with few pairs
+        (a · k ≤ 16) that beats a (1 × a)(a × k) product per frequency — 1.2 against 3.0 ms at
+        3 × 3 on 90 × 46 × 16 frequencies, 11.5 against 5.6 ms at 8 × 8."""
+        return self.input_shape[self.sum_axis] * self.steps <= 16
+
     def _forward(self, x):
         X = B.rfftn(x, s=self.padded, axes=self.axes)
-        # Y[…, k] = Σ_a X[…, a] H[…, a, k]: a (1 × a)(a × k) product per frequency — a
-        # product over the whole (…, a, k) block and a reduction along a middle axis cost 5×
-        X = tl.moveaxis(X, self.sum_axis, -1)
-        Y = tl.matmul(X[..., None, :], self._mixing(x)[0])[..., 0, :]
+        H = self._mixing(x)[0]
+        if self._pairwise():  # Y[…, k] = Σ_a X[…, a] H[…, a, k], slab by slab
+            Xa = tl.moveaxis(X, self.sum_axis, 0)
+            Y = tl.stack([_mix(Xa, H[:, k]) for k in range(self.steps)], axis=-1)
+        else:  # a (1 × a)(a × k) product per frequency
+            Y = tl.matmul(tl.moveaxis(X, self.sum_axis, -1)[..., None, :], H)[..., 0, :]
         full = B.irfftn(Y, s=self.padded, axes=self.out_axes)
         return _crop(full, self.out_axes, self.output_shape, self.centre)
 
     def _adjoint(self, y):
         E = _centred_spectrum(y, self.out_axes, self.padded, self.centre)
-        X = tl.matmul(self._mixing(y)[1], E[..., None])[..., 0]  # Σ_k conj(H[…, a, k]) E[…, k]
-        X = tl.moveaxis(X, -1, self.sum_axis)
+        Hc = self._mixing(y)[1]
+        if self._pairwise():  # X[…, a] = Σ_k conj(H[…, a, k]) E[…, k]
+            Ek = tl.moveaxis(E, -1, 0)
+            n_planes = self.input_shape[self.sum_axis]
+            X = tl.stack([_mix(Ek, Hc[a]) for a in range(n_planes)], axis=self.sum_axis)
+        else:
+            X = tl.moveaxis(tl.matmul(Hc, E[..., None])[..., 0], -1, self.sum_axis)
         full = B.irfftn(X, s=self.padded, axes=self.axes)
         return _crop(full, self.axes, self.input_shape, (0, 0))
 
@@ -313,6 +329,14 @@ class BlurSum(TensorOperator):
 
     def _to_matrix(self):
         return self._composite().to_matrix()
+
+
+def _mix(slabs, weights):
+    """``Σ_i slabs[i] · weights[i]`` (spectra along the leading axis), accumulated in place."""
+    acc = slabs[0] * weights[0]
+    for i in range(1, slabs.shape[0]):
+        acc += slabs[i] * weights[i]
+    return acc
 
 
 def _centred_spectrum(y, axes, padded, centre):

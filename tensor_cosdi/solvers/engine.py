@@ -36,6 +36,8 @@ so no option depends on the measurement's scale.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import tensorly as tl
 
@@ -308,7 +310,7 @@ def fista(
         x_new = prior.prox(y + op.apply_adjoint(g - op.apply(y)) / L)
         if project is not None:
             x_new = project(x_new)
-        t_new = (1 + np.sqrt(1 + 4 * t * t)) / 2
+        t_new = (1 + math.sqrt(1 + 4 * t * t)) / 2  # a Python float: keeps float32 iterates float32
         y = x_new + ((t - 1) / t_new) * (x_new - x)
         change = relative_change(x_new, x)
         x, t = x_new, t_new

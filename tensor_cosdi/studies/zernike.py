@@ -20,6 +20,8 @@ from functools import partial
 
 import numpy as np
 
+from ..validate import precision
+
 __all__ = ["zernike_design", "zernike_run", "default_lens", "DEPTHS_MM"]
 
 #: Object distances (mm) of the depth planes and the lens of the DFA design studies.
@@ -34,16 +36,19 @@ def default_lens():
 
 def zernike_run(
     aberration, psf_size, *, scene="cave.face", shape=(48, 48), n_bands=12, depths_mm=DEPTHS_MM,
-    lens=None, snr_db=30.0, method="dfa", seed=0, reference_size=81, sweep=False, **options,
+    lens=None, snr_db=30.0, method="dfa", seed=0, reference_size=81, sweep=False,
+    dtype="float64", **options,
 ) -> dict:  # fmt: skip
     """One cell of :func:`zernike_design`: CASSDI-DFA whose PSFs add ``aberration = (Noll index,
     waves RMS)`` to defocus (amplitude 0: pure defocus, "DFD"), cropped to ``psf_size``;
-    ``sweep=True``: the focal-sweep model (every plane seen at every step)."""
+    ``sweep=True``: the focal-sweep model (every plane seen at every step); the measurement
+    reaches the reconstruction in ``dtype``."""
     from .. import codes, optics, scenes
     from ..solvers import reconstruct
     from ..systems import CASSDIDFA, wavelengths_for
     from .problems import Problem, score
 
+    dtype = precision("dtype", dtype)
     mode, amp = int(aberration[0]), float(aberration[1])
     if int(psf_size) > int(reference_size):
         raise ValueError(f"psf_size {psf_size} exceeds reference_size {reference_size}")
@@ -69,7 +74,7 @@ def zernike_run(
     system = CASSDIDFA(
         codes.depth_codes(tuple(shape), nz, rng=seed), n_bands=n_bands, psfs=psfs, wavelengths=wl
     )
-    g = system.simulate(cube, snr_db=snr_db, rng=seed)
+    g = np.asarray(system.simulate(cube, snr_db=snr_db, rng=seed), dtype=dtype)
     t0 = time.perf_counter()
     res = reconstruct(system, g, method, **options)
     seconds = time.perf_counter() - t0
@@ -88,7 +93,7 @@ def zernike_run(
 def zernike_design(
     modes=(5, 6, 7, 8, 9, 11), amplitudes=(0.25, 0.5, 0.9), psf_sizes=(15, 41), *,
     scene="cave.face", shape=(48, 48), n_bands=12, snr_db=30.0, method="dfa", seeds=(0,),
-    reference_size=81, sweep=False, client=None, progress=True, **options,
+    reference_size=81, sweep=False, dtype="float64", client=None, progress=True, **options,
 ) -> list[dict]:  # fmt: skip
     """Depth and spectral quality of CASSDI-DFA against the Zernike mode and amplitude the
     deformable mirror adds to defocus, at several PSF crop sizes (thesis Section 4.3).
@@ -118,6 +123,10 @@ def zernike_design(
         the thesis' per-plane model, where plane ``z`` is seen only at step
         ``z`` and the codes alone tell the planes apart.  ``separation`` then
         averages over the steps.
+    dtype : {"float64", "float32"}
+        The precision the measurement reaches the reconstruction in (the solver keeps it):
+        ``"float32"``, a camera's data, runs the Fourier-domain blurs at about twice the
+        speed (``benchmarks/thesis_findings.py`` uses it).
 
     Returns
     -------
@@ -151,7 +160,8 @@ def zernike_design(
     grid = {"aberration": cases, "psf_size": sizes, "seed": list(seeds)}
     run = partial(  # a module-level function: picklable for Dask workers
         zernike_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
-        method=method, reference_size=reference_size, sweep=bool(sweep), **options,
+        method=method, reference_size=reference_size, sweep=bool(sweep),
+        dtype=str(precision("dtype", dtype)), **options,
     )  # fmt: skip
     recs = run_grid(grid, run, client=client, progress=progress)
     for r in recs:

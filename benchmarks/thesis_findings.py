@@ -70,10 +70,10 @@ scenes from photos.
                    vsi_learned]
         [--workers 2] [--out benchmarks/results]
 
-Studies 2 and C3SLFI Table 1 hand their solvers float32 measurements
-(``PRECISION``: a camera's precision; the Fourier-domain blurs and the
-dense transforms run about twice as fast, and a DFA cell's PSNR moves by
-< 0.001 dB against float64).
+The CASSI-VSI αT studies, study 2 and C3SLFI Table 1 (with its baselines)
+hand their solvers float32 measurements (``PRECISION``: a camera's
+precision; the Fourier-domain blurs and the dense transforms run about twice
+as fast, and a DFA cell's PSNR moves by < 0.001 dB against float64).
 
 Every study runs for each of ``--seeds`` (codes and noise); tables show means
 over scenes and seeds, and each verdict is computed from the per-seed values:
@@ -113,7 +113,8 @@ from _protocol import provenance, provenance_lines  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("chelsea", "coffee", "astronaut")
-#: The precision of the measurements of studies 2 (CASSDI-DFA) and C3SLFI Table 1.
+#: The precision of the measurements of the CASSI-VSI αT studies, studies 2 (CASSDI-DFA) and
+#: C3SLFI Table 1 with its baselines.
 PRECISION = "float32"
 
 
@@ -154,7 +155,7 @@ def vsi_run(scene, case, size, bands, snr, seed):
     method, alpha_t = case
     r = tc.studies.imagers.vsi_ratio_run(
         alpha_t, scene=scene, shape=(size, size), n_bands=bands, snr_db=snr, method=method,
-        seed=seed,
+        seed=seed, dtype=PRECISION,
     )  # fmt: skip
     r.pop("seconds")
     return {"system": "sd_cassi" if alpha_t is None else "cassi_vsi"} | r
@@ -751,8 +752,8 @@ def table1_dl_study(args, log, client=None):
     for r in tc.studies.c3slfi_table(
         names, (2,) if QUICK else (2, 3), (20.0,), ("otd", "wdct", "dl", "dl5", "lytro"),
         ("3d",),
-        shape=(size, size), views=(4, 4), n_bands=n_bands, seeds=tuple(args.seeds), client=client,
-        progress=False,
+        shape=(size, size), views=(4, 4), n_bands=n_bands, seeds=tuple(args.seeds),
+        dtype=PRECISION, client=client, progress=False,
     ):  # fmt: skip
         recs.append(r)
         log(
@@ -892,8 +893,8 @@ def main(argv=None):
         f"{tc.__version__}; "
         f"{args.size}×{args.size}×{args.bands}, {args.snr:g} dB, seeds "
         f"{', '.join(map(str, args.seeds))}; scenes: "
-        f"{', '.join(_scene_names())} (CS2LI: {', '.join(SCENES)}); CASSDI-DFA and Table 1 "
-        f"from {PRECISION} measurements.\n"
+        f"{', '.join(_scene_names())} (CS2LI: {', '.join(SCENES)}); the CASSI-VSI αT studies, "
+        f"CASSDI-DFA and Table 1 from {PRECISION} measurements.\n"
     ]
     keys = args.studies.split(",")
     unknown = [k for k in keys if k not in funcs]

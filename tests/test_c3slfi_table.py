@@ -28,6 +28,8 @@ def test_bad_grids_are_named():
         studies.c3slfi_table(forms=("4d",))
     with pytest.raises(ValueError, match="snapshots must lie in 1…n_bands = 31"):
         studies.c3slfi_table(snapshots=(40,))
+    with pytest.raises(ValueError, match="dtype must be 'float32' or 'float64', got 'f2'"):
+        studies.c3slfi_table(dtype="f2")
 
 
 def test_otd_over_wdct_holds_on_a_photo_scene_and_reverses_on_a_real_one():

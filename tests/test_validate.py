@@ -7,13 +7,21 @@ import pytest
 import tensor_cosdi as tc
 from tensor_cosdi.io.triggers import AcquisitionPlan
 from tensor_cosdi.solvers import denoisers
-from tensor_cosdi.validate import flag, integer, number, option_types
+from tensor_cosdi.validate import flag, integer, number, option_types, precision
 
 
 @pytest.mark.parametrize("bad", [True, np.bool_(False), "0.5", None, float("inf"), np.nan, 1j])
 def test_number_refuses_what_is_not_a_finite_real(bad):
     with pytest.raises(ValueError, match="x must be a finite number"):
         number("x", bad)
+
+
+def test_precision_is_float32_or_float64():
+    assert precision("dtype", "float32") == np.float32
+    assert precision("dtype", np.float64) == np.float64
+    for bad in ("float16", "int32", "x", 3, None, True, np.int8, object):
+        with pytest.raises(ValueError, match="dtype must be 'float32' or 'float64', got"):
+            precision("dtype", bad)
 
 
 def test_number_ranges_and_numpy_scalars():

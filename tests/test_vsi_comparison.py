@@ -6,6 +6,7 @@ import pytest
 
 import tensor_cosdi as tc
 from tensor_cosdi import datasets, studies
+from tensor_cosdi.studies import imagers
 from tensor_cosdi.studies.imagers import VSI_COMPARISON_SYSTEMS, vsi_comparison_run
 
 
@@ -80,10 +81,22 @@ def test_vsi_ratio_records_and_equal_light():
     for kwargs, match in (
         ({"alphas": (1.2,)}, "alpha_t"), ({"alphas": ()}, "at least one"),
         ({"scenes": "chelsea"}, "not one string"), ({"n_bands": 0}, "n_bands"),
+        ({"dtype": "int8"}, "dtype must be 'float32' or 'float64'"),
     ):  # fmt: skip
         with pytest.raises(ValueError, match=match):
             studies.vsi_ratio(**{"scenes": ("chelsea",), "shape": (8, 8), "n_bands": 4,
                                  "progress": False, **kwargs})  # fmt: skip
+
+
+def test_a_float32_study_scores_as_the_float64_one():
+    """A-VSI and OTD on float32 measurements score as on float64 ones (16×16×4, 10 iterations:
+    OTD's learned bases move it by 0.016 dB, A-VSI by less than 0.001)."""
+    kw = dict(scene="colorchecker", shape=(16, 16), n_bands=4, snr_db=30.0, max_iter=10)
+    for method in ("avsi", "otd"):
+        hi = imagers.vsi_ratio_run(0.7, method=method, **kw)
+        lo = imagers.vsi_ratio_run(0.7, method=method, dtype="float32", **kw)
+        assert lo["psnr"] == pytest.approx(hi["psnr"], abs=0.05), method
+        assert lo["pan_psnr"] == pytest.approx(hi["pan_psnr"], abs=0.05), method
 
 
 def test_the_panchromatic_estimate_gains_as_light_goes_to_the_grayscale_arm():

@@ -357,7 +357,7 @@ def twist(
     if not 0 < lam1 < 1:
         raise ValueError(f"lam1 must lie in (0, 1) (the smallest eigenvalue of AᵀA/L), got {lam1}")
     rho0 = (1 - lam1) / (1 + lam1)
-    alpha = 2 / (1 + np.sqrt(1 - rho0 * rho0))
+    alpha = 2 / (1 + math.sqrt(1 - rho0 * rho0))  # Python floats keep float32 iterates float32
     beta = 2 * alpha / (1 + lam1)
     start = least_norm(op, g) if start is None else start
     prior.setup(start, penalty=L, gain=L)

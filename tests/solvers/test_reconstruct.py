@@ -210,6 +210,32 @@ def test_a_float16_measurement_is_promoted_to_float32():
     assert abs(psnr[0] - psnr[1]) < 0.2, psnr  # only the input's rounding differs
 
 
+#: Methods that need more than a measurement (trained weights for 28 bands at 2 px, a dictionary).
+_NEED_MORE = ("dcosnet", "dl")
+
+
+@pytest.mark.parametrize(
+    "system, kw",
+    [("sd_cassi", {}), ("cassi_vsi", {}), ("cassdi_dfa", {}),
+     ("c3slfi", {"n_snapshots": 2, "views": (2, 2)})],
+)  # fmt: skip
+def test_every_method_keeps_a_float32_measurement_float32(system, kw):
+    """A float32 measurement gives a float32 cube with every method: NumPy 2 keeps the type
+    of a NumPy float64 scalar, so an ``np.sqrt`` step size once turned TwIST's and FISTA's
+    iterates (and everything after them) into float64."""
+    p = tc.studies.make_problem(system, "chelsea", shape=(16, 16), n_bands=4, rng=0, **kw)
+    op, g = p.system, np.asarray(p.measurement, dtype=np.float32)
+    methods = [m for m in tc.solvers.methods(op) if m not in _NEED_MORE]
+    if system == "cassdi_dfa":  # with PSFs (band, plane): the methods without CG solves
+        psfs = np.random.default_rng(0).random((3, 3, 4, 3)) + 0.1
+        op = tc.systems.CASSDIDFA(op.codes, n_bands=4, psfs=psfs)
+        g = np.asarray(op.simulate(p.cube, snr_db=30.0, rng=0), dtype=np.float32)
+        methods = ["dfa", "split_tv", "twist"]
+    for m in methods:
+        opts = {"max_iter": 3} if "max_iter" in tc.solvers.METHODS[m].defaults else {}
+        assert tc.reconstruct(op, g, m, **opts).cube.dtype == np.float32, m
+
+
 def test_method_metadata_says_which_systems_and_what_is_needed():
     vsi = tc.studies.make_problem("cassi_vsi", "chelsea", shape=(16, 16), n_bands=4)
     sd = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)

@@ -72,9 +72,9 @@ scenes from photos.
 
 The CASSI-VSI αT studies, study 2 and C3SLFI Table 1 (with its baselines)
 hand their solvers float32 measurements (``PRECISION``: a camera's
-precision; single-threaded, a DFA cell ran about 1.3× and a Table 1 OTD or
-WDCT cell 1.5-2× faster than on float64, its PSNR within 0.001 dB on the
-DFA cells).
+precision; the transforms and products run faster than on float64, see
+``benchmarks/results/blur_operators.md``; the whole run's time is in the
+results file).
 
 Every study runs for each of ``--seeds`` (codes and noise); tables show means
 over scenes and seeds, and each verdict is computed from the per-seed values:

@@ -560,8 +560,7 @@ def c3slfi_table(
         Lenslet image size, views per lenslet, bands; seeds of codes and
         noise; as for :func:`~tensor_cosdi.studies.sweep`.
     dtype : {"float64", "float32"}
-        The precision the measurements reach the reconstructions in (the solvers keep it;
-        ``"float32"`` runs OTD and WDCT at about 1.5-2× the speed).
+        The precision the measurements reach the reconstructions in (the solvers keep it).
 
     Returns
     -------

@@ -209,8 +209,7 @@ def vsi_ratio(
     seeds, client, progress
         As in :func:`~tensor_cosdi.studies.sweep`.
     dtype : {"float64", "float32"}
-        The precision the measurements reach the reconstruction in (A-VSI runs ≈ 1.4× faster
-        in float32).
+        The precision the measurements reach the reconstruction in (the solver keeps it).
     **options
         Passed to the reconstruction.
 

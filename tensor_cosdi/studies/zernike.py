@@ -126,8 +126,8 @@ def zernike_design(
     dtype : {"float64", "float32"}
         The precision the measurement reaches the reconstruction in (the solver keeps it):
         ``"float32"``, a camera's data, runs the Fourier-domain blurs 1.2-1.7× faster
-        (``benchmarks/results/blur_operators.md``) and a whole cell about 1.3×
-        (``benchmarks/thesis_findings.py`` uses it).
+        (``benchmarks/results/blur_operators.md``; ``benchmarks/thesis_findings.py`` uses
+        it).
 
     Returns
     -------

@@ -413,6 +413,14 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--patch", type=_positive_int, default=64, help="patch side (even)")
     tr.add_argument("--width", type=_positive_int, default=64, help="convolution channels")
     tr.add_argument("--blocks", type=_positive_int, default=4, help="residual blocks")
+    tr.add_argument(
+        "--zoom", type=float, default=0.0, metavar="P",
+        help="probability that a batch is a magnified view (a smaller crop upsampled to the "
+        "patch; default 0)",
+    )  # fmt: skip
+    tr.add_argument(
+        "--zoom-max", type=float, default=3.0, help="largest magnification (default 3)"
+    )
     tr.set_defaults(func=run_train_denoiser)
 
     dc = sub.add_parser(

@@ -65,6 +65,8 @@ def run_train_denoiser(args) -> int:
         patch=args.patch,
         width=args.width,
         blocks=args.blocks,
+        zoom=args.zoom,
+        zoom_max=args.zoom_max,
         seed=args.seed,
         hold_out=args.hold_out,
     )

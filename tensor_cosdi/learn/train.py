@@ -5,6 +5,10 @@ report scenes are never read) at their native 31 bands or resampled to the
 28 KAIST bands, with random band ranges and strides (3 to 31 channels, so
 that the network serves any band count), random subspace ranks, flips and
 rotations, a random smooth illuminant and shading (:func:`_illuminate`),
+optionally magnified views (``zoom``: a smaller crop upsampled to the patch
+size, so that the network also meets the smoother, larger-scale structure of
+scenes photographed from farther in or at a higher resolution than the
+2×2-downsampled CAVE scenes),
 plus white Gaussian noise of a log-uniform level — for half of
 the batches (``coded_fraction``) with its projection onto the row space of a
 random SD-CASSI operator removed, which is the structured error a
@@ -51,6 +55,11 @@ class TrainConfig:
     #: probability that a patch's spectra are tilted (a random smooth illuminant) and, apart,
     #: that it is shaded by a random linear ramp across the image plane
     illumination: float = 0.5
+    #: probability that a batch is a magnified view: crops of ``patch / z`` pixels
+    #: (``z`` log-uniform in [1, ``zoom_max``]) upsampled bicubically to ``patch``; 0 draws
+    #: nothing from the random stream (earlier recipes reproduce exactly)
+    zoom: float = 0.0
+    zoom_max: float = 3.0
     r_max: int = 12
     width: int = 64
     blocks: int = 4
@@ -67,12 +76,19 @@ class TrainConfig:
         )
         if self.patch < 8 or self.patch % 2:
             raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
-        for name in ("coded_fraction", "illumination"):
+        for name in ("coded_fraction", "illumination", "zoom"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:
                 raise ValueError(f"{name} must be a number in [0, 1], got {v!r}")
         from ..datasets import training_scenes
 
+        if isinstance(self.zoom_max, bool) or not isinstance(self.zoom_max, (int, float)) or not (
+            1 <= self.zoom_max <= self.patch / 8
+        ):
+            raise ValueError(
+                f"zoom_max must be a number in [1, patch/8 = {self.patch / 8:g}], "
+                f"got {self.zoom_max!r}"
+            )
         training_scenes(self.hold_out)
         if not 0 < self.sigma_min < self.sigma_max:
             raise ValueError(
@@ -94,7 +110,8 @@ def training_data(folder=None, hold_out: int = -1):
 
 
 def _batch(rng, cubes, cfg: TrainConfig):
-    """One batch ``(clean (B, P, C), rank, (H, W))`` as NumPy, from the random stream ``rng``."""
+    """One batch ``(clean (B, side², C), rank, side)`` as NumPy, from the random stream ``rng``:
+    ``side`` is ``cfg.patch``, or less for a magnified batch (the caller upsamples it)."""
     cube = cubes[int(rng.integers(len(cubes)))]  # one band set per batch
     nb = cube.shape[2]
     if rng.random() < 0.2:
@@ -107,6 +124,8 @@ def _batch(rng, cubes, cfg: TrainConfig):
     bands = start + stride * np.arange(n)
     rank = cfg.r_max if rng.random() < 0.7 else int(rng.integers(3, cfg.r_max + 1))
     p = cfg.patch
+    if cfg.zoom > 0 and rng.random() < cfg.zoom:
+        p = max(8, int(round(cfg.patch / np.exp(rng.uniform(0.0, np.log(cfg.zoom_max))))))
     out = np.empty((cfg.batch, p, p, n), dtype=np.float32)
     for i in range(cfg.batch):
         c = cubes[int(rng.integers(len(cubes)))] if i else cube
@@ -119,7 +138,19 @@ def _batch(rng, cubes, cfg: TrainConfig):
         if rng.random() < 0.5:
             patch = patch[::-1]
         out[i] = _illuminate(rng, patch, bands / max(nb - 1, 1), cfg.illumination)
-    return out.reshape(cfg.batch, p * p, n), rank
+    return out.reshape(cfg.batch, p * p, n), rank, p
+
+
+def _upsampled(torch, clean, side: int, patch: int):
+    """``clean (B, side², C)`` upsampled bicubically to ``(B, patch², C)``, floored at 0."""
+    if side == patch:
+        return clean
+    b, _, n = clean.shape
+    img = clean.reshape(b, side, side, n).permute(0, 3, 1, 2)
+    up = torch.nn.functional.interpolate(
+        img, size=(patch, patch), mode="bicubic", align_corners=False
+    ).clamp_min(0.0)
+    return up.permute(0, 2, 3, 1).reshape(b, patch * patch, n).contiguous()
 
 
 def _illuminate(rng, patch, position, probability):
@@ -177,9 +208,9 @@ def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     """One batch's loss (see the module docstring)."""
     from .spectral_net import subspace
 
-    clean_np, rank = _batch(rng, cubes, cfg)
+    clean_np, rank, side = _batch(rng, cubes, cfg)
     sig_np = np.exp(rng.uniform(np.log(cfg.sigma_min), np.log(cfg.sigma_max), cfg.batch))
-    clean = torch.from_numpy(clean_np).to(dev)
+    clean = _upsampled(torch, torch.from_numpy(clean_np).to(dev), side, cfg.patch)
     sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
     noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
     if rng.random() < cfg.coded_fraction:

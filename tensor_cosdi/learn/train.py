@@ -82,12 +82,13 @@ class TrainConfig:
                 raise ValueError(f"{name} must be a number in [0, 1], got {v!r}")
         from ..datasets import training_scenes
 
-        if isinstance(self.zoom_max, bool) or not isinstance(self.zoom_max, (int, float)) or not (
-            1 <= self.zoom_max <= self.patch / 8
-        ):
+        z = self.zoom_max
+        top = self.patch / 8 if self.zoom > 0 else float("inf")  # crops of at least 8 px
+        if isinstance(z, bool) or not isinstance(z, (int, float)) or not 1 <= z <= top:
             raise ValueError(
-                f"zoom_max must be a number in [1, patch/8 = {self.patch / 8:g}], "
-                f"got {self.zoom_max!r}"
+                "zoom_max must be a number ≥ 1"
+                + (f" and ≤ patch/8 = {top:g} with zoom > 0" if self.zoom > 0 else "")
+                + f", got {z!r}"
             )
         training_scenes(self.hold_out)
         if not 0 < self.sigma_min < self.sigma_max:

@@ -179,6 +179,46 @@ def test_cli_train_denoiser(tmp_path, capsys):
     assert len(scenes) == 28 - len(fold) and not set(fold) & set(scenes)
     assert cli.main(args[:1] + ["--out", str(tmp_path / "x.pt"), "--hold-out", "4"] + args[3:]) == 2
     assert "hold_out must be -1" in capsys.readouterr().err
+    # magnified views: recorded in the weights' training configuration
+    zoomed = tmp_path / "zoom.pt"
+    zoom = ["--zoom", "0.5", "--zoom-max", "2"]
+    assert cli.main(args[:1] + ["--out", str(zoomed)] + zoom + args[3:]) == 0
+    cfg = json.loads(torch.load(zoomed, weights_only=True)["train_config"])
+    assert cfg["zoom"] == 0.5 and cfg["zoom_max"] == 2.0
+    assert cli.main(args[:1] + ["--out", str(tmp_path / "z.pt"), "--zoom", "2"] + args[3:]) == 2
+    assert "zoom must be a number in [0, 1]" in capsys.readouterr().err
+
+
+@needs_torch
+def test_magnified_batches_are_smaller_crops_upsampled_to_the_patch():
+    import torch
+
+    from tensor_cosdi.learn.train import TrainConfig, _batch, _upsampled
+
+    cube = _real("face", (96, 96))
+    cfg = TrainConfig(batch=3, patch=32, zoom=1.0, zoom_max=4.0).check()
+    sides = set()
+    rng = np.random.default_rng(0)
+    for _ in range(12):
+        clean, _, side = _batch(rng, [cube], cfg)
+        assert clean.shape[:2] == (3, side * side) and 8 <= side <= 32
+        sides.add(side)
+        up = _upsampled(torch, torch.from_numpy(clean), side, 32)
+        assert up.shape == (3, 32 * 32, clean.shape[2]) and float(up.min()) >= 0
+        # bicubic magnification keeps the mean level of each band (within 2 %)
+        np.testing.assert_allclose(up.mean(1).numpy(), clean.mean(1), rtol=0.02, atol=1e-4)
+    assert len(sides) > 3 and min(sides) < 16  # magnifications up to 4× were drawn
+    # without zoom every batch is a full patch, and no random number is drawn for it
+    plain = TrainConfig(batch=3, patch=32)
+    a, _, side = _batch(np.random.default_rng(5), [cube], plain)
+    assert side == 32
+    r = np.random.default_rng(5)
+    b, _, _ = _batch(r, [cube], TrainConfig(batch=3, patch=32, zoom=0.0, zoom_max=2.0))
+    np.testing.assert_array_equal(a, b)
+    for bad in ({"zoom": 1.5}, {"zoom": -0.1}, {"zoom_max": 0.5}, {"zoom": 0.5, "zoom_max": 5.0}):
+        with pytest.raises(ValueError, match="zoom"):
+            TrainConfig(patch=32, **bad).check()
+    TrainConfig(patch=16).check()  # the default zoom_max only binds when zoom is on
 
 
 @needs_torch

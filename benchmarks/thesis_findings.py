@@ -54,7 +54,7 @@ algorithms).
    network per arm (the spread is over scenes and noise levels, not over
    training runs).  ``vsi_learned`` (Sec. 3.3.5, Fig. 25-27):
    ``studies.learned_imagers`` — the shipped D-CoSNet pair trained alike
-   for SD-CASSI and for CASSI-VSI (αT 0.7, one seeded 32×32 code, the
+   for SD-CASSI and for CASSI-VSI (αT 0.7, one seeded 64×64 code, the
    x-step through each system's exact solve), the report scenes at 20 and
    30 dB.
 
@@ -717,8 +717,12 @@ def vsi_learned_study(args, log, client=None):
     for r in rows:
         log(f"learned reconstructor {r['system']:9s} {r['scene']:28s} "
             f"{_snr_text(r['snr_db']):6s} PSNR {r['psnr']:.2f} SAM {r['sam']:.2f}")  # fmt: skip
+    from tensor_cosdi.learn.dcosnet import read_config
+
+    shipped = tc.studies.learned.IMAGER_STUDY_WEIGHTS["sd_cassi"]
+    code = "×".join(str(v) for v in read_config(shipped)["code_shape"])
     lines = [
-        f"Scenes {', '.join(names)} at {size}×{size}; 28 bands, 2 px per band, one seeded 32×32 "
+        f"Scenes {', '.join(names)} at {size}×{size}; 28 bands, 2 px per band, one seeded {code} "
         "code tiled, CASSI-VSI at αT 0.7; each network trained alike for its own imager "
         "(means over scenes).\n",
         "| imager | PSNR dB, 20 dB | PSNR dB, 30 dB | SSIM | SAM ° | s a cube | OTD, 20 dB | "

@@ -8,7 +8,7 @@ ahead at 20 and 30 dB (Sec. 3.3.5, Fig. 25-27).  The same experiment with
 the package's unrolled network: D-CoSNet, whose x-step is each system's
 exact ``(μI + A Aᵀ)⁻¹`` — a division for SD-CASSI, a Cholesky solve of each
 detector row's banded block for CASSI-VSI — trained alike for both imagers
-on one seeded 32×32 code (the shipped pair,
+on one seeded 64×64 code (the shipped pair,
 :data:`tensor_cosdi.studies.learned.IMAGER_STUDY_WEIGHTS`).
 :func:`tensor_cosdi.studies.learned_imagers` images one scene with each
 imager through that code, tiled, and lets its own network reconstruct it.

@@ -25,7 +25,7 @@ CODE_STUDY_WEIGHTS = {
     "learned": _WEIGHTS / "dcosnet_learned_s2.pt",
 }
 #: The shipped pair of the imager study: the same D-CoSNet (3 stages, 28 bands, 2 px per band,
-#: one fixed seeded 32×32 code) trained for SD-CASSI and for CASSI-VSI (αT 0.7).
+#: one fixed seeded 64×64 code, 64×64 crops) trained for SD-CASSI and for CASSI-VSI (αT 0.7).
 IMAGER_STUDY_WEIGHTS = {
     "sd_cassi": _WEIGHTS / "dcosnet_imager_sd_cassi.pt",
     "cassi_vsi": _WEIGHTS / "dcosnet_imager_cassi_vsi.pt",

@@ -325,7 +325,9 @@ def test_a_fortran_ordered_cube_comes_back_fortran_ordered_with_the_same_values(
     c_in, f_in = np.ascontiguousarray(noisy), np.asfortranarray(noisy)
     c_out, f_out = den(c_in, 0.05), den(f_in, 0.05)
     assert c_out.flags.c_contiguous and f_out.flags.f_contiguous and not f_out.flags.c_contiguous
-    assert np.abs(f_out - c_out).max() <= 1e-5 * np.abs(c_out).max()
+    # float32 sums in another order: 1.6e-5 of the peak on one CPU, under 1e-5 on earlier ones;
+    # a layout mistake (a transposed or mis-strided plane) moves values by the signal itself
+    assert np.abs(f_out - c_out).max() <= 1e-4 * np.abs(c_out).max()
     gain = metrics.psnr(clean, f_out, data_range=1.0) - metrics.psnr(clean, noisy, data_range=1.0)
     assert gain > 5, gain
     # the self-ensemble hands over a flipped view (negative strides): still no transposition

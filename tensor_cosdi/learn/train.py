@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TrainConfig", "train_denoiser", "training_data"]
+__all__ = ["TrainConfig", "magnify", "sample_batch", "train_denoiser", "training_data"]
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,7 @@ def training_data(folder=None, hold_out: int = -1):
     return cubes
 
 
-def _batch(rng, cubes, cfg: TrainConfig):
+def sample_batch(rng, cubes, cfg: TrainConfig):
     """One batch ``(clean (B, side², C), rank, side)`` as NumPy, from the random stream ``rng``:
     ``side`` is ``cfg.patch``, or less for a magnified batch (the caller upsamples it)."""
     cube = cubes[int(rng.integers(len(cubes)))]  # one band set per batch
@@ -142,7 +142,7 @@ def _batch(rng, cubes, cfg: TrainConfig):
     return out.reshape(cfg.batch, p * p, n), rank, p
 
 
-def _upsampled(torch, clean, side: int, patch: int):
+def magnify(torch, clean, side: int, patch: int):
     """``clean (B, side², C)`` upsampled bicubically to ``(B, patch², C)``, floored at 0."""
     if side == patch:
         return clean
@@ -209,9 +209,9 @@ def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     """One batch's loss (see the module docstring)."""
     from .spectral_net import subspace
 
-    clean_np, rank, side = _batch(rng, cubes, cfg)
+    clean_np, rank, side = sample_batch(rng, cubes, cfg)
     sig_np = np.exp(rng.uniform(np.log(cfg.sigma_min), np.log(cfg.sigma_max), cfg.batch))
-    clean = _upsampled(torch, torch.from_numpy(clean_np).to(dev), side, cfg.patch)
+    clean = magnify(torch, torch.from_numpy(clean_np).to(dev), side, cfg.patch)
     sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
     noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
     if rng.random() < cfg.coded_fraction:

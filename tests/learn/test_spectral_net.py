@@ -193,27 +193,27 @@ def test_cli_train_denoiser(tmp_path, capsys):
 def test_magnified_batches_are_smaller_crops_upsampled_to_the_patch():
     import torch
 
-    from tensor_cosdi.learn.train import TrainConfig, _batch, _upsampled
+    from tensor_cosdi.learn.train import TrainConfig, magnify, sample_batch
 
     cube = _real("face", (96, 96))
     cfg = TrainConfig(batch=3, patch=32, zoom=1.0, zoom_max=4.0).check()
     sides = set()
     rng = np.random.default_rng(0)
     for _ in range(12):
-        clean, _, side = _batch(rng, [cube], cfg)
+        clean, _, side = sample_batch(rng, [cube], cfg)
         assert clean.shape[:2] == (3, side * side) and 8 <= side <= 32
         sides.add(side)
-        up = _upsampled(torch, torch.from_numpy(clean), side, 32)
+        up = magnify(torch, torch.from_numpy(clean), side, 32)
         assert up.shape == (3, 32 * 32, clean.shape[2]) and float(up.min()) >= 0
         # bicubic magnification keeps the mean level of each band (within 2 %)
         np.testing.assert_allclose(up.mean(1).numpy(), clean.mean(1), rtol=0.02, atol=1e-4)
     assert len(sides) > 3 and min(sides) < 16  # magnifications up to 4× were drawn
     # without zoom every batch is a full patch, and no random number is drawn for it
     plain = TrainConfig(batch=3, patch=32)
-    a, _, side = _batch(np.random.default_rng(5), [cube], plain)
+    a, _, side = sample_batch(np.random.default_rng(5), [cube], plain)
     assert side == 32
     r = np.random.default_rng(5)
-    b, _, _ = _batch(r, [cube], TrainConfig(batch=3, patch=32, zoom=0.0, zoom_max=2.0))
+    b, _, _ = sample_batch(r, [cube], TrainConfig(batch=3, patch=32, zoom=0.0, zoom_max=2.0))
     np.testing.assert_array_equal(a, b)
     for bad in ({"zoom": 1.5}, {"zoom": -0.1}, {"zoom_max": 0.5}, {"zoom": 0.5, "zoom_max": 5.0}):
         with pytest.raises(ValueError, match="zoom"):

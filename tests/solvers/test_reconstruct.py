@@ -302,7 +302,7 @@ CHEAP += ("pnp_gap",) if importlib.util.find_spec("torch") else ()
 def test_every_imager_gives_the_same_cube_in_any_measurement_units(system):
     """Every imager, with every cheap method written for it (the thesis' A-VSI, DFA and PnP-ADMM
     on their imagers): a measurement ×1e±300 gives the cube ×1e±300 within 1e-6 (dual-camera
-    CASSI's OTD once moved by 22-25 %)."""
+    CASSI's OTD once moved by 22-25 %); 1e-5 for the float32 learned denoiser."""
     p = tc.studies.make_problem(system, "colorchecker", shape=(16, 16), n_bands=4, rng=0)
     g = np.asarray(p.measurement)
     for method in [m for m in tc.solvers.methods(p.system) if m in CHEAP]:
@@ -314,4 +314,5 @@ def test_every_imager_gives_the_same_cube_in_any_measurement_units(system):
             cube = np.asarray(tc.reconstruct(p.system, g * scale, method, **opts).cube)
             assert np.isfinite(cube).all(), (system, method, scale)
             rel = np.linalg.norm(cube / scale - ref) / np.linalg.norm(ref)
-            assert rel < 1e-6, (system, method, scale, rel)
+            # the learned denoiser runs in float32: rounding alone reached 1.1e-6 on one CPU
+            assert rel < (1e-5 if method == "pnp_gap" else 1e-6), (system, method, scale, rel)

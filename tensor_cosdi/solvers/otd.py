@@ -69,7 +69,7 @@ def initial_bases(
     wavelet_name: str = "sym8",
     wavelet_level="auto",
     pan_iter: int = 60,
-    pan_atoms: int = 3,
+    pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps: int | None = 10,
     spatial_block: int | None = None,
@@ -95,7 +95,8 @@ def initial_bases(
     pan_iter, pan_atoms, pan_weight, pan_tv_steps
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
-        estimated SNR, :data:`PAN_WEIGHTS`).
+        estimated SNR, :data:`PAN_WEIGHTS`; ``pan_atoms``: spectral DCT atoms,
+        ``"auto"`` by the band count, :func:`~.panchromatic.pan_atoms_for`).
     spatial_block : int or None
         With ``"panchromatic"``: a spatial axis longer than this gets a
         block-diagonal basis, one learned block per run of at most
@@ -284,7 +285,7 @@ def online_tucker_admm(
     max_iter="auto",
     admm_iter="auto",
     pan_iter: int = 90,
-    pan_atoms: int = 3,
+    pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps=10,
     spatial_block=None,

@@ -11,7 +11,10 @@ from ..bases import dct
 from . import engine
 from .priors import TV
 
-__all__ = ["panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "PAN_WEIGHTS"]
+__all__ = [
+    "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for", "PAN_WEIGHTS",
+    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
+]  # fmt: skip
 
 _check_int = engine.check_int
 
@@ -22,6 +25,26 @@ _check_int = engine.check_int
 #: 26.55 dB at 4.0 (24.82 at 2.0, 26.48 at 8.0).  A noise-free TSA measurement estimates at
 #: 40-47 dB.
 PAN_WEIGHTS = {40.0: 0.3, 30.0: 2.0, 20.0: 4.0}
+#: ``pan_atoms="auto"``: the DCT atoms spanning a panchromatic axis in the first stage, by the
+#: axis' length: :data:`PAN_ATOMS` below :data:`MANY_BANDS`, :data:`PAN_ATOMS_MANY` from there
+#: on.  The larger count was chosen by 4-fold cross-validation over 16 of the 28-band tuning
+#: scenes (SD-CASSI, TSA mask, one setting for noiseless and 30 dB from 3, 6, 8, 12;
+#: ``benchmarks/results/pan_atoms.md``): three atoms cannot follow the spectra of 28 bands, and
+#: the first stage's cube is OTD's start.  Shorter axes keep the three atoms their studies were
+#: run with.
+PAN_ATOMS = 3
+PAN_ATOMS_MANY = 6
+MANY_BANDS = 24
+
+
+def pan_atoms_for(length: int, pan_atoms="auto") -> int:
+    """The first stage's atom count for an axis of ``length`` samples: ``pan_atoms`` (an integer
+    ≥ 1) or ``"auto"`` (:data:`PAN_ATOMS` / :data:`PAN_ATOMS_MANY`), at most ``length``."""
+    if isinstance(pan_atoms, str):
+        if pan_atoms != "auto":
+            raise ValueError(f"pan_atoms must be an integer ≥ 1 or 'auto', got {pan_atoms!r}")
+        pan_atoms = PAN_ATOMS_MANY if length >= MANY_BANDS else PAN_ATOMS
+    return min(_check_int("pan_atoms", pan_atoms, 1), int(length))
 
 
 def _check_pan_weight(pan_weight):
@@ -50,7 +73,7 @@ def panchromatic_estimate(
     measurement,
     *,
     pan_iter: int = 60,
-    pan_atoms: int = 3,
+    pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps: int | None = 10,
     progress: bool = False,
@@ -60,7 +83,7 @@ def panchromatic_estimate(
     Systems whose :meth:`~tensor_cosdi.systems.System.panchromatic` is exact
     (complementary C3SLFI by Lemma 1, the dual-camera CASSI) use it.  The
     others use :func:`subspace_gap_tv` (``pan_iter`` iterations,
-    ``pan_atoms`` spectral atoms, ``pan_tv_steps`` warm-started Chambolle
+    ``pan_atoms`` spectral atoms (:func:`pan_atoms_for`), ``pan_tv_steps`` warm-started Chambolle
     steps per iteration — :class:`~tensor_cosdi.solvers.denoisers.WarmTV`;
     ``None``: 50 cold ones) and ``Z = D x``; with ``pan_iter = 0`` they
     fall back to the Tikhonov solve of the flat decimated model.
@@ -90,7 +113,7 @@ def subspace_gap_tv(
     system,
     measurement,
     *,
-    n_atoms: int = 3,
+    n_atoms="auto",
     max_iter: int = 60,
     tv_weight: float = 0.05,
     tv_steps: int | None = 10,
@@ -102,7 +125,8 @@ def subspace_gap_tv(
     The decimated model of Eq. 62 assumes flat spectra (``F = Dᵀ Z / n``);
     on sheared systems that mismatch dominates (relative error 0.7-0.9 on
     64×64×16 scenes).  Here the panchromatic axes are instead spanned by
-    their first ``n_atoms`` DCT atoms (``n_atoms = 1`` is the flat model)
+    their first ``n_atoms`` DCT atoms (``n_atoms = 1`` is the flat model; ``"auto"``:
+    :func:`pan_atoms_for` each axis' length)
     and regularised by 2-D total variation of each coefficient image, in
     accelerated GAP iterations ``x ← P TV(Pᵀ(x + Aᵀ(AAᵀ + εI)⁻¹(ĝ − Ax)))``.
     TV runs on ``n_atoms`` images instead of ``Nλ``, so it costs a fraction
@@ -115,15 +139,14 @@ def subspace_gap_tv(
     """
     from .denoisers import WarmTV, tv
 
-    n_atoms = _check_int("n_atoms", n_atoms, 1)
+    if not isinstance(n_atoms, str):
+        n_atoms = _check_int("n_atoms", n_atoms, 1)
     max_iter = _check_int("max_iter", max_iter, 1)
     g = measurement
     names = list(system.axes)
     modes = [names.index(a) for a in system.panchromatic_axes]
-    mats = [
-        B.tensor_like(dct(system.cube_shape[m])[:, : min(n_atoms, system.cube_shape[m])], g)
-        for m in modes
-    ]
+    shape = system.cube_shape
+    mats = [B.tensor_like(dct(shape[m])[:, : pan_atoms_for(shape[m], n_atoms)], g) for m in modes]
 
     denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
 

@@ -325,3 +325,26 @@ def test_the_subspace_denoiser_keeps_a_fortran_iterate_and_its_values():
     assert f_out.flags.f_contiguous and not f_out.flags.c_contiguous
     np.testing.assert_allclose(f_out, c_out, rtol=0, atol=1e-12)
     assert np.linalg.norm(c_out - v) > 0.1 * np.linalg.norm(v)  # it did project and denoise
+
+
+def test_the_first_stage_spans_many_bands_with_more_atoms():
+    """``pan_atoms="auto"``: 3 DCT atoms below 24 bands, the cross-validated count from there
+    (three atoms cannot follow 28-band spectra); an explicit count is kept, capped at the axis."""
+    from tensor_cosdi.solvers.panchromatic import (
+        MANY_BANDS, PAN_ATOMS, PAN_ATOMS_MANY, pan_atoms_for, subspace_gap_tv,
+    )  # fmt: skip
+
+    assert PAN_ATOMS_MANY > PAN_ATOMS
+    assert pan_atoms_for(MANY_BANDS - 1) == PAN_ATOMS and pan_atoms_for(28) == PAN_ATOMS_MANY
+    assert pan_atoms_for(2) == 2 and pan_atoms_for(28, 4) == 4 and pan_atoms_for(3, 5) == 3
+    for bad in ("many", 0, 2.5, True):
+        with pytest.raises(ValueError, match="pan_atoms must be"):
+            pan_atoms_for(28, bad)
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=28, rng=0)
+    auto = subspace_gap_tv(p.system, p.measurement, max_iter=5)
+    same = subspace_gap_tv(p.system, p.measurement, n_atoms=PAN_ATOMS_MANY, max_iter=5)
+    three = subspace_gap_tv(p.system, p.measurement, n_atoms=3, max_iter=5)
+    np.testing.assert_array_equal(auto, same)
+    assert np.abs(auto - three).max() > 1e-3  # a different subspace, not a no-op
+    with pytest.raises(ValueError, match="pan_atoms must be"):
+        tc.reconstruct(p.system, p.measurement, "otd", pan_atoms="many")

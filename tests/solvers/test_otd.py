@@ -331,7 +331,11 @@ def test_the_first_stage_spans_many_bands_with_more_atoms():
     """``pan_atoms="auto"``: 3 DCT atoms below 24 bands, the cross-validated count from there
     (three atoms cannot follow 28-band spectra); an explicit count is kept, capped at the axis."""
     from tensor_cosdi.solvers.panchromatic import (
-        MANY_BANDS, PAN_ATOMS, PAN_ATOMS_MANY, pan_atoms_for, subspace_gap_tv,
+        MANY_BANDS,
+        PAN_ATOMS,
+        PAN_ATOMS_MANY,
+        pan_atoms_for,
+        subspace_gap_tv,
     )  # fmt: skip
 
     assert PAN_ATOMS_MANY > PAN_ATOMS

@@ -7,7 +7,7 @@ that the network serves any band count), random subspace ranks, flips and
 rotations, a random smooth illuminant and shading (:func:`_illuminate`),
 optionally magnified views (``zoom``: a smaller crop upsampled to the patch
 size, so that the network also meets the smoother, larger-scale structure of
-scenes photographed from farther in or at a higher resolution than the
+scenes photographed closer up or at a higher resolution than the
 2×2-downsampled CAVE scenes),
 plus white Gaussian noise of a log-uniform level — for half of
 the batches (``coded_fraction``) with its projection onto the row space of a

@@ -37,14 +37,15 @@ PAN_ATOMS_MANY = 6
 MANY_BANDS = 24
 
 
-def pan_atoms_for(length: int, pan_atoms="auto") -> int:
+def pan_atoms_for(length: int, pan_atoms="auto", *, name: str = "pan_atoms") -> int:
     """The first stage's atom count for an axis of ``length`` samples: ``pan_atoms`` (an integer
-    ≥ 1) or ``"auto"`` (:data:`PAN_ATOMS` / :data:`PAN_ATOMS_MANY`), at most ``length``."""
+    ≥ 1) or ``"auto"`` (:data:`PAN_ATOMS` / :data:`PAN_ATOMS_MANY`), at most ``length``;
+    ``name`` is the option's name in the error."""
     if isinstance(pan_atoms, str):
         if pan_atoms != "auto":
-            raise ValueError(f"pan_atoms must be an integer ≥ 1 or 'auto', got {pan_atoms!r}")
+            raise ValueError(f"{name} must be an integer ≥ 1 or 'auto', got {pan_atoms!r}")
         pan_atoms = PAN_ATOMS_MANY if length >= MANY_BANDS else PAN_ATOMS
-    return min(_check_int("pan_atoms", pan_atoms, 1), int(length))
+    return min(_check_int(name, pan_atoms, 1), int(length))
 
 
 def _check_pan_weight(pan_weight):
@@ -95,6 +96,7 @@ def panchromatic_estimate(
     """
     pan_iter = _check_int("pan_iter", pan_iter, 0)
     _check_pan_weight(pan_weight)
+    pan_atoms_for(MANY_BANDS, pan_atoms)  # checked even where the exact estimate needs none
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     x = subspace_gap_tv(
@@ -139,14 +141,14 @@ def subspace_gap_tv(
     """
     from .denoisers import WarmTV, tv
 
-    if not isinstance(n_atoms, str):
-        n_atoms = _check_int("n_atoms", n_atoms, 1)
+    pan_atoms_for(MANY_BANDS, n_atoms, name="n_atoms")  # checked before any work
     max_iter = _check_int("max_iter", max_iter, 1)
     g = measurement
     names = list(system.axes)
     modes = [names.index(a) for a in system.panchromatic_axes]
     shape = system.cube_shape
-    mats = [B.tensor_like(dct(shape[m])[:, : pan_atoms_for(shape[m], n_atoms)], g) for m in modes]
+    keep = {m: pan_atoms_for(shape[m], n_atoms, name="n_atoms") for m in modes}
+    mats = [B.tensor_like(dct(shape[m])[:, : keep[m]], g) for m in modes]
 
     denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
 

@@ -352,3 +352,8 @@ def test_the_first_stage_spans_many_bands_with_more_atoms():
     assert np.abs(auto - three).max() > 1e-3  # a different subspace, not a no-op
     with pytest.raises(ValueError, match="pan_atoms must be"):
         tc.reconstruct(p.system, p.measurement, "otd", pan_atoms="many")
+    with pytest.raises(ValueError, match="n_atoms must be"):
+        subspace_gap_tv(p.system, p.measurement, n_atoms=0)
+    exact = tc.studies.make_problem("dual_camera_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    with pytest.raises(ValueError, match="pan_atoms must be"):  # checked where unused too
+        tc.solvers.panchromatic.panchromatic_estimate(exact.system, exact.measurement, pan_atoms=-1)

@@ -111,8 +111,25 @@ def training_data(folder=None, hold_out: int = -1):
 
 
 def sample_batch(rng, cubes, cfg: TrainConfig):
-    """One batch ``(clean (B, side², C), rank, side)`` as NumPy, from the random stream ``rng``:
-    ``side`` is ``cfg.patch``, or less for a magnified batch (the caller upsamples it)."""
+    """One training batch of clean patches, drawn from the random stream ``rng``.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    cubes : list of arrays ``(rows, columns, bands)``
+        The training scenes (:func:`training_data`); one band set per batch.
+    cfg : TrainConfig
+        Batch size, patch size, ranks, illumination and ``zoom`` options.
+
+    Returns
+    -------
+    clean : float32 array ``(batch, side², channels)``
+    rank : int
+        The subspace rank of this batch.
+    side : int
+        ``cfg.patch``, or less for a magnified batch: :func:`magnify` brings it to
+        ``cfg.patch``.
+    """
     cube = cubes[int(rng.integers(len(cubes)))]  # one band set per batch
     nb = cube.shape[2]
     if rng.random() < 0.2:
@@ -143,7 +160,20 @@ def sample_batch(rng, cubes, cfg: TrainConfig):
 
 
 def magnify(torch, clean, side: int, patch: int):
-    """``clean (B, side², C)`` upsampled bicubically to ``(B, patch², C)``, floored at 0."""
+    """A batch of :func:`sample_batch` upsampled bicubically to the patch size, floored at 0.
+
+    Parameters
+    ----------
+    torch : module
+        PyTorch (:func:`tensor_cosdi.learn.require_torch`).
+    clean : torch.Tensor ``(batch, side², channels)``
+    side, patch : int
+        The batch's side and the patch size; equal sides return ``clean`` itself.
+
+    Returns
+    -------
+    torch.Tensor ``(batch, patch², channels)``
+    """
     if side == patch:
         return clean
     b, _, n = clean.shape

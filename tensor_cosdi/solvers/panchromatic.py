@@ -38,9 +38,29 @@ MANY_BANDS = 24
 
 
 def pan_atoms_for(length: int, pan_atoms="auto", *, name: str = "pan_atoms") -> int:
-    """The first stage's atom count for an axis of ``length`` samples: ``pan_atoms`` (an integer
-    ≥ 1) or ``"auto"`` (:data:`PAN_ATOMS` / :data:`PAN_ATOMS_MANY`), at most ``length``;
-    ``name`` is the option's name in the error."""
+    """The first stage's count of DCT atoms for a panchromatic axis.
+
+    Parameters
+    ----------
+    length : int
+        Samples along the axis (its band count).
+    pan_atoms : int or "auto"
+        An integer ≥ 1, or ``"auto"``: :data:`PAN_ATOMS` below :data:`MANY_BANDS`,
+        :data:`PAN_ATOMS_MANY` from there on.
+    name : str
+        The option's name in the error message.
+
+    Returns
+    -------
+    int
+        The count, at most ``length``.
+
+    Examples
+    --------
+    >>> from tensor_cosdi.solvers.panchromatic import pan_atoms_for
+    >>> pan_atoms_for(28), pan_atoms_for(16), pan_atoms_for(2, 5)
+    (6, 3, 2)
+    """
     if isinstance(pan_atoms, str):
         if pan_atoms != "auto":
             raise ValueError(f"{name} must be an integer ≥ 1 or 'auto', got {pan_atoms!r}")

@@ -88,6 +88,29 @@ def magnified(cube, zoom: float):
     return np.maximum(out, 0.0).astype(cube.dtype)
 
 
+def scene_view(label: str) -> tuple[str, float]:
+    """``(scene, zoom)`` of a scene label: ``"cloth"`` is the scene as it is, ``"cloth@2"`` its
+    centre half magnified 2× (:func:`magnified`)."""
+    name, sep, z = str(label).partition("@")
+    if not sep:
+        return name, 1.0
+    try:
+        zoom = float(z)
+    except ValueError:
+        zoom = float("nan")
+    if not zoom >= 1:
+        raise ValueError(f"scene view {label!r}: the zoom after '@' must be a number ≥ 1")
+    return name, zoom
+
+
+def views(scenes, zoom) -> tuple[str, ...]:
+    """``scenes`` followed by their ``@zoom`` views (``zoom`` ``None`` or 1: ``scenes``)."""
+    scenes = tuple(scenes)
+    if zoom is None or zoom == 1:
+        return scenes
+    return scenes + tuple(f"{s}@{zoom:g}" for s in scenes)
+
+
 def score(truth, est) -> dict:
     est = np.clip(np.asarray(est, dtype=np.float64), 0.0, 1.0)
     truth = np.asarray(truth, dtype=np.float64)
@@ -257,7 +280,8 @@ class Store:
         pk = (scene, snr, mask_kind)
         if pk not in cache:
             cache.clear()
-            cache[pk] = problem(scene, snr, load_mask(mask_kind))
+            name, zoom = scene_view(scene)
+            cache[pk] = problem(name, snr, load_mask(mask_kind), zoom=zoom)
         system, cube, g = cache[pk]
         est, sec = run(method, system, g, options)
         row = {

@@ -18,9 +18,16 @@ does not stay in cache.
 
 The adjoint returns its cube in that layout, so solver iterates stay in it.
 
-A cube in any other memory order (NumPy's default C order, with the band
-axis fastest; band-major slices) cannot be read band by band without
-copying short rows, so :class:`GatherMatrix` applies the coded shear-and-sum
+A cube whose band axis is slowest but whose shifted axis is not next
+(band-major slabs, memory ``(λ, x, y)``) is read band by band too
+(:func:`shear_sum_forward_slabs`): each coded slab goes into a buffer padded
+like the measurement, and lands with one contiguous add at the band's flat
+offset — one long add per band instead of a short row at a time (≈ 2.3
+copies against ≈ 3.2 for the row loop on a 2-core Xeon).
+
+A cube with the band axis fastest (NumPy's default C order for
+``(x, y, λ)``) cannot be read band by band without gathering single values,
+so :class:`GatherMatrix` applies the coded shear-and-sum
 as one sparse matrix–vector product over the cube's memory buffer: one
 row per measurement pixel holding the code values of the voxels that land
 on it, with column indices in the cube's own memory order (no transpose).
@@ -38,6 +45,7 @@ __all__ = [
     "linear_step",
     "moved",
     "shear_sum_forward",
+    "shear_sum_forward_slabs",
     "shear_sum_adjoint",
     "memory_order",
     "GatherMatrix",
@@ -84,6 +92,49 @@ def shear_sum_forward(x: np.ndarray, weights, band_axis: int, shift_axis: int, s
             np.multiply(xm[l], weights[l if weights.shape[0] > 1 else 0], out=tmp)
             np.add(target, tmp, out=target)
     return np.moveaxis(out, 0, shift_axis - (shift_axis > band_axis))
+
+
+def shear_sum_forward_slabs(x: np.ndarray, wslices, band_axis: int, shift_axis: int, step: int):
+    """The same sum for a cube whose band axis is slowest in memory but whose shifted axis is
+    not next (band-major ``(λ, x, y)`` memory for an ``(x, y, λ)`` cube); ``None`` otherwise.
+
+    The measurement is allocated in the order of the slabs' remaining axes, so shifting a
+    band by ``d`` pixels adds ``d`` times the shifted axis' stride to every flat index.  Each
+    coded slab is written into a zero-padded buffer laid out like the measurement (the
+    padding of the shifted axis is never written), and that buffer is added to the
+    measurement's flat buffer at the band's offset: one contiguous add per band instead of
+    one short row at a time (the rows of a band slab land ``d`` pixels into rows of the
+    longer measurement).  The padding's zeros land on real pixels and change nothing.
+    ``wslices[l]`` is band ``l``'s code in the remaining axes' logical order (or ``None``).
+    """
+    order = memory_order(x)
+    if order is None or order[0] != band_axis or order[1] == shift_axis:
+        return None
+    rest = [a for a in range(x.ndim) if a != band_axis]
+    out_axes = [rest.index(a) for a in order[1:]]  # output axes, slowest first in memory
+    L = x.shape[band_axis]
+    o_shift = rest.index(shift_axis)
+    out_shape = [x.shape[a] for a in rest]
+    out_shape[o_shift] += step * (L - 1)
+    held = [out_shape[a] for a in out_axes]  # the measurement's shape in memory order
+    size = int(np.prod(held))
+    stride = int(np.prod([out_shape[a] for a in out_axes[out_axes.index(o_shift) + 1 :]]))
+    flat = np.zeros(size + step * (L - 1) * stride, dtype=x.dtype)
+    pad = np.zeros(held, dtype=x.dtype)  # one band, padded along the shifted axis
+    n = x.shape[shift_axis]
+    inner = pad[tuple(slice(0, n) if a == o_shift else slice(None) for a in out_axes)]
+    inner = np.moveaxis(inner, range(len(out_axes)), out_axes)  # logical order of ``rest``
+    pad_flat = pad.reshape(-1)
+    for l in range(L):
+        slab = x[(slice(None),) * band_axis + (l,)]  # a view
+        if wslices is None:
+            np.copyto(inner, slab)
+        else:
+            np.multiply(slab, wslices[l], out=inner)
+        target = flat[step * l * stride : step * l * stride + size]
+        np.add(target, pad_flat, out=target)
+    y = flat[:size].reshape(held)
+    return np.moveaxis(y, range(len(out_axes)), out_axes)
 
 
 def shear_sum_adjoint(

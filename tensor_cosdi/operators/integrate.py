@@ -15,6 +15,7 @@ from ._kernels import (
     moved,
     shear_sum_adjoint,
     shear_sum_forward,
+    shear_sum_forward_slabs,
 )
 from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
 from .codes import Code
@@ -186,12 +187,16 @@ class _CodedShearSum(TensorOperator):
             y = shear_sum_forward(x, self._w_moved(x), self.sum_axis, self.shift_axis, self._step)
             if y is not None:
                 return y
+            nb = self.input_shape[self.sum_axis]
+            ws = None if self._wslices is None else [self._w(l, x) for l in range(nb)]
+            y = shear_sum_forward_slabs(x, ws, self.sum_axis, self.shift_axis, self._step)
+            if y is not None:
+                return y
         if numpy and x.dtype in GATHER_DTYPES and x.size <= GATHER_MAX_VOXELS:
             order = memory_order(x)
             # the band axis fastest in memory (NumPy's C order for (x, y, λ)): band slices are
             # strided single values, so one sparse product over the buffer (≈ 7 copies against
-            # ≈ 19 for the loop); band slices made of contiguous rows keep the loop (≈ 6 against
-            # ≈ 8: benchmarks/operators.py)
+            # ≈ 19 for the loop; benchmarks/operators.py)
             if order is not None and order[-1] == self.sum_axis:
                 return self._gather(order, x.dtype).forward(x)
         y = B.zeros_like_shape(self.output_shape, x)

@@ -157,3 +157,19 @@ def test_coded_shear_sum_is_the_same_in_every_memory_layout(layout, shifts, colo
     y = rng.random(op.output_shape).astype(dtype)  # and the adjoint stays its transpose
     lhs, rhs = np.vdot(got, y), np.vdot(x, op.adjoint(y))
     assert abs(lhs - rhs) <= 10 * tol * abs(lhs)
+
+
+@pytest.mark.parametrize("rest_order", [(0, 1, 3), (3, 0, 1), (1, 3, 0), (0, 3, 1)])
+def test_band_slowest_layouts_of_a_4d_cube_match_the_factor_chain(rest_order, rng):
+    """A 4-way cube whose band axis is slowest in memory, the other axes in any order (the
+    slab kernel pads each band like the measurement's memory and adds it at a flat offset)."""
+    shape = (4, 7, 5, 3)  # (x, y, λ, t), λ summed, y sheared by 2 px per band
+    code = Code(rng.random(shape[:2]), shape, axes=(0, 1))
+    shear = Shear(shape, 2, axis=1, band_axis=2)
+    op = SumAxis(shear.output_shape, 2) @ shear @ code
+    x = rng.random(shape)
+    mem = (2,) + rest_order  # memory order, slowest first
+    held = np.transpose(np.ascontiguousarray(np.transpose(x, mem)), np.argsort(mem))
+    assert np.array_equal(held, x)
+    expected = op.factors[0].forward(shear.forward(code.forward(x)))
+    np.testing.assert_allclose(op.forward(held), expected, rtol=1e-12, atol=1e-12)

@@ -306,18 +306,37 @@ def snr_label(snr) -> str:
     return "noiseless" if snr is None else f"{snr:g} dB"
 
 
-def cross_validate(rows_of, cands, folds):
+def pick(means, seconds=None, tie_db: float = 0.0) -> int:
+    """Index of the best mean PSNR; with ``tie_db > 0`` and ``seconds``, the fastest of the
+    candidates within ``tie_db`` of the best (a tie is not worth the time)."""
+    best = int(np.argmax(means))
+    if tie_db <= 0 or seconds is None:
+        return best
+    near = [i for i, m in enumerate(means) if m >= means[best] - tie_db]
+    return min(near, key=lambda i: (seconds[i], -means[i]))
+
+
+def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.0):
     """Fold-wise choice: ``rows_of(candidate, scenes) -> [PSNR]``.
 
+    ``seconds_of(candidate, scenes) -> [seconds]`` with ``tie_db > 0``: candidates within
+    ``tie_db`` dB of the best mean are a tie, won by the smallest median time (:func:`pick`).
+
     Returns ``{"folds": [{"chosen", "held_out_psnr", "train_psnr"}], "mean", "spread",
-    "chosen_on_all", "all_means"}`` where ``spread`` is the standard deviation of
-    the held-out fold means.
+    "chosen_on_all", "all_means", "all_seconds"}`` where ``spread`` is the standard deviation
+    of the held-out fold means.
     """
+
+    def secs(scenes):
+        if seconds_of is None:
+            return None
+        return [float(np.median(seconds_of(c, scenes))) for c in cands]
+
     out = []
     for k, fold in enumerate(folds):
         rest = [s for j, f in enumerate(folds) if j != k for s in f]
         means = [float(np.mean(rows_of(c, rest))) for c in cands]
-        best = int(np.argmax(means))
+        best = pick(means, secs(rest), tie_db)
         out.append(
             {
                 "fold": k,
@@ -328,11 +347,13 @@ def cross_validate(rows_of, cands, folds):
         )
     every = [s for f in folds for s in f]
     all_means = [float(np.mean(rows_of(c, every))) for c in cands]
+    all_seconds = secs(every)
     held = [f["held_out_psnr"] for f in out]
     return {
         "folds": out,
         "mean": float(np.mean(held)),
         "spread": float(np.std(held)),
-        "chosen_on_all": cands[int(np.argmax(all_means))],
+        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db)],
         "all_means": all_means,
+        "all_seconds": all_seconds,
     }

@@ -174,7 +174,10 @@ def cv(args, store, cache):
         def psnrs(c, scenes, snr=snr, mk=mk):
             return [store.get(s, snr, mk, method, c)["psnr"] for s in scenes]
 
-        res = cross_validate(psnrs, cands, folds)
+        def seconds(c, scenes, snr=snr, mk=mk):
+            return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes]
+
+        res = cross_validate(psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db)
         chosen = res["chosen_on_all"]
         rep, rep_zoom = {}, {}
         magnified = views(datasets.REPORT_SCENES, args.zoom)[len(datasets.REPORT_SCENES) :]
@@ -199,11 +202,11 @@ def cv(args, store, cache):
             res["gap_tv_tune_mean"] = float(np.mean(base))
         res["report"] = rep
         results[f"{mk}/{snr_label(snr)}"] = res
-    results["joint"] = _joint(method, cands, folds, conds, store, cache)
+    results["joint"] = _joint(method, cands, folds, conds, store, cache, args.tie_db)
     return _cv_markdown(method, grid, folds, results, args), results
 
 
-def _joint(method, cands, folds, conds, store, cache):
+def _joint(method, cands, folds, conds, store, cache, tie_db=0.0):
     """One setting for every code and noise level, cross-validated the same way: on each fold
     the candidate with the best mean over the conditions on the other three folds; then the
     choice on all folds, its loss against each condition's own best, and its report PSNR."""
@@ -214,7 +217,12 @@ def _joint(method, cands, folds, conds, store, cache):
             for s in scenes
         ]
 
-    res = cross_validate(mean_over_conditions, cands, folds)
+    def seconds(c, scenes):
+        return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes for snr, mk in conds]
+
+    res = cross_validate(
+        mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db
+    )
     chosen = res["chosen_on_all"]
     tune = [s for f in folds for s in f]
     res["loss"], res["report"] = {}, {}
@@ -247,7 +255,13 @@ def _cv_markdown(method, grid, folds, results, args):
         f"Grid {json.dumps(grid)} ({len(candidates(grid))} candidates); 4 folds of "
         f"{seen} (`datasets.tune_folds(4)`): "
         + "; ".join(f"fold {k}: {', '.join(f)}" for k, f in enumerate(folds))
-        + ".  Each fold is scored with the candidate best on the other three.",
+        + ".  Each fold is scored with the candidate best on the other three"
+        + (
+            f" (candidates within {args.tie_db:g} dB of the best mean are a tie, won by the "
+            "smallest median time)."
+            if args.tie_db > 0
+            else "."
+        ),
         "",
         f"| code | SNR | chosen per fold | held-out PSNR dB, mean ± spread | chosen on all {n} |"
         " report PSNR dB | plain GAP-TV, report | lead dB |"
@@ -284,6 +298,16 @@ def _cv_markdown(method, grid, folds, results, args):
             f"**{v:.2f}**" if i == best else f"{v:.2f}" for i, v in enumerate(res["all_means"])
         ]
         lines.append(f"| {mk} | {snr} | " + " | ".join(cells) + " |")
+    if args.tie_db > 0:
+        lines += ["", "Median seconds a cube of every candidate over the tuning scenes:", ""]
+        lines.append("| code | SNR | " + " | ".join(fmt(c) for c in cands) + " |")
+        lines.append("|---|---|" + "---|" * len(cands))
+        for cond, res in results.items():
+            if cond != "joint":
+                mk, snr = cond.split("/")
+                lines.append(
+                    f"| {mk} | {snr} | " + " | ".join(f"{v:.2f}" for v in res["all_seconds"]) + " |"
+                )
     joint = results.get("joint")
     if joint:
         chosen = "; ".join(fmt(f["chosen"]) for f in joint["folds"])
@@ -318,6 +342,10 @@ def main(argv=None):
     ap.add_argument(
         "--baseline-on-tune", action="store_true", help="--cv: also plain GAP-TV on the folds"
     )
+    ap.add_argument(
+        "--tie-db", type=float, default=0.0, metavar="DB",
+        help="--cv: candidates within DB of the best mean are a tie, won by the fastest",
+    )  # fmt: skip
     ap.add_argument("--name", default=None, help="results file stem")
     ap.add_argument(
         "--fresh", default="", metavar="METHODS",
@@ -325,6 +353,8 @@ def main(argv=None):
     )  # fmt: skip
     ap.add_argument("--out", default=str(RESULTS))
     args = ap.parse_args(argv)
+    if not args.tie_db >= 0:
+        raise SystemExit(f"--tie-db must be a number ≥ 0, got {args.tie_db:g}")
     if args.zoom is not None and not args.zoom >= 1:
         raise SystemExit(f"--zoom must be a number ≥ 1, got {args.zoom:g}")
     try:

@@ -306,21 +306,27 @@ def snr_label(snr) -> str:
     return "noiseless" if snr is None else f"{snr:g} dB"
 
 
-def pick(means, seconds=None, tie_db: float = 0.0) -> int:
-    """Index of the best mean PSNR; with ``tie_db > 0`` and ``seconds``, the fastest of the
-    candidates within ``tie_db`` of the best (a tie is not worth the time)."""
+def pick(means, seconds=None, tie_db: float = 0.0, keep: int | None = None) -> int:
+    """Index of the best mean PSNR.  With ``tie_db > 0`` the candidates within ``tie_db`` of
+    the best are a tie: won by ``keep`` (the default in use: a change must gain more than
+    ``tie_db``) when it is among them, else by the fastest (``seconds``)."""
     best = int(np.argmax(means))
-    if tie_db <= 0 or seconds is None:
+    if tie_db <= 0:
         return best
     near = [i for i, m in enumerate(means) if m >= means[best] - tie_db]
+    if keep is not None and keep in near:
+        return keep
+    if seconds is None:
+        return best
     return min(near, key=lambda i: (seconds[i], -means[i]))
 
 
-def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.0):
+def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.0, keep=None):
     """Fold-wise choice: ``rows_of(candidate, scenes) -> [PSNR]``.
 
-    ``seconds_of(candidate, scenes) -> [seconds]`` with ``tie_db > 0``: candidates within
-    ``tie_db`` dB of the best mean are a tie, won by the smallest median time (:func:`pick`).
+    With ``tie_db > 0``, candidates within ``tie_db`` dB of the best mean are a tie, won by
+    ``keep`` (a candidate of ``cands``, the default in use) when it is one of them, else by
+    the smallest median of ``seconds_of(candidate, scenes) -> [seconds]`` (:func:`pick`).
 
     Returns ``{"folds": [{"chosen", "held_out_psnr", "train_psnr"}], "mean", "spread",
     "chosen_on_all", "all_means", "all_seconds"}`` where ``spread`` is the standard deviation
@@ -332,11 +338,12 @@ def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.
             return None
         return [float(np.median(seconds_of(c, scenes))) for c in cands]
 
+    k_keep = None if keep is None else cands.index(keep)
     out = []
     for k, fold in enumerate(folds):
         rest = [s for j, f in enumerate(folds) if j != k for s in f]
         means = [float(np.mean(rows_of(c, rest))) for c in cands]
-        best = pick(means, secs(rest), tie_db)
+        best = pick(means, secs(rest), tie_db, k_keep)
         out.append(
             {
                 "fold": k,
@@ -353,7 +360,7 @@ def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.
         "folds": out,
         "mean": float(np.mean(held)),
         "spread": float(np.std(held)),
-        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db)],
+        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db, k_keep)],
         "all_means": all_means,
         "all_seconds": all_seconds,
     }

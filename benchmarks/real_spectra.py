@@ -177,7 +177,9 @@ def cv(args, store, cache):
         def seconds(c, scenes, snr=snr, mk=mk):
             return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes]
 
-        res = cross_validate(psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db)
+        res = cross_validate(
+            psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db, keep=args.keep
+        )
         chosen = res["chosen_on_all"]
         rep, rep_zoom = {}, {}
         magnified = views(datasets.REPORT_SCENES, args.zoom)[len(datasets.REPORT_SCENES) :]
@@ -202,11 +204,11 @@ def cv(args, store, cache):
             res["gap_tv_tune_mean"] = float(np.mean(base))
         res["report"] = rep
         results[f"{mk}/{snr_label(snr)}"] = res
-    results["joint"] = _joint(method, cands, folds, conds, store, cache, args.tie_db)
+    results["joint"] = _joint(method, cands, folds, conds, store, cache, args.tie_db, args.keep)
     return _cv_markdown(method, grid, folds, results, args), results
 
 
-def _joint(method, cands, folds, conds, store, cache, tie_db=0.0):
+def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None):
     """One setting for every code and noise level, cross-validated the same way: on each fold
     the candidate with the best mean over the conditions on the other three folds; then the
     choice on all folds, its loss against each condition's own best, and its report PSNR."""
@@ -221,7 +223,7 @@ def _joint(method, cands, folds, conds, store, cache, tie_db=0.0):
         return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes for snr, mk in conds]
 
     res = cross_validate(
-        mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db
+        mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db, keep=keep
     )
     chosen = res["chosen_on_all"]
     tune = [s for f in folds for s in f]
@@ -239,6 +241,7 @@ def _joint(method, cands, folds, conds, store, cache, tie_db=0.0):
 
 def _cv_markdown(method, grid, folds, results, args):
     fmt = lambda c: ", ".join(f"{k}={v}" for k, v in c.items()) or "defaults"  # noqa: E731
+    keep = args.keep is not None
     n = sum(len(f) for f in folds)
     seen = (
         f"{n // 2} tuning scenes as they are and magnified {args.zoom:g}× (`@{args.zoom:g}`: "
@@ -257,8 +260,9 @@ def _cv_markdown(method, grid, folds, results, args):
         + "; ".join(f"fold {k}: {', '.join(f)}" for k, f in enumerate(folds))
         + ".  Each fold is scored with the candidate best on the other three"
         + (
-            f" (candidates within {args.tie_db:g} dB of the best mean are a tie, won by the "
-            "smallest median time)."
+            f" (candidates within {args.tie_db:g} dB of the best mean are a tie, won by "
+            + (f"the default in use, {fmt(args.keep)}, where it ties, else by " if keep else "")
+            + "the smallest median time)."
             if args.tie_db > 0
             else "."
         ),
@@ -346,6 +350,10 @@ def main(argv=None):
         "--tie-db", type=float, default=0.0, metavar="DB",
         help="--cv: candidates within DB of the best mean are a tie, won by the fastest",
     )  # fmt: skip
+    ap.add_argument(
+        "--keep", default=None, metavar="JSON",
+        help="--cv with --tie-db: the candidate in use as a default; it wins the ties it is in",
+    )  # fmt: skip
     ap.add_argument("--name", default=None, help="results file stem")
     ap.add_argument(
         "--fresh", default="", metavar="METHODS",
@@ -353,6 +361,15 @@ def main(argv=None):
     )  # fmt: skip
     ap.add_argument("--out", default=str(RESULTS))
     args = ap.parse_args(argv)
+    if args.keep is not None:
+        if not args.cv or args.tie_db <= 0:
+            raise SystemExit("--keep needs --cv and --tie-db > 0")
+        try:
+            args.keep = json.loads(args.keep)
+        except json.JSONDecodeError as exc:
+            raise SystemExit(f"--keep must be a JSON object of options: {exc}") from None
+        if args.keep not in candidates(json.loads(args.grid)):
+            raise SystemExit(f"--keep {json.dumps(args.keep)} is not a candidate of --grid")
     if not args.tie_db >= 0:
         raise SystemExit(f"--tie-db must be a number ≥ 0, got {args.tie_db:g}")
     if args.zoom is not None and not args.zoom >= 1:

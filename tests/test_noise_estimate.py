@@ -109,7 +109,8 @@ def _tsa_problem(snr):
 
 
 def test_otd_pan_weight_follows_the_noise_and_an_explicit_value_wins():
-    from tensor_cosdi.solvers.otd import PAN_WEIGHTS, pan_weight_for
+    from tensor_cosdi.solvers.panchromatic import PAN_WEIGHTS_MANY as PAN_WEIGHTS
+    from tensor_cosdi.solvers.panchromatic import pan_weight_for
 
     weights = {}
     for snr in (None, 30, 20):
@@ -117,7 +118,8 @@ def test_otd_pan_weight_follows_the_noise_and_an_explicit_value_wins():
         weights[snr] = pan_weight_for(system, g, "auto")
         assert pan_weight_for(system, g, 0.25) == 0.25
     assert weights[None] == PAN_WEIGHTS[40.0]  # read as noise-free (≈ 42 dB)
-    assert weights[None] < weights[30] < weights[20] <= max(PAN_WEIGHTS.values())
+    # a true 30 dB reads 28-31 dB: between the 20- and 30-dB anchors, so above the 30-dB one
+    assert PAN_WEIGHTS[30.0] <= weights[30] < weights[20] <= max(PAN_WEIGHTS.values())
     with pytest.raises(ValueError, match="pan_weight must be"):
         pan_weight_for(system, g, "strong")
     with pytest.raises(ValueError, match="pan_weight must be"):
@@ -198,3 +200,23 @@ def test_frame_sigmas_read_each_frame_where_its_light_falls():
         noise.frame_sigmas(x, x[..., :1])
     with pytest.raises(ValueError, match="NaN or inf"):
         noise.frame_sigmas(np.full((8, 8), np.nan))
+
+
+def test_pan_weight_schedule_follows_the_band_count():
+    """Fewer than MANY_BANDS bands keep the three-atom schedule their studies ran with; from
+    there on the six-atom one."""
+    from tensor_cosdi.solvers.panchromatic import (
+        MANY_BANDS,
+        PAN_WEIGHTS,
+        PAN_WEIGHTS_MANY,
+        pan_weight_for,
+    )
+    from tensor_cosdi.solvers.snr import estimate_snr
+
+    for n_bands, table in ((16, PAN_WEIGHTS), (MANY_BANDS, PAN_WEIGHTS_MANY)):
+        p = tc.studies.make_problem(
+            "sd_cassi", "chelsea", shape=(48, 48), n_bands=n_bands, snr_db=30
+        )
+        snr = estimate_snr(p.system, p.measurement).snr_db
+        assert pan_weight_for(p.system, p.measurement, "auto") == noise.snr_schedule(snr, table)
+    assert PAN_WEIGHTS[30.0] != PAN_WEIGHTS_MANY[30.0]  # the two schedules differ at 30 dB

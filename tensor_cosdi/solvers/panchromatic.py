@@ -13,18 +13,29 @@ from .priors import TV
 
 __all__ = [
     "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for", "PAN_WEIGHTS",
+    "PAN_WEIGHTS_MANY",
     "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
 ]  # fmt: skip
 
 _check_int = engine.check_int
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
-#: (:func:`tensor_cosdi.noise.snr_schedule`), chosen on the tuning scenes (SD-CASSI, TSA mask):
+#: (:func:`tensor_cosdi.noise.snr_schedule`), for panchromatic axes shorter than
+#: :data:`MANY_BANDS` (three atoms), chosen on the tuning scenes (SD-CASSI, TSA mask):
 #: noiseless (balloons, flowers, clay) 28.23 dB at 0.3 (27.78 at 0.1, 27.69 at 0.6); 30 dB
 #: (balloons, clay) 27.19 dB at 2.0 (26.95 at 1.0, 27.02 at 1.5); 20 dB (balloons, clay, lam 0.3)
 #: 26.55 dB at 4.0 (24.82 at 2.0, 26.48 at 8.0).  A noise-free TSA measurement estimates at
 #: 40-47 dB.
 PAN_WEIGHTS = {40.0: 0.3, 30.0: 2.0, 20.0: 4.0}
+#: The same from :data:`MANY_BANDS` on (with :data:`PAN_ATOMS_MANY` atoms), each anchor chosen
+#: by 4-fold cross-validation over 16 tuning scenes as they are and magnified 2× (SD-CASSI,
+#: 28 bands): noiseless 0.3 from 0.15 / 0.3 / 0.6 (TSA;
+#: ``benchmarks/results/pan_weight_clean_zoom2.md``); 30 dB 0.25 from 0.25-2.0, both codes
+#: (``pan_weight_30db_both_zoom2.md``; tuning means against :data:`PAN_WEIGHTS`' 2.0: TSA
+#: 29.22 → 29.85 dB, random 31.62 → 32.14); 20 dB 1.0 from 0.5-4.0 (TSA;
+#: ``pan_weight_20db_zoom2.md``: 27.61 → 27.96 dB against 4.0).  With six atoms the first
+#: stage needs far less smoothing under noise than with three.
+PAN_WEIGHTS_MANY = {40.0: 0.3, 30.0: 0.25, 20.0: 1.0}
 #: ``pan_atoms="auto"``: the DCT atoms spanning a panchromatic axis in the first stage, by the
 #: axis' length: :data:`PAN_ATOMS` below :data:`MANY_BANDS`, :data:`PAN_ATOMS_MANY` from there
 #: on.  The larger count was chosen by 4-fold cross-validation over 16 of the 28-band tuning
@@ -79,13 +90,17 @@ def _check_pan_weight(pan_weight):
 
 
 def pan_weight_for(system, measurement, pan_weight) -> float:
-    """``pan_weight`` as a number: ``"auto"`` follows :data:`PAN_WEIGHTS` against the
-    measurement's estimated SNR (:func:`~tensor_cosdi.solvers.snr.estimate_snr`)."""
+    """``pan_weight`` as a number: ``"auto"`` follows :data:`PAN_WEIGHTS` (or, when a
+    panchromatic axis has :data:`MANY_BANDS` samples or more, :data:`PAN_WEIGHTS_MANY`)
+    against the measurement's estimated SNR (:func:`~tensor_cosdi.solvers.snr.estimate_snr`)."""
     if _check_pan_weight(pan_weight) == "auto":
         from ..noise import snr_schedule
         from .snr import estimate_snr
 
-        return snr_schedule(estimate_snr(system, measurement).snr_db, PAN_WEIGHTS)
+        names = list(system.axes)
+        longest = max(system.cube_shape[names.index(a)] for a in system.panchromatic_axes)
+        table = PAN_WEIGHTS_MANY if longest >= MANY_BANDS else PAN_WEIGHTS
+        return snr_schedule(estimate_snr(system, measurement).snr_db, table)
     return float(pan_weight)
 
 

@@ -22,8 +22,8 @@ A cube whose band axis is slowest but whose shifted axis is not next
 (band-major slabs, memory ``(λ, x, y)``) is read band by band too
 (:func:`shear_sum_forward_slabs`): each coded slab goes into a buffer padded
 like the measurement, and lands with one contiguous add at the band's flat
-offset — one long add per band instead of a short row at a time (≈ 2.3
-copies against ≈ 3.2 for the row loop on a 2-core Xeon).
+offset — one long add per band instead of a short row at a time
+(``benchmarks/results/operators.md``, row "band-major").
 
 A cube with the band axis fastest (NumPy's default C order for
 ``(x, y, λ)``) cannot be read band by band without gathering single values,

@@ -33,8 +33,8 @@ PAN_WEIGHTS = {40.0: 0.3, 30.0: 2.0, 20.0: 4.0}
 #: ``benchmarks/results/pan_weight_clean_zoom2.md``); 30 dB 0.25 from 0.25-2.0, both codes
 #: (``pan_weight_30db_both_zoom2.md``; tuning means against :data:`PAN_WEIGHTS`' 2.0: TSA
 #: 29.22 → 29.85 dB, random 31.62 → 32.14); 20 dB 1.0 from 0.5-4.0 (TSA;
-#: ``pan_weight_20db_zoom2.md``: 27.61 → 27.96 dB against 4.0).  With six atoms the first
-#: stage needs far less smoothing under noise than with three.
+#: ``pan_weight_20db_zoom2.md``: 27.61 → 27.96 dB against 4.0).  The six-atom first stage
+#: does best with far less smoothing under noise than the schedule chosen with three atoms.
 PAN_WEIGHTS_MANY = {40.0: 0.3, 30.0: 0.25, 20.0: 1.0}
 #: ``pan_atoms="auto"``: the DCT atoms spanning a panchromatic axis in the first stage, by the
 #: axis' length: :data:`PAN_ATOMS` below :data:`MANY_BANDS`, :data:`PAN_ATOMS_MANY` from there
@@ -98,7 +98,9 @@ def pan_weight_for(system, measurement, pan_weight) -> float:
         from .snr import estimate_snr
 
         names = list(system.axes)
-        longest = max(system.cube_shape[names.index(a)] for a in system.panchromatic_axes)
+        longest = max(
+            (system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0
+        )
         table = PAN_WEIGHTS_MANY if longest >= MANY_BANDS else PAN_WEIGHTS
         return snr_schedule(estimate_snr(system, measurement).snr_db, table)
     return float(pan_weight)

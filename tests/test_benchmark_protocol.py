@@ -1,0 +1,47 @@
+"""The cross-validation helpers of ``benchmarks/_protocol.py`` (choices and scene views)."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "_protocol.py"
+
+
+@pytest.fixture(scope="module")
+def protocol():
+    spec = importlib.util.spec_from_file_location("bench_protocol", _PATH)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_pick_takes_the_best_unless_a_tie_goes_to_the_default_or_the_fastest(protocol):
+    means, secs = [30.00, 30.04, 29.50], [5.0, 9.0, 1.0]
+    assert protocol.pick(means) == 1
+    assert protocol.pick(means, secs, tie_db=0.05) == 0  # a tie: the faster one
+    assert protocol.pick(means, secs, tie_db=0.01) == 1  # no tie
+    assert protocol.pick(means, secs, tie_db=0.05, keep=1) == 1  # the default wins its tie
+    assert protocol.pick(means, secs, tie_db=0.05, keep=2) == 0  # 0.54 dB under: no tie
+    assert protocol.pick(means, None, tie_db=0.05) == 1  # no times: the best
+
+
+def test_cross_validate_keeps_the_default_in_a_tie(protocol):
+    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 30.02, "s2": 31.02}}
+    cands = [{"w": "a"}, {"w": "b"}]
+    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
+    folds = (("s1",), ("s2",))
+    assert protocol.cross_validate(rows, cands, folds)["chosen_on_all"] == {"w": "b"}
+    res = protocol.cross_validate(rows, cands, folds, tie_db=0.05, keep={"w": "a"})
+    assert res["chosen_on_all"] == {"w": "a"}
+    assert [f["chosen"] for f in res["folds"]] == [{"w": "a"}, {"w": "a"}]
+
+
+def test_scene_views(protocol):
+    assert protocol.scene_view("cloth") == ("cloth", 1.0)
+    assert protocol.scene_view("cloth@2") == ("cloth", 2.0)
+    assert protocol.views(("a", "b"), 2) == ("a", "b", "a@2", "b@2")
+    assert protocol.views(("a",), None) == ("a",)
+    for bad in ("cloth@0.5", "cloth@x", "cloth@"):
+        with pytest.raises(ValueError, match="zoom after '@'"):
+            protocol.scene_view(bad)

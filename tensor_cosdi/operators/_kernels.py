@@ -94,7 +94,7 @@ def shear_sum_forward(x: np.ndarray, weights, band_axis: int, shift_axis: int, s
     return np.moveaxis(out, 0, shift_axis - (shift_axis > band_axis))
 
 
-def shear_sum_forward_slabs(x: np.ndarray, wslices, band_axis: int, shift_axis: int, step: int):
+def shear_sum_forward_slabs(x: np.ndarray, weight_of, band_axis: int, shift_axis: int, step: int):
     """The same sum for a cube whose band axis is slowest in memory but whose shifted axis is
     not next (band-major ``(λ, x, y)`` memory for an ``(x, y, λ)`` cube); ``None`` otherwise.
 
@@ -105,7 +105,8 @@ def shear_sum_forward_slabs(x: np.ndarray, wslices, band_axis: int, shift_axis: 
     measurement's flat buffer at the band's offset: one contiguous add per band instead of
     one short row at a time (the rows of a band slab land ``d`` pixels into rows of the
     longer measurement).  The padding's zeros land on real pixels and change nothing.
-    ``wslices[l]`` is band ``l``'s code in the remaining axes' logical order (or ``None``).
+    ``weight_of(l)`` is band ``l``'s code in the remaining axes' logical order (``weight_of``
+    ``None``: no code); it is called only once the layout qualifies.
     """
     order = memory_order(x)
     if order is None or order[0] != band_axis or order[1] == shift_axis:
@@ -127,10 +128,10 @@ def shear_sum_forward_slabs(x: np.ndarray, wslices, band_axis: int, shift_axis: 
     pad_flat = pad.reshape(-1)
     for l in range(L):
         slab = x[(slice(None),) * band_axis + (l,)]  # a view
-        if wslices is None:
+        if weight_of is None:
             np.copyto(inner, slab)
         else:
-            np.multiply(slab, wslices[l], out=inner)
+            np.multiply(slab, weight_of(l), out=inner)
         target = flat[step * l * stride : step * l * stride + size]
         np.add(target, pad_flat, out=target)
     y = flat[:size].reshape(held)

@@ -187,9 +187,8 @@ class _CodedShearSum(TensorOperator):
             y = shear_sum_forward(x, self._w_moved(x), self.sum_axis, self.shift_axis, self._step)
             if y is not None:
                 return y
-            nb = self.input_shape[self.sum_axis]
-            ws = None if self._wslices is None else [self._w(l, x) for l in range(nb)]
-            y = shear_sum_forward_slabs(x, ws, self.sum_axis, self.shift_axis, self._step)
+            w_of = None if self._wslices is None else (lambda l: self._w(l, x))
+            y = shear_sum_forward_slabs(x, w_of, self.sum_axis, self.shift_axis, self._step)
             if y is not None:
                 return y
         if numpy and x.dtype in GATHER_DTYPES and x.size <= GATHER_MAX_VOXELS:

@@ -243,14 +243,14 @@ def _cv_markdown(method, grid, folds, results, args):
     fmt = lambda c: ", ".join(f"{k}={v}" for k, v in c.items()) or "defaults"  # noqa: E731
     keep = args.keep is not None
     n = sum(len(f) for f in folds)
+    zoomed = args.zoom not in (None, 1)
     seen = (
         f"{n // 2} tuning scenes as they are and magnified {args.zoom:g}× (`@{args.zoom:g}`: "
         "the centre crop magnified back to 256×256, the larger-scale structure of a "
         "finer camera)"
-        if args.zoom not in (None, 1)
+        if zoomed
         else f"{n} tuning scenes"
     )
-    zoomed = args.zoom not in (None, 1)
     n = f"{n} views" if zoomed else n
     lines = [
         f"# Cross-validated choice for `{method}`",

@@ -45,3 +45,30 @@ def test_scene_views(protocol):
     for bad in ("cloth@0.5", "cloth@x", "cloth@"):
         with pytest.raises(ValueError, match="zoom after '@'"):
             protocol.scene_view(bad)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--zoom", "0.5"], "--zoom must be"),
+        (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "-1"], "--tie-db must be"),
+        (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--keep", '{"lam": 0.1}'], "--keep needs"),
+        (
+            ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--keep", "{lam"],
+            "--keep must be a JSON object",
+        ),
+        (
+            ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--keep", '{"lam": 3}'],
+            "is not a candidate",
+        ),
+    ],
+)
+def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_path):
+    monkeypatch.syspath_prepend(str(_PATH.parent))
+    path = _PATH.parent / "real_spectra.py"
+    spec = importlib.util.spec_from_file_location("bench_real_spectra", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    with pytest.raises(SystemExit, match=message):
+        mod.main([*argv, "--out", str(tmp_path)])
+    assert not any(tmp_path.iterdir())  # refused before any run or file

@@ -50,6 +50,12 @@ GAP_TV_WARM_ITER = 80
 #: 4 folds (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at
 #: 30 dB, 20 lose 2.9 and 1.2 dB.
 FAST_WARM_ITER = 20
+#: :func:`pnp_fast`'s ``pan_tv_steps``: 5 warm-started Chambolle steps per iteration of its start's
+#: first stage instead of OTD's 10, the fastest setting within 0.02 dB of the best at both noise
+#: levels (8 tuning scenes as they are and magnified 4×, 4 folds, TSA mask;
+#: ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB
+#: noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median 6.8 / 4.9 / 4.4 s on one thread).
+FAST_PAN_TV_STEPS = 5
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
@@ -64,7 +70,10 @@ SIGMA_END = {40.0: 0.015, 30.0: 0.03, 20.0: 0.08}
 #: :data:`SIGMA_END` (its 20-iteration default was chosen with it: σ_end 0.05 cost 0.2 dB).
 SHORT_RUN = 50
 SIGMA_END_SHORT = {40.0: 0.05, 30.0: 0.05, 20.0: 0.08}
-SIGMA_END_ADMM_SHORT = {28.5: 0.05, 19.5: 0.2}
+#: At 30 dB with ADMM, 0.07, cross-validated on 8 tuning scenes as they are and magnified 4×
+#: (``benchmarks/results/pnp_fast_sigma_30db_zoom4.md``: 0.05 / 0.07 / 0.1 → 31.37 / 31.43 /
+#: 31.20 dB, three folds of four).
+SIGMA_END_ADMM_SHORT = {28.5: 0.07, 19.5: 0.2}
 #: ``max_iter="auto"``: iterations with and without acceleration.  Accelerated (clean data)
 #: keeps gaining to 100 (see :data:`SIGMA_END`); plain GAP at 30 dB does not (balloons 27.25 dB
 #: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start, 20 do what 40 did
@@ -86,8 +95,12 @@ ADMM_ITER = 80
 #: (OTD alone 21.71) — so the level starts at ``max(sigma, sigma_end)``.
 #: At a true 40 dB (read as 34.2-36.9 dB, so ADMM): 30.21 dB against plain GAP's 28.14 and
 #: accelerated GAP's 25.50; σ_end 0.025 there would add 0.16 dB (not adopted: untested on
-#: the report split).
-SIGMA_END_ADMM = {28.5: 0.04, 19.5: 0.2}
+#: the report split).  The 30-dB anchor is 0.06, cross-validated over ρ and σ_end at 30 dB on 8
+#: tuning scenes as they are and magnified 4× (4 folds, TSA mask;
+#: ``benchmarks/results/pnp_gap_admm_30db_zoom4.md``): 0.04 kept the noise on smooth,
+#: magnified scenes (balloons ×4: 33.84 dB, OTD's start 33.82; 0.06: 37.45), tuning means
+#: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).
+SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 2
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
@@ -136,6 +149,7 @@ def pnp_gap(
     warm: str = "otd",
     warm_iter="auto",
     pan_iter="auto",
+    pan_tv_steps="auto",
     accelerate="auto",
     eps="auto",
     splitting="auto",
@@ -177,6 +191,9 @@ def pnp_gap(
         With ``warm="otd"``: the iterations of OTD's first stage (its
         ``pan_iter``; ``"auto"``: OTD's default).  Any other start refuses an
         integer here.
+    pan_tv_steps : int or "auto"
+        With ``warm="otd"``: the warm-started Chambolle steps per iteration of
+        that first stage (OTD's ``pan_tv_steps``; ``"auto"``: OTD's default).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration
@@ -272,6 +289,7 @@ def pnp_gap(
     sigma_end = check_positive("sigma_end", sigma_end)
     warm_iter = _check_warm_iter(warm_iter)
     pan_iter = _check_pan_iter(pan_iter, warm)
+    pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
@@ -303,6 +321,7 @@ def pnp_gap(
         warm=warm,
         warm_iter=warm_iter,
         pan_iter=pan_iter,
+        pan_tv_steps=pan_tv_steps,
         accelerate=accelerate,
         eps=eps,
         max_iter=max_iter,
@@ -316,18 +335,20 @@ def pnp_gap(
 
 def warm_started_gap(
     system, g, prior, *, warm, warm_iter, accelerate, eps, max_iter, tol, progress, desc,
-    guard=None, rho=None, pan_iter="auto",
+    guard=None, rho=None, pan_iter="auto", pan_tv_steps="auto",
 ):  # fmt: skip
     """:func:`~tensor_cosdi.solvers.engine.gap` (or, with ``rho``, :func:`~.engine.admm`) with
     ``prior`` from a ``warm`` start (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
-    first-stage iterations, ``"auto"`` its own); one history for both stages.  Returns
+    first-stage iterations and ``pan_tv_steps`` its Chambolle steps, ``"auto"`` its own); one
+    history for both stages.  Returns
     ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter)
     pan_iter = _check_pan_iter(pan_iter, warm)
+    pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -337,7 +358,8 @@ def warm_started_gap(
     elif warm == "otd":
         from .otd import online_tucker_admm
 
-        pan = {} if pan_iter == "auto" else {"pan_iter": pan_iter}
+        pan = {k: v for k, v in (("pan_iter", pan_iter), ("pan_tv_steps", pan_tv_steps))
+               if v != "auto"}  # fmt: skip
         start, hist, _ = online_tucker_admm(
             system, g, admm_iter=warm_iter, progress=progress, **pan
         )
@@ -368,16 +390,18 @@ def _check_warm_iter(warm_iter):
     return engine.check_int("warm_iter", warm_iter, 1)
 
 
-def _check_pan_iter(pan_iter, warm):
+def _check_pan_iter(pan_iter, warm, name="pan_iter"):
+    """An option of the OTD start's first stage: ``"auto"`` or an integer ≥ 1, refused with any
+    other start."""
     if isinstance(pan_iter, str):
         if pan_iter != "auto":
-            raise ValueError(f"pan_iter must be 'auto' or an integer ≥ 1, got {pan_iter!r}")
+            raise ValueError(f"{name} must be 'auto' or an integer ≥ 1, got {pan_iter!r}")
         return pan_iter
-    pan_iter = engine.check_int("pan_iter", pan_iter, 1)
+    pan_iter = engine.check_int(name, pan_iter, 1)
     if warm in WARM_STARTS and warm != "otd":  # an unknown start is named by its own check
         raise ValueError(
-            f"pan_iter sets the first stage of the OTD start; warm={warm!r} has none "
-            "(use warm='otd' or leave pan_iter='auto')"
+            f"{name} sets the first stage of the OTD start; warm={warm!r} has none "
+            f"(use warm='otd' or leave {name}='auto')"
         )
     return pan_iter
 
@@ -391,13 +415,15 @@ def _joined(first, second):
 
 def pnp_fast(
     system, measurement, *, max_iter: int = 40, ensemble: int = 1, precision: str = "auto",
-    warm: str = "otd", warm_iter=FAST_WARM_ITER, nonneg: bool = True, progress: bool = False,
+    warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", sigma_end="auto", rho="auto",
+    nonneg: bool = True, progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
     ``max_iter`` 40 (accelerated GAP on clean data, ADMM on noisy data, as there), one
     denoiser call per iteration (``ensemble=1``), the network in bfloat16 where the CPU
     runs it natively (``precision="auto"``) and a shorter OTD start (:data:`FAST_WARM_ITER`
-    ADMM iterations after OTD's first stage); being a short run, its denoiser level ends
+    ADMM iterations after OTD's first stage, whose TV takes :data:`FAST_PAN_TV_STEPS` steps an
+    iteration); being a short run, its denoiser level ends
     higher (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT`).  Registered as
     ``"pnp_fast"``.
 
@@ -413,8 +439,9 @@ def pnp_fast(
 
     Parameters
     ----------
-    max_iter, ensemble, precision, warm, warm_iter, nonneg, progress
-        As in :func:`pnp_gap`, with the defaults above; every other option of
+    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, sigma_end, rho, nonneg, progress
+        As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
+        :data:`FAST_PAN_TV_STEPS` with the OTD start); every other option of
         :func:`pnp_gap` keeps its default there (call ``"pnp_gap"`` to change it).
 
     Returns
@@ -422,9 +449,12 @@ def pnp_fast(
     cube, history, converged
         As :func:`pnp_gap`.
     """
+    if isinstance(pan_tv_steps, str) and pan_tv_steps == "auto" and warm == "otd":
+        pan_tv_steps = FAST_PAN_TV_STEPS
     return pnp_gap(
         system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
-        warm=warm, warm_iter=warm_iter, nonneg=nonneg, progress=progress,
+        warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, sigma_end=sigma_end,
+        rho=rho, nonneg=nonneg, progress=progress,
     )  # fmt: skip
 
 

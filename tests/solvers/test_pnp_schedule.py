@@ -45,24 +45,25 @@ def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels)
     assert seen["accelerated, 40"][0] > seen["accelerated, 100"][0]
 
 
-def test_pan_iter_reaches_the_otd_start_and_other_starts_refuse_it():
+@pytest.mark.parametrize("option", ["pan_iter", "pan_tv_steps"])
+def test_first_stage_options_reach_the_otd_start_and_other_starts_refuse_them(option):
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
     otd = importlib.import_module("tensor_cosdi.solvers.otd")
     seen = []
     real = otd.online_tucker_admm
 
     def spy(*args, **kw):
-        seen.append(kw.get("pan_iter", "default"))
+        seen.append(kw.get(option, "default"))
         return real(*args, **kw)
 
     with mock.patch.object(otd, "online_tucker_admm", side_effect=spy):
-        for pan in ("auto", 7):
+        for value in ("auto", 7):
             tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=2,
-                           warm_iter=2, pan_iter=pan)  # fmt: skip
+                           warm_iter=2, **{option: value})  # fmt: skip
     assert seen == ["default", 7]
-    with pytest.raises(ValueError, match="pan_iter sets the first stage of the OTD start"):
+    with pytest.raises(ValueError, match=f"{option} sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="gap_tv",
-                       pan_iter=30)  # fmt: skip
+                       **{option: 30})  # fmt: skip
     for bad in (0, 2.5, "many", True):
-        with pytest.raises(ValueError, match="pan_iter"):
-            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", pan_iter=bad)
+        with pytest.raises(ValueError, match=option):
+            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **{option: bad})

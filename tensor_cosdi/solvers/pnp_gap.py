@@ -56,6 +56,10 @@ FAST_WARM_ITER = 20
 #: ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB
 #: noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median 6.8 / 4.9 / 4.4 s on one thread).
 FAST_PAN_TV_STEPS = 5
+#: :func:`pnp_fast`'s ``max_iter``: 46 against 40 gained 0.20 dB clean and 0.11 dB at 30 dB on 12
+#: tuning scenes, 4 folds (``benchmarks/results/cv_pnp_fast_budget.md``; every fold chose 46) for
+#: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps.
+FAST_ITER = 46
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
@@ -342,8 +346,7 @@ def warm_started_gap(
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
     first-stage iterations and ``pan_tv_steps`` its Chambolle steps, ``"auto"`` its own); one
-    history for both stages.  Returns
-    ``(x, history, converged)``."""
+    history for both stages.  Returns ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter)
@@ -390,20 +393,20 @@ def _check_warm_iter(warm_iter):
     return engine.check_int("warm_iter", warm_iter, 1)
 
 
-def _check_pan_iter(pan_iter, warm, name="pan_iter"):
+def _check_pan_iter(value, warm, name="pan_iter"):
     """An option of the OTD start's first stage: ``"auto"`` or an integer ≥ 1, refused with any
     other start."""
-    if isinstance(pan_iter, str):
-        if pan_iter != "auto":
-            raise ValueError(f"{name} must be 'auto' or an integer ≥ 1, got {pan_iter!r}")
-        return pan_iter
-    pan_iter = engine.check_int(name, pan_iter, 1)
+    if isinstance(value, str):
+        if value != "auto":
+            raise ValueError(f"{name} must be 'auto' or an integer ≥ 1, got {value!r}")
+        return value
+    value = engine.check_int(name, value, 1)
     if warm in WARM_STARTS and warm != "otd":  # an unknown start is named by its own check
         raise ValueError(
             f"{name} sets the first stage of the OTD start; warm={warm!r} has none "
             f"(use warm='otd' or leave {name}='auto')"
         )
-    return pan_iter
+    return value
 
 
 def _joined(first, second):
@@ -414,13 +417,13 @@ def _joined(first, second):
 
 
 def pnp_fast(
-    system, measurement, *, max_iter: int = 40, ensemble: int = 1, precision: str = "auto",
+    system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
     warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", sigma_end="auto", rho="auto",
     nonneg: bool = True, progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
-    ``max_iter`` 40 (accelerated GAP on clean data, ADMM on noisy data, as there), one
-    denoiser call per iteration (``ensemble=1``), the network in bfloat16 where the CPU
+    ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
+    there), one denoiser call per iteration (``ensemble=1``), the network in bfloat16 where the CPU
     runs it natively (``precision="auto"``) and a shorter OTD start (:data:`FAST_WARM_ITER`
     ADMM iterations after OTD's first stage, whose TV takes :data:`FAST_PAN_TV_STEPS` steps an
     iteration); being a short run, its denoiser level ends
@@ -428,10 +431,10 @@ def pnp_fast(
     ``"pnp_fast"``.
 
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
-    and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  46 iterations from a
-    30-iteration OTD start gain 0.23 dB clean and 0.13 dB at 30 dB on the tuning scenes
-    (``benchmarks/results/cv_pnp_fast_budget.md``) but leave the 5-s budget of two cores:
-    ``pnp_gap(max_iter=46, ensemble=1, warm_iter=30, precision="auto")``.  In bfloat16 the result
+    and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  A 30-iteration OTD start adds
+    0.03 dB clean and 0.02 dB at 30 dB on the tuning scenes
+    (``benchmarks/results/cv_pnp_fast_budget.md``) for about 0.4 s more:
+    ``pnp_fast(warm_iter=30)``.  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
     ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch
     (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:
@@ -461,7 +464,7 @@ def pnp_fast(
 register_method(
     "pnp_fast",
     pnp_fast,
-    summary="the learned plug-and-play path with 40 single denoiser calls, in bfloat16 where "
+    summary="the learned plug-and-play path with 46 single denoiser calls, in bfloat16 where "
     "the CPU runs it natively (torch)",
     requires=("torch",),
 )

@@ -65,8 +65,8 @@ FAST_ITER = 46
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
 #: The 40-dB anchor is 0.03, cross-validated on all 28 tuning scenes as they are and magnified
 #: 4× (4 folds, noiseless, TSA mask, accelerated;
-#: ``benchmarks/results/pnp_gap_sigma_clean_zoom4.md``): 0.01 / 0.015 / 0.02 / 0.03 →
-#: 36.60 / 36.84 / 36.97 / 37.08 dB, every fold 0.03, the top of the grid.
+#: ``benchmarks/results/pnp_gap_sigma_clean_zoom4.md``): 0.01 / 0.015 / 0.02 / 0.03 / 0.04 →
+#: 36.60 / 36.84 / 36.97 / 37.08 / 37.07 dB, two folds 0.03 and two 0.04.
 SIGMA_END = {40.0: 0.03, 30.0: 0.03, 20.0: 0.08}
 #: ``sigma_end="auto"`` for a short run (``max_iter`` ≤ :data:`SHORT_RUN`, e.g. :func:`pnp_fast`):
 #: with fewer steps the level must stay higher.  Cross-validated with ``pnp_fast``'s settings

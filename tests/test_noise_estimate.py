@@ -109,17 +109,16 @@ def _tsa_problem(snr):
 
 
 def test_otd_pan_weight_follows_the_noise_and_an_explicit_value_wins():
-    from tensor_cosdi.solvers.panchromatic import PAN_WEIGHTS_MANY as PAN_WEIGHTS
-    from tensor_cosdi.solvers.panchromatic import pan_weight_for
+    from tensor_cosdi.solvers.panchromatic import PAN_WEIGHTS_MANY, pan_weight_for
 
     weights = {}
     for snr in (None, 30, 20):
         system, g = _tsa_problem(snr)
         weights[snr] = pan_weight_for(system, g, "auto")
         assert pan_weight_for(system, g, 0.25) == 0.25
-    assert weights[None] == PAN_WEIGHTS[40.0]  # read as noise-free (≈ 42 dB)
+    assert weights[None] == PAN_WEIGHTS_MANY[40.0]  # read as noise-free (≈ 42 dB)
     # a true 30 dB reads 28-31 dB: between the 20- and 30-dB anchors, so above the 30-dB one
-    assert PAN_WEIGHTS[30.0] <= weights[30] < weights[20] <= max(PAN_WEIGHTS.values())
+    assert PAN_WEIGHTS_MANY[30.0] <= weights[30] < weights[20] <= max(PAN_WEIGHTS_MANY.values())
     with pytest.raises(ValueError, match="pan_weight must be"):
         pan_weight_for(system, g, "strong")
     with pytest.raises(ValueError, match="pan_weight must be"):

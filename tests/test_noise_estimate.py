@@ -203,7 +203,7 @@ def test_frame_sigmas_read_each_frame_where_its_light_falls():
 
 def test_pan_weight_schedule_follows_the_band_count():
     """Fewer than MANY_BANDS bands keep the three-atom schedule their studies ran with; from
-    there on the six-atom one."""
+    there on the many-atom one."""
     from tensor_cosdi.solvers.panchromatic import (
         MANY_BANDS,
         PAN_WEIGHTS,

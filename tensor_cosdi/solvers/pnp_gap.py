@@ -158,6 +158,7 @@ def pnp_gap(
     warm_iter="auto",
     pan_iter="auto",
     pan_tv_steps="auto",
+    pan_atoms="auto",
     accelerate="auto",
     eps="auto",
     splitting="auto",
@@ -202,6 +203,10 @@ def pnp_gap(
     pan_tv_steps : int or "auto"
         With ``warm="otd"``: the warm-started Chambolle steps per iteration of
         that first stage (OTD's ``pan_tv_steps``; ``"auto"``: OTD's default).
+    pan_atoms : int or "auto"
+        With ``warm="otd"``: the spectral DCT atoms of that first stage (OTD's
+        ``pan_atoms``; ``"auto"``: OTD's default,
+        :func:`~tensor_cosdi.solvers.panchromatic.pan_atoms_for`).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration
@@ -298,6 +303,7 @@ def pnp_gap(
     warm_iter = _check_warm_iter(warm_iter)
     pan_iter = _check_pan_iter(pan_iter, warm)
     pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
+    pan_atoms = _check_pan_iter(pan_atoms, warm, "pan_atoms")
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
@@ -330,6 +336,7 @@ def pnp_gap(
         warm_iter=warm_iter,
         pan_iter=pan_iter,
         pan_tv_steps=pan_tv_steps,
+        pan_atoms=pan_atoms,
         accelerate=accelerate,
         eps=eps,
         max_iter=max_iter,
@@ -343,19 +350,21 @@ def pnp_gap(
 
 def warm_started_gap(
     system, g, prior, *, warm, warm_iter, accelerate, eps, max_iter, tol, progress, desc,
-    guard=None, rho=None, pan_iter="auto", pan_tv_steps="auto",
+    guard=None, rho=None, pan_iter="auto", pan_tv_steps="auto", pan_atoms="auto",
 ):  # fmt: skip
     """:func:`~tensor_cosdi.solvers.engine.gap` (or, with ``rho``, :func:`~.engine.admm`) with
     ``prior`` from a ``warm`` start (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
-    first-stage iterations and ``pan_tv_steps`` its Chambolle steps, ``"auto"`` its own); one
+    first-stage iterations, ``pan_tv_steps`` its Chambolle steps and ``pan_atoms`` its spectral
+    atoms, ``"auto"`` its own); one
     history for both stages.  Returns ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter)
     pan_iter = _check_pan_iter(pan_iter, warm)
     pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
+    pan_atoms = _check_pan_iter(pan_atoms, warm, "pan_atoms")
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -365,8 +374,13 @@ def warm_started_gap(
     elif warm == "otd":
         from .otd import online_tucker_admm
 
-        pan = {k: v for k, v in (("pan_iter", pan_iter), ("pan_tv_steps", pan_tv_steps))
-               if v != "auto"}  # fmt: skip
+        pan = {
+            k: v
+            for k, v in (
+                ("pan_iter", pan_iter), ("pan_tv_steps", pan_tv_steps), ("pan_atoms", pan_atoms)
+            )
+            if v != "auto"
+        }  # fmt: skip
         start, hist, _ = online_tucker_admm(
             system, g, admm_iter=warm_iter, progress=progress, **pan
         )
@@ -422,8 +436,8 @@ def _joined(first, second):
 
 def pnp_fast(
     system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
-    warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", sigma_end="auto", rho="auto",
-    nonneg: bool = True, progress: bool = False,
+    warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", pan_atoms="auto",
+    sigma_end="auto", rho="auto", nonneg: bool = True, progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
     ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
@@ -446,10 +460,12 @@ def pnp_fast(
 
     Parameters
     ----------
-    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, sigma_end, rho, nonneg, progress
+    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
-        :data:`FAST_PAN_TV_STEPS` with the OTD start); every other option of
-        :func:`pnp_gap` keeps its default there (call ``"pnp_gap"`` to change it).
+        :data:`FAST_PAN_TV_STEPS` with the OTD start).
+    sigma_end, rho, nonneg, progress
+        As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
+        default here (call ``"pnp_gap"`` to change it).
 
     Returns
     -------
@@ -460,8 +476,8 @@ def pnp_fast(
         pan_tv_steps = FAST_PAN_TV_STEPS
     return pnp_gap(
         system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
-        warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, sigma_end=sigma_end,
-        rho=rho, nonneg=nonneg, progress=progress,
+        warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
+        sigma_end=sigma_end, rho=rho, nonneg=nonneg, progress=progress,
     )  # fmt: skip
 
 

@@ -45,7 +45,7 @@ def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels)
     assert seen["accelerated, 40"][0] > seen["accelerated, 100"][0]
 
 
-@pytest.mark.parametrize("option", ["pan_iter", "pan_tv_steps"])
+@pytest.mark.parametrize("option", ["pan_iter", "pan_tv_steps", "pan_atoms"])
 def test_first_stage_options_reach_the_otd_start_and_other_starts_refuse_them(option):
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
     otd = importlib.import_module("tensor_cosdi.solvers.otd")
@@ -60,6 +60,11 @@ def test_first_stage_options_reach_the_otd_start_and_other_starts_refuse_them(op
         for value in ("auto", 7):
             tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=2,
                            warm_iter=2, **{option: value})  # fmt: skip
+        if option != "pan_iter":  # pnp_fast passes its first-stage options on too
+            pytest.importorskip("torch")
+            tc.reconstruct(p.system, p.measurement, "pnp_fast", max_iter=1, warm_iter=2,
+                           **{option: 5})  # fmt: skip
+            assert seen.pop() == 5
     assert seen == ["default", 7]
     with pytest.raises(ValueError, match=f"{option} sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="gap_tv",

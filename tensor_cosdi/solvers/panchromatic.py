@@ -12,7 +12,8 @@ from . import engine
 from .priors import TV
 
 __all__ = [
-    "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for", "PAN_WEIGHTS",
+    "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for",
+    "has_many_bands", "PAN_WEIGHTS",
     "PAN_WEIGHTS_MANY",
     "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
 ]  # fmt: skip
@@ -103,13 +104,19 @@ def pan_weight_for(system, measurement, pan_weight) -> float:
         from ..noise import snr_schedule
         from .snr import estimate_snr
 
-        names = list(system.axes)
-        longest = max(
-            (system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0
-        )
-        table = PAN_WEIGHTS_MANY if longest >= MANY_BANDS else PAN_WEIGHTS
+        table = PAN_WEIGHTS_MANY if has_many_bands(system) else PAN_WEIGHTS
         return snr_schedule(estimate_snr(system, measurement).snr_db, table)
     return float(pan_weight)
+
+
+def has_many_bands(system) -> bool:
+    """Whether a panchromatic axis of ``system`` has :data:`MANY_BANDS` samples or more (the
+    schedules chosen on 28-band scenes apply there)."""
+    names = list(system.axes)
+    longest = max(
+        (system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0
+    )
+    return longest >= MANY_BANDS
 
 
 def panchromatic_estimate(

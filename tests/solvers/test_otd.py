@@ -357,3 +357,31 @@ def test_the_first_stage_spans_many_bands_with_more_atoms():
     exact = tc.studies.make_problem("dual_camera_cassi", "colorchecker", shape=(16, 16), n_bands=4)
     with pytest.raises(ValueError, match="pan_atoms must be"):  # checked where unused too
         tc.solvers.panchromatic.panchromatic_estimate(exact.system, exact.measurement, pan_atoms=-1)
+
+
+def test_lam_auto_takes_the_many_band_schedule_from_24_bands(monkeypatch):
+    """``lam="auto"``: the 28-band schedule (chosen on 28-band scenes) from MANY_BANDS bands on,
+    the earlier one below; both read the same SNR estimate and give different weights when
+    clean."""
+    from tensor_cosdi import noise
+    from tensor_cosdi.solvers import otd, snr
+    from tensor_cosdi.solvers.panchromatic import has_many_bands
+
+    assert otd.LAM_SCHEDULE_MANY[40.0] != otd.LAM_SCHEDULE[40.0]
+    seen = []
+
+    def spy(snr_db, anchors):
+        if anchors in (otd.LAM_SCHEDULE, otd.LAM_SCHEDULE_MANY):
+            seen.append(anchors)
+            raise RuntimeError("stop after the weight")  # the weight is all this test needs
+        return real(snr_db, anchors)
+
+    real = noise.snr_schedule
+    monkeypatch.setattr(noise, "snr_schedule", spy)
+    monkeypatch.setattr(snr, "estimate_snr", lambda s, g: snr.SNREstimate(45.0, 45.0, 45.0))
+    for bands, table in ((28, otd.LAM_SCHEDULE_MANY), (16, otd.LAM_SCHEDULE)):
+        p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=bands)
+        assert has_many_bands(p.system) == (bands == 28)
+        with pytest.raises(RuntimeError, match="stop after"):
+            otd.online_tucker_admm(p.system, p.measurement, max_iter=3)
+        assert seen[-1] is table

@@ -110,8 +110,31 @@ def pan_weight_for(system, measurement, pan_weight) -> float:
 
 
 def has_many_bands(system) -> bool:
-    """Whether a panchromatic axis of ``system`` has :data:`MANY_BANDS` samples or more (the
-    schedules chosen on 28-band scenes apply there)."""
+    """Whether a panchromatic axis of ``system`` has :data:`MANY_BANDS` samples or more.
+
+    The schedules chosen on 28-band scenes (:data:`PAN_WEIGHTS_MANY`,
+    :data:`PAN_ATOMS_MANY`, OTD's ``LAM_SCHEDULE_MANY``) apply there; fewer
+    bands keep the ones their studies ran with.
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+
+    Returns
+    -------
+    bool
+        ``False`` for a system without panchromatic axes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import tensor_cosdi as tc
+    >>> code = np.ones((8, 8))
+    >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=28))
+    True
+    >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=16))
+    False
+    """
     names = list(system.axes)
     longest = max(
         (system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0

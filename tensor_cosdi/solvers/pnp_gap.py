@@ -301,9 +301,9 @@ def pnp_gap(
         sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)
     warm_iter = _check_warm_iter(warm_iter)
-    pan_iter = _check_pan_iter(pan_iter, warm)
-    pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
-    pan_atoms = _check_pan_iter(pan_atoms, warm, "pan_atoms")
+    pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
+    pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
+    pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
@@ -357,14 +357,14 @@ def warm_started_gap(
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
     first-stage iterations, ``pan_tv_steps`` its Chambolle steps and ``pan_atoms`` its spectral
-    atoms, ``"auto"`` its own); one
-    history for both stages.  Returns ``(x, history, converged)``."""
+    atoms, ``"auto"`` its own); one history for both stages.  Returns ``(x, history,
+    converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter)
-    pan_iter = _check_pan_iter(pan_iter, warm)
-    pan_tv_steps = _check_pan_iter(pan_tv_steps, warm, "pan_tv_steps")
-    pan_atoms = _check_pan_iter(pan_atoms, warm, "pan_atoms")
+    pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
+    pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
+    pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -374,13 +374,8 @@ def warm_started_gap(
     elif warm == "otd":
         from .otd import online_tucker_admm
 
-        pan = {
-            k: v
-            for k, v in (
-                ("pan_iter", pan_iter), ("pan_tv_steps", pan_tv_steps), ("pan_atoms", pan_atoms)
-            )
-            if v != "auto"
-        }  # fmt: skip
+        first = {"pan_iter": pan_iter, "pan_tv_steps": pan_tv_steps, "pan_atoms": pan_atoms}
+        pan = {k: v for k, v in first.items() if v != "auto"}
         start, hist, _ = online_tucker_admm(
             system, g, admm_iter=warm_iter, progress=progress, **pan
         )
@@ -411,7 +406,7 @@ def _check_warm_iter(warm_iter):
     return engine.check_int("warm_iter", warm_iter, 1)
 
 
-def _check_pan_iter(value, warm, name="pan_iter"):
+def _check_first_stage(value, warm, name):
     """An option of the OTD start's first stage: ``"auto"`` or an integer ≥ 1, refused with any
     other start."""
     if isinstance(value, str):

@@ -25,6 +25,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _protocol import MASKS, RESULTS, load_mask, problem, write_results  # noqa: E402
@@ -79,8 +81,6 @@ def main(argv=None):
 
 def protocol_table() -> list[str]:
     """The estimate on every tuning scene at the real-spectra protocol, both codes."""
-    import numpy as np
-
     scenes = tc.datasets.TUNE_SCENES
     lines = [
         "",

@@ -3,13 +3,16 @@ start the spatial bases, and the cube on the way to it (:func:`subspace_gap_tv`)
 
 from __future__ import annotations
 
-import numpy as np
-from tensorly import tenalg
-
-from .. import _backend as B
-from ..bases import dct
 from . import engine
-from .priors import TV
+from .subspace import (  # noqa: F401  (the subspace fit and its atom counts, re-exported here)
+    MANY_BANDS,
+    PAN_ATOMS,
+    PAN_ATOMS_MANY,
+    has_many_bands,
+    pan_atoms_for,
+    subspace_denoise,
+    subspace_gap_tv,
+)
 
 __all__ = [
     "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for",
@@ -38,52 +41,6 @@ PAN_WEIGHTS = {40.0: 0.3, 30.0: 2.0, 20.0: 4.0}
 #: many-atom first stage does best with far less smoothing under noise than the schedule
 #: chosen with three atoms.
 PAN_WEIGHTS_MANY = {40.0: 0.3, 30.0: 0.25, 20.0: 1.0}
-#: ``pan_atoms="auto"``: the DCT atoms spanning a panchromatic axis in the first stage, by the
-#: axis' length: :data:`PAN_ATOMS` below :data:`MANY_BANDS`, :data:`PAN_ATOMS_MANY` from there
-#: on.  The larger count was chosen by 4-fold cross-validation over 16 of the 28-band tuning
-#: scenes (SD-CASSI, TSA mask, one setting for noiseless and 30 dB from 3, 6, 8, 12;
-#: ``benchmarks/results/pan_atoms.md``): three atoms cannot follow the spectra of 28 bands, and
-#: the first stage's cube is OTD's start.  Eight, not six: cross-validated again on all 28
-#: tuning scenes as they are and magnified 4× (4 folds, TSA mask, noiseless and 30 dB;
-#: ``benchmarks/results/otd_pan_atoms_zoom4.md``): 6 / 8 / 10 / 12 atoms → 33.02 / 33.22 /
-#: 33.16 / 33.10 dB noiseless, 31.41 / 31.47 / 31.39 / 31.37 dB at 30 dB, every fold chose 8.
-#: On the magnified views six atoms cannot follow large areas of saturated colour (superballs
-#: ×4 30.51 dB against 34.38 with eight; clay ×4 34.86 against 39.63).  Shorter axes keep the
-#: three atoms their studies were run with.
-PAN_ATOMS = 3
-PAN_ATOMS_MANY = 8
-MANY_BANDS = 24
-
-
-def pan_atoms_for(length: int, pan_atoms="auto", *, name: str = "pan_atoms") -> int:
-    """The first stage's count of DCT atoms for a panchromatic axis.
-
-    Parameters
-    ----------
-    length : int
-        Samples along the axis (its band count).
-    pan_atoms : int or "auto"
-        An integer ≥ 1, or ``"auto"``: :data:`PAN_ATOMS` below :data:`MANY_BANDS`,
-        :data:`PAN_ATOMS_MANY` from there on.
-    name : str
-        The option's name in the error message.
-
-    Returns
-    -------
-    int
-        The count, at most ``length``.
-
-    Examples
-    --------
-    >>> from tensor_cosdi.solvers.panchromatic import pan_atoms_for
-    >>> pan_atoms_for(28), pan_atoms_for(16), pan_atoms_for(2, 5)
-    (8, 3, 2)
-    """
-    if isinstance(pan_atoms, str):
-        if pan_atoms != "auto":
-            raise ValueError(f"{name} must be an integer ≥ 1 or 'auto', got {pan_atoms!r}")
-        pan_atoms = PAN_ATOMS_MANY if length >= MANY_BANDS else PAN_ATOMS
-    return min(_check_int(name, pan_atoms, 1), int(length))
 
 
 def _check_pan_weight(pan_weight):
@@ -107,39 +64,6 @@ def pan_weight_for(system, measurement, pan_weight) -> float:
         table = PAN_WEIGHTS_MANY if has_many_bands(system) else PAN_WEIGHTS
         return snr_schedule(estimate_snr(system, measurement).snr_db, table)
     return float(pan_weight)
-
-
-def has_many_bands(system) -> bool:
-    """Whether a panchromatic axis of ``system`` has :data:`MANY_BANDS` samples or more.
-
-    The schedules chosen on 28-band scenes (:data:`PAN_WEIGHTS_MANY`,
-    :data:`PAN_ATOMS_MANY`, OTD's ``LAM_SCHEDULE_MANY``) apply there; fewer
-    bands keep the ones their studies ran with.
-
-    Parameters
-    ----------
-    system : tensor_cosdi.systems.System
-
-    Returns
-    -------
-    bool
-        ``False`` for a system without panchromatic axes.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> import tensor_cosdi as tc
-    >>> code = np.ones((8, 8))
-    >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=28))
-    True
-    >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=16))
-    False
-    """
-    names = list(system.axes)
-    longest = max(
-        (system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0
-    )
-    return longest >= MANY_BANDS
 
 
 def panchromatic_estimate(
@@ -182,95 +106,3 @@ def panchromatic_estimate(
         progress=progress,
     )
     return system.decimation.forward(x), x
-
-
-def subspace_gap_tv(
-    system,
-    measurement,
-    *,
-    n_atoms="auto",
-    max_iter: int = 60,
-    tv_weight: float = 0.05,
-    tv_steps: int | None = 10,
-    eps: float = 1e-6,
-    progress: bool = False,
-):
-    """A fast first estimate for the panchromatic image: GAP-TV in a smooth spectral subspace.
-
-    The decimated model of Eq. 62 assumes flat spectra (``F = Dᵀ Z / n``);
-    on sheared systems that mismatch dominates (relative error 0.7-0.9 on
-    64×64×16 scenes).  Here the panchromatic axes are instead spanned by
-    their first ``n_atoms`` DCT atoms (``n_atoms = 1`` is the flat model; ``"auto"``:
-    :func:`pan_atoms_for` each axis' length)
-    and regularised by 2-D total variation of each coefficient image, in
-    accelerated GAP iterations ``x ← P TV(Pᵀ(x + Aᵀ(AAᵀ + εI)⁻¹(ĝ − Ax)))``.
-    TV runs on ``n_atoms`` images instead of ``Nλ``, so it costs a fraction
-    of full GAP-TV.
-
-    Returns
-    -------
-    cube : tensor of ``system.cube_shape``
-        The subspace estimate; ``system.decimation.forward(cube)`` is ``Z``.
-    """
-    from .denoisers import WarmTV, tv
-
-    pan_atoms_for(MANY_BANDS, n_atoms, name="n_atoms")  # checked before any work
-    max_iter = _check_int("max_iter", max_iter, 1)
-    g = measurement
-    names = list(system.axes)
-    modes = [names.index(a) for a in system.panchromatic_axes]
-    shape = system.cube_shape
-    keep = {m: pan_atoms_for(shape[m], n_atoms, name="n_atoms") for m in modes}
-    mats = [B.tensor_like(dct(shape[m])[:, : keep[m]], g) for m in modes]
-
-    denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
-
-    def subspace_tv(v, weight):
-        return subspace_denoise(v, mats, modes, denoise, weight)
-
-    x, _, _ = engine.gap(
-        system.operator,
-        g,
-        TV(tv_weight, denoise=subspace_tv),
-        eps=eps,
-        max_iter=max_iter,
-        progress=progress,
-        desc="OTD stage 1: panchromatic",
-        objective=False,  # an internal stage: its history is not returned
-    )
-    return x
-
-
-def subspace_denoise(v, atoms, modes, denoise, weight):
-    """``P denoise(Pᵀ v, weight)`` with ``P`` the ``atoms`` matrices along ``modes``: a denoiser
-    run on a few coefficient images instead of every band (the subspace TV of
-    :func:`subspace_gap_tv`).
-
-    A Fortran-ordered NumPy ``v`` (the shear kernels' layout, which the solvers keep) with one
-    mode, its last axis, gives a Fortran-ordered result: ``vᵀ`` is C-ordered with that axis
-    first, so both products are single GEMMs.  The general mode products return the transformed
-    axis first in memory, and every shear of the next iteration paid for it (90 iterations of
-    :func:`subspace_gap_tv` at 256×256×28: 1.45 → 1.13 s, medians of four alternated runs, the
-    same estimate).
-
-    >>> import numpy as np
-    >>> from tensor_cosdi.bases import dct
-    >>> v = np.asfortranarray(np.random.default_rng(0).random((4, 5, 6)))
-    >>> out = subspace_denoise(v, [dct(6)[:, :2]], [2], lambda c, w: c, 0.1)
-    >>> out.flags.f_contiguous, out.shape
-    (True, (4, 5, 6))
-    """
-    if (
-        isinstance(v, np.ndarray)
-        and list(modes) == [v.ndim - 1]
-        and v.ndim > 1
-        and v.flags.f_contiguous
-        and not v.flags.c_contiguous
-    ):
-        m = np.asarray(atoms[0])
-        rev = v.shape[::-1]
-        coef = (m.T @ v.T.reshape(rev[0], -1)).reshape((m.shape[1], *rev[1:])).T
-        den = np.asfortranarray(denoise(coef, weight))
-        return (m @ den.T.reshape(m.shape[1], -1)).reshape(rev).T
-    coef = tenalg.multi_mode_dot(v, atoms, modes=modes, transpose=True)
-    return tenalg.multi_mode_dot(denoise(coef, weight), atoms, modes=modes)

@@ -6,30 +6,42 @@ every fine-scale structure of ``g`` as noise.  A coded aperture puts its
 pattern on the measurement at the finest scale, so a noiseless measurement
 through a random binary code reads as a noisy one.
 
-:func:`estimate_snr` also fits the measurement with :data:`FIT_ITER` plain
-GAP-TV iterations through the system and measures the same wavelet MAD on
-the residual ``g − A x̂``: ``A x̂`` carries the code's pattern, so the residual
-holds the noise plus what the smooth fit missed.  Both readings mostly
-over-state the noise (each adds structure it cannot model), so the estimate
-is the larger SNR of the two.  Each reading is the noisiest frame of a
-stacked measurement (:func:`tensor_cosdi.noise.frame_sigmas`, over the
-pixels the frame's light reaches): the fit can absorb one frame's noise
-(dual-camera CASSI's panchromatic frame read ≈ 50 dB at a true 30 dB), and
-averaging it with the others read the whole measurement as cleaner than it
-is (Lytro-CASSI +3.8 dB at 30 dB with the mean, −2.6 with the noisiest
-frame; dual-camera CASSI +10.5 → +5.9 dB, still over).
-``benchmarks/results/snr_estimate.md`` shows both readings on every system
-(noiseless through a random code, 64×64: SD-CASSI 28.3 dB from the
-measurement, 37.9 with the fit; CASSI-VSI 16.1 → 38.3; C3SLFI 12.2 → 47.3),
-and where the fit still reads texture as noise (CS2LI's fringes).  Its second
-table reads SD-CASSI at 256×256×28 on every tuning scene: through the TSA
-mask the noiseless readings clear :data:`~tensor_cosdi.solvers.pnp_gap.ACCELERATE_ABOVE_DB`
-on most scenes, through a random binary code on about half of them (the
-fit's TV prior cannot follow the scene's fine detail through such a code,
-and that misfit reads as noise); the noisy readings sit within 3 dB of the
-truth on every scene through the TSA mask.  The
-estimate is cached for the last few (system, measurement) pairs, so the
-``"auto"`` options of one reconstruction share one fit.
+:func:`estimate_snr` therefore also fits the measurement through the system
+and measures the same wavelet MAD on the residual ``g − A x̂``: ``A x̂``
+carries the code's pattern, so the residual holds the noise plus what the
+fit missed.  Both readings mostly over-state the noise (each adds structure
+it cannot model), so the estimate is the larger SNR of the two.
+
+The fit depends on the system:
+
+* a system that takes one 2-D frame wider than the scene (a disperser
+  shears the bands across it: SD-CASSI, CASSI-VSI, CASSDI-DFA) is fitted
+  with :data:`SUBSPACE_FIT_ITER` accelerated iterations of
+  :func:`~tensor_cosdi.solvers.subspace.subspace_gap_tv` (the bands spanned
+  by a few DCT atoms, TV weight :data:`SUBSPACE_FIT_TV`).  The plain GAP-TV
+  fit below cannot follow a scene's fine detail through a random binary
+  code at 256×256×28 in its few iterations, and read 15 of the 28 noiseless
+  tuning scenes under 38 dB (cloth 21.1 dB); the subspace fit reads every
+  one of them at 37 dB or more, and true 30 dB within 3 dB on all of them.
+  Noise spread along a sheared diagonal of voxels is what the subspace
+  cannot hold, so the fit leaves it in the residual.
+* every other system is fitted with :data:`FIT_ITER` plain GAP-TV
+  iterations.  Accelerated subspace iterations would fit the noise itself
+  where a measurement pixel's voxels share one spatial position
+  (DD-CASSI, Mu-CoSDI read a true 20 dB at 50 dB and more), and read the
+  multi-frame systems (Lytro-CASSI, dual-camera CASSI) no better.
+
+Each reading is the noisiest frame of a stacked measurement
+(:func:`tensor_cosdi.noise.frame_sigmas`, over the pixels the frame's light
+reaches): the fit can absorb one frame's noise (dual-camera CASSI's
+panchromatic frame read ≈ 50 dB at a true 30 dB), and averaging it with the
+others read the whole measurement as cleaner than it is.
+``benchmarks/results/snr_estimate.md`` shows both readings and the fit on
+every system, where a reading is still off (CS2LI's fringes), and the
+estimate at 256×256×28 on every tuning scene through the TSA mask and a
+random binary code.  The estimate is cached for the last few (system,
+measurement) pairs, so the ``"auto"`` options of one reconstruction share
+one fit.
 """
 
 from __future__ import annotations
@@ -42,28 +54,60 @@ import numpy as np
 
 from .. import _backend as B
 from ..noise import frame_sigmas, snr_db_from_sigma
+from .subspace import subspace_gap_tv
 
-__all__ = ["SNREstimate", "estimate_snr", "FIT_ITER"]
+__all__ = [
+    "SNREstimate", "estimate_snr", "one_dispersed_frame", "FITS", "FIT_ITER",
+    "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV",
+]  # fmt: skip
 
 #: Plain GAP-TV iterations of the fit (TV weight 0.1, 5 Chambolle steps each).
 FIT_ITER = 10
+#: Accelerated iterations and TV weight of the subspace fit (5 warm-started Chambolle steps
+#: each, the atoms of :func:`~tensor_cosdi.solvers.subspace.pan_atoms_for`), from 20 / 40
+#: iterations × TV 0.1 / 0.3 on the 28 tuning scenes at 256×256×28, TSA mask and a random
+#: binary code (``benchmarks/results/snr_fit_sweep.md``): the lighter the weight and the longer
+#: the fit, the more noise it takes up and the cleaner a noisy measurement reads; the shorter
+#: the fit, the more detail it misses and the noisier a clean one reads.
+SUBSPACE_FIT_ITER = 40
+SUBSPACE_FIT_TV = 0.3
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 4
 
 
 class SNREstimate(NamedTuple):
-    """An SNR estimate in dB and its two readings (``inf`` for a noiseless-looking reading)."""
+    """An SNR estimate in dB, its two readings (``inf`` for a noiseless-looking reading) and the
+    fit of the residual reading."""
 
     snr_db: float
     from_measurement_db: float
     from_residual_db: float
+    #: The fit behind ``from_residual_db``: ``"subspace"``, ``"gap_tv"`` or ``"none"``.
+    fit: str = "none"
 
 
 def _fingerprint(g: np.ndarray) -> str:
     return hashlib.blake2b(np.ascontiguousarray(g).tobytes(), digest_size=16).hexdigest()
 
 
-def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
+def one_dispersed_frame(system) -> bool:
+    """Whether ``system`` takes one 2-D frame with more pixels than the scene's image: a
+    disperser shears the bands across it (SD-CASSI, CASSI-VSI, CASSDI-DFA), and
+    :func:`estimate_snr` fits it in a spectral subspace (see the module).
+
+    >>> import numpy as np
+    >>> import tensor_cosdi as tc
+    >>> one_dispersed_frame(tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4))
+    True
+    """
+    m, c = tuple(system.measurement_shape), tuple(system.cube_shape)
+    return len(m) == 2 and len(c) >= 2 and m[0] * m[1] > c[0] * c[1]
+
+
+FITS = ("auto", "subspace", "gap_tv")
+
+
+def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     """The measurement's SNR in dB, from the measurement and the fit residual (see the module).
 
     Parameters
@@ -71,17 +115,23 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
     system : tensor_cosdi.systems.System
         The system that took ``measurement``.
     measurement : tensor of ``system.measurement_shape``
-    fit : bool
-        ``False`` skips the fit: the measurement-only reading.
+    fit : bool or str
+        ``True`` or ``"auto"``: the fit the system calls for (see the module);
+        ``"subspace"`` or ``"gap_tv"``: that fit; ``False``: none, the
+        measurement-only reading.
 
     Examples
     --------
     >>> import tensor_cosdi as tc
-    >>> p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(64, 64), n_bands=8, snr_db=20)
+    >>> p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(64, 64), n_bands=16, snr_db=20)
     >>> est = estimate_snr(p.system, p.measurement)
     >>> 17 < est.snr_db < 23
     True
     """
+    if fit is True:
+        fit = "auto"
+    if fit is not False and fit not in FITS:
+        raise ValueError(f"fit must be True, False or one of {FITS}, got {fit!r}")
     g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
     if not np.isfinite(g).all():
         raise ValueError("the measurement holds NaN or inf: no SNR can be estimated from it")
@@ -93,23 +143,31 @@ def estimate_snr(system, measurement, *, fit: bool = True) -> SNREstimate:
     meas_db = snr_db_from_sigma(power, float(frame_sigmas(g_unit).max()))
     if not fit:
         return SNREstimate(meas_db, meas_db, float("nan"))
-    key = (id(system), g.shape, _fingerprint(g))  # float32 and float64 copies differ: both fit
+    if fit == "auto":
+        fit = "subspace" if one_dispersed_frame(system) else "gap_tv"
+    key = (id(system), g.shape, _fingerprint(g), fit)  # float32 and float64 copies both fit
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key][1]
-    from .gap_tv import gap_tv
+    # Either fit runs in float32 (the measurement at a peak of 1): the GAP-TV fit 2.5× faster than
+    # in float64 at 256×256×28 with the same reading to 1e-4 dB (a CAVE scene, TSA mask,
+    # noiseless / 30 / 20 dB); the residual is taken in float64.
+    g32 = B.as_tensor(g_unit, "float32")
+    if fit == "subspace":
+        x = subspace_gap_tv(
+            system, g32, max_iter=SUBSPACE_FIT_ITER, tv_weight=SUBSPACE_FIT_TV, tv_steps=5
+        )
+    else:
+        from .gap_tv import gap_tv
 
-    # The fit runs in float32 (the measurement at a peak of 1): 2.5× faster than in float64 at
-    # 256×256×28 with the same reading to 1e-4 dB (a CAVE scene, TSA mask, noiseless / 30 /
-    # 20 dB); the residual is taken in float64.
-    x, _, _ = gap_tv(
-        system, B.as_tensor(g_unit, "float32"), max_iter=FIT_ITER, accelerate=False,
-        tv_weight=0.1, tv_iter=5, plane_support=False, nonneg=False,
-    )  # fmt: skip
+        x, _, _ = gap_tv(
+            system, g32, max_iter=FIT_ITER, accelerate=False,
+            tv_weight=0.1, tv_iter=5, plane_support=False, nonneg=False,
+        )  # fmt: skip
     r = g_unit - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
     finite = np.isfinite(r).all()
     res_db = snr_db_from_sigma(power, float(frame_sigmas(r, g_unit).max())) if finite else -np.inf
-    est = SNREstimate(max(meas_db, res_db), meas_db, res_db)
+    est = SNREstimate(max(meas_db, res_db), meas_db, res_db, fit)
     _CACHE[key] = (system, est)  # the system is held so that its id is not reused
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)

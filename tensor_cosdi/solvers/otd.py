@@ -97,7 +97,7 @@ def initial_bases(
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
         estimated SNR, :data:`PAN_WEIGHTS`; ``pan_atoms``: spectral DCT atoms,
-        ``"auto"`` by the band count, :func:`~.panchromatic.pan_atoms_for`).
+        ``"auto"`` by the band count, :func:`~.subspace.pan_atoms_for`).
     spatial_block : int or None
         With ``"panchromatic"``: a spatial axis longer than this gets a
         block-diagonal basis, one learned block per run of at most
@@ -276,7 +276,7 @@ def tucker_admm(
 #: non-negative z-step (``nonneg=True``) the same cross-validation on 12 of the scenes chose the
 #: same three values on all of them (``benchmarks/results/nonneg.md``).
 LAM_SCHEDULE = {40.0: 0.03, 30.0: 0.1, 20.0: 0.3}
-#: The same from :data:`~tensor_cosdi.solvers.panchromatic.MANY_BANDS` bands on, where the first
+#: The same from :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` bands on, where the first
 #: stage has eight atoms.  Noiseless, cross-validated again on all 28 tuning scenes as they are
 #: and magnified 4× (TSA mask; ``benchmarks/results/otd_lam_clean_zoom4.md``): 0.00375 / 0.0075
 #: / 0.015 / 0.03 → 33.48 / 33.53 / 33.45 / 33.21 dB, every fold chose 0.0075 (a finer grid

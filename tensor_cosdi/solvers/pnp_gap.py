@@ -206,7 +206,7 @@ def pnp_gap(
     pan_atoms : int or "auto"
         With ``warm="otd"``: the spectral DCT atoms of that first stage (OTD's
         ``pan_atoms``; ``"auto"``: OTD's default,
-        :func:`~tensor_cosdi.solvers.panchromatic.pan_atoms_for`).
+        :func:`~tensor_cosdi.solvers.subspace.pan_atoms_for`).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration

@@ -173,11 +173,11 @@ def test_fit_residual_does_not_read_a_random_code_as_noise(name):
         readings[snr] = est
     assert readings[None].snr_db > 32 and readings[None].from_measurement_db < 29, readings
     if name in ("cassi_vsi", "cassdi_dfa"):
-        # the subspace fit takes up part of the noise of these small 16-band frames: a noisy
-        # measurement reads up to ≈ 6 dB cleaner than it is, still well apart from a clean one
+        # the subspace fit takes up part of the noise of these small 16-band frames: a true
+        # 20 dB reads up to ≈ 4 dB cleaner than it is, still well apart from a clean one
         assert readings[None].fit == "subspace", readings
-        assert 28 < readings[30].snr_db < 34.5 and 18 < readings[20].snr_db < 27, readings
-        assert readings[None].snr_db > readings[30].snr_db + 3 > readings[20].snr_db + 6
+        assert abs(readings[30].snr_db - 30) < 3 and 18 < readings[20].snr_db < 24.5, readings
+        assert readings[None].snr_db > readings[30].snr_db + 2 > readings[20].snr_db + 6
     else:
         assert abs(readings[30].snr_db - 30) < 3 and abs(readings[20].snr_db - 20) < 3, readings
     assert estimate_snr(p.system, p.measurement) is readings[20] or (
@@ -189,9 +189,9 @@ def test_fit_residual_does_not_read_a_random_code_as_noise(name):
 
 def test_a_random_binary_code_at_full_size_reads_clean_when_it_is():
     """SD-CASSI at the real-spectra protocol (256×256×28, 2 px per band) through a seeded random
-    binary code: the plain GAP-TV fit read this noiseless scene at 32.8 dB (texture taken for
-    noise, so the automatic settings regularised it as noisy); the subspace fit reads it clean,
-    and 30 dB within 3 dB."""
+    binary code: the plain GAP-TV fit reads this noiseless scene at 32.8 dB (texture taken for
+    noise, so the automatic settings regularise it as noisy); the subspace fit reads it at
+    38.0 dB, and 30 dB within 3 dB."""
     from tensor_cosdi.solvers.snr import estimate_snr, one_dispersed_frame
 
     try:
@@ -201,9 +201,11 @@ def test_a_random_binary_code_at_full_size_reads_clean_when_it_is():
     code = (np.random.default_rng(2024).random((256, 256)) < 0.5).astype(np.float64)
     system = tc.systems.SDCASSI(code, n_bands=28, shifts=2, wavelengths=wl)
     assert one_dispersed_frame(system)
-    clean = estimate_snr(system, system.simulate(cube))
+    g = system.simulate(cube)
+    clean = estimate_snr(system, g)
     noisy = estimate_snr(system, system.simulate(cube, snr_db=30, rng=0))
-    assert clean.fit == "subspace" and clean.snr_db > 38, clean
+    assert clean.fit == "subspace" and clean.snr_db > 36.5, clean
+    assert estimate_snr(system, g, fit="gap_tv").snr_db < clean.snr_db - 3
     assert abs(noisy.snr_db - 30) < 3, noisy
 
 

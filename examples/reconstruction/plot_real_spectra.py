@@ -10,8 +10,8 @@ checkout; research-use data, not shipped), resamples it onto the 28 KAIST
 bands, measures a 96×96 crop with SD-CASSI at 30 dB, and compares GAP-TV,
 OTD at its default (``lam="auto"``: the weight follows the measurement's
 estimated SNR, :func:`tensor_cosdi.solvers.snr.estimate_snr`, which reads
-the residual of a short fit so that the code's texture is not taken for
-noise) and at a fixed ``lam=0.3``, the experimental non-local Tucker prior
+the residual of a fit in the spectral subspace so that the code's texture is
+not taken for noise) and at a fixed ``lam=0.3``, the experimental non-local Tucker prior
 ``"otd_nl"`` and, where PyTorch is installed, plug-and-play GAP with the
 learned spectral denoiser (``"pnp_gap"``, and its quicker form ``"pnp_fast"``)
 and the unfolded network
@@ -49,7 +49,7 @@ print(source)
 system = tc.systems.SDCASSI(code, n_bands=len(wl), shifts=2, wavelengths=wl)
 g = system.simulate(cube, snr_db=30, rng=0)
 snr = estimate_snr(system, g)
-print(f"estimated SNR: {snr.snr_db:.1f} dB (simulated at 30 dB)")
+print(f"estimated SNR: {snr.snr_db:.1f} dB (simulated at 30 dB; {snr.fit} fit)")
 
 # %%
 runs = {

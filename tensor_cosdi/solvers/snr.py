@@ -12,25 +12,24 @@ carries the code's pattern, so the residual holds the noise plus what the
 fit missed.  Both readings mostly over-state the noise (each adds structure
 it cannot model), so the estimate is the larger SNR of the two.
 
-The fit depends on the system:
+The fit is the system's ``snr_fit``:
 
-* a system that takes one 2-D frame wider than the scene (a disperser
-  shears the bands across it: SD-CASSI, CASSI-VSI, CASSDI-DFA) is fitted
-  with :data:`SUBSPACE_FIT_ITER` accelerated iterations of
-  :func:`~tensor_cosdi.solvers.subspace.subspace_gap_tv` (the bands spanned
-  by a few DCT atoms, TV weight :data:`SUBSPACE_FIT_TV`).  The plain GAP-TV
-  fit below cannot follow a scene's fine detail through a random binary
-  code at 256×256×28 in its few iterations: it read the 28 noiseless tuning
-  scenes at 21.1-46.7 dB, 15 of them under 38 dB; the subspace fit reads
-  them at 32.3-45.7 dB, 6 under 38, and a true 30 or 20 dB within 3 dB on
-  every scene through either code.  Noise spread along a sheared diagonal
-  of voxels is what the subspace cannot hold, so the fit leaves it in the
-  residual.
-* every other system is fitted with :data:`FIT_ITER` plain GAP-TV
-  iterations.  Accelerated subspace iterations would fit the noise itself
-  where a measurement pixel's voxels share one spatial position
-  (DD-CASSI, Mu-CoSDI read a true 20 dB at 50 dB and more), and read the
-  multi-frame systems (Lytro-CASSI, dual-camera CASSI) no better.
+* ``"subspace"`` (SD-CASSI, CASSDI-DFA, where every measurement pixel sums
+  voxels along a sheared diagonal): :data:`SUBSPACE_FIT_ITER` accelerated
+  iterations of :func:`~tensor_cosdi.solvers.subspace.subspace_gap_tv` (the
+  bands spanned by a few DCT atoms, TV weight :data:`SUBSPACE_FIT_TV`).  The
+  plain GAP-TV fit below cannot follow a scene's fine detail through a
+  random binary code at 256×256×28 in its few iterations: it read the 28
+  noiseless tuning scenes at 21.1-46.7 dB, 15 of them under 38 dB; the
+  subspace fit reads them at 32.3-45.7 dB, 6 under 38, and a true 30 or
+  20 dB within 3 dB on every scene through either code.  Noise spread along
+  a sheared diagonal is what the subspace cannot hold, so the fit leaves it
+  in the residual.
+* ``"gap_tv"`` (every other system): :data:`FIT_ITER` plain GAP-TV
+  iterations.  Where a pixel's voxels share one position — DD-CASSI,
+  Mu-CoSDI, CASSI-VSI's direct arm — the accelerated subspace fit takes up
+  the noise itself (DD-CASSI and Mu-CoSDI read a true 20 dB at 50 dB and
+  more, CASSI-VSI at 24-27 dB); the multi-frame systems read no better.
 
 Each reading is the noisiest frame of a stacked measurement
 (:func:`tensor_cosdi.noise.frame_sigmas`, over the pixels the frame's light
@@ -58,7 +57,7 @@ from ..noise import frame_sigmas, snr_db_from_sigma
 from .subspace import subspace_gap_tv
 
 __all__ = [
-    "SNREstimate", "estimate_snr", "one_dispersed_frame", "FITS", "FIT_ITER",
+    "SNREstimate", "estimate_snr", "FITS", "FIT_ITER",
     "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV",
 ]  # fmt: skip
 
@@ -95,20 +94,6 @@ def _fingerprint(g: np.ndarray) -> str:
     return hashlib.blake2b(np.ascontiguousarray(g).tobytes(), digest_size=16).hexdigest()
 
 
-def one_dispersed_frame(system) -> bool:
-    """Whether ``system`` takes one 2-D frame with more pixels than the scene's image: a
-    disperser shears the bands across it (SD-CASSI, CASSI-VSI, CASSDI-DFA), and
-    :func:`estimate_snr` fits it in a spectral subspace (see the module).
-
-    >>> import numpy as np
-    >>> import tensor_cosdi as tc
-    >>> one_dispersed_frame(tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4))
-    True
-    """
-    m, c = tuple(system.measurement_shape), tuple(system.cube_shape)
-    return len(m) == 2 and len(c) >= 2 and m[0] * m[1] > c[0] * c[1]
-
-
 FITS = ("auto", "subspace", "gap_tv")
 
 
@@ -121,7 +106,8 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
         The system that took ``measurement``.
     measurement : tensor of ``system.measurement_shape``
     fit : bool or str
-        ``True`` or ``"auto"``: the fit the system calls for (see the module);
+        ``True`` or ``"auto"``: the fit the system calls for (its ``snr_fit``;
+        see the module);
         ``"subspace"`` or ``"gap_tv"``: that fit; ``False``: none, the
         measurement-only reading.
 
@@ -149,7 +135,11 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     if not fit:
         return SNREstimate(meas_db, meas_db, float("nan"))
     if fit == "auto":
-        fit = "subspace" if one_dispersed_frame(system) else "gap_tv"
+        fit = getattr(system, "snr_fit", "gap_tv")
+        if fit not in FITS[1:]:
+            raise ValueError(
+                f"{type(system).__name__}.snr_fit must be one of {FITS[1:]}, got {fit!r}"
+            )
     key = (id(system), g.shape, _fingerprint(g), fit)  # float32 and float64 copies both fit
     if key in _CACHE:
         _CACHE.move_to_end(key)

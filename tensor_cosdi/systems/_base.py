@@ -108,6 +108,12 @@ class System(SystemRoles):
     #: ``"auto"``: tiny where ``A Aᵀ`` is well conditioned; a system whose ``A Aᵀ`` has weak
     #: directions sets more, so GAP does not fit the noise along them.
     gap_eps: float = 1e-6
+    #: The fit whose residual :func:`~tensor_cosdi.solvers.snr.estimate_snr` reads the noise
+    #: from (``fit="auto"``): ``"gap_tv"``, a few plain GAP-TV iterations, or ``"subspace"``,
+    #: GAP-TV in a spectral subspace, for a system whose every measurement pixel sums voxels
+    #: along a sheared diagonal, which the subspace cannot hold, so the noise stays in the
+    #: residual (see :mod:`tensor_cosdi.solvers.snr`).
+    snr_fit: str = "gap_tv"
     _frozen = False
 
     def _finish(self, operator: TensorOperator, *, wavelengths, axes, measurement_axes):

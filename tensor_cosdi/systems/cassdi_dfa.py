@@ -167,6 +167,8 @@ class CASSDIDFA(System):
     # ---- roles (systems/_roles.py) -------------------------------------------------------
     name = "cassdi_dfa"
     demo_scene = "motorcycle"
+    #: Every pixel sums sheared diagonals of voxels, as in SD-CASSI (see ``SDCASSI.snr_fit``).
+    snr_fit = "subspace"
     has_depth = True
     example_options = {"n_depths": 3}
     depth_kind = "planes"

@@ -122,6 +122,13 @@ class CASSIVSI(System):
             measurement_axes=("x", "y"),
         )
 
+    @property
+    def snr_fit(self) -> str:
+        """``"subspace"`` without a direct arm (``alpha_t = 1``: SD-CASSI), else ``"gap_tv"``:
+        the direct arm's pixels each hold one position's voxels, and the subspace fit would take
+        up their noise (see :mod:`tensor_cosdi.solvers.snr`)."""
+        return "subspace" if self.alpha_r == 0 else "gap_tv"
+
     @classmethod
     def example(cls, cube_shape=None, *, rng=0, transmittance: float = 0.5, **overrides):
         """A seeded instance with a random binary code (default cube ``(16, 16, 8)``)."""

@@ -28,8 +28,9 @@ The fit is the system's ``snr_fit``:
 * ``"gap_tv"`` (every other system): :data:`FIT_ITER` plain GAP-TV
   iterations.  Where a pixel's voxels share one position — DD-CASSI,
   Mu-CoSDI, CASSI-VSI's direct arm — the accelerated subspace fit takes up
-  the noise itself (DD-CASSI and Mu-CoSDI read a true 20 dB at 50 dB and
-  more, CASSI-VSI at 24-27 dB); the multi-frame systems read no better.
+  the noise itself (64×64×16: DD-CASSI and Mu-CoSDI read a true 20 dB at
+  about 40 dB, CASSI-VSI at 23.8 against the GAP-TV fit's 22.2); it reads
+  Lytro-CASSI as noisier than it is.
 
 Each reading is the noisiest frame of a stacked measurement
 (:func:`tensor_cosdi.noise.frame_sigmas`, over the pixels the frame's light
@@ -71,8 +72,8 @@ FIT_ITER = 10
 #: true 20 dB at 23.3-27.5 dB); the shorter and the heavier, the more detail it misses.  20 at
 #: 0.3 is the one that reads every noisy scene within 3 dB through both codes, as the plain
 #: GAP-TV fit does through the TSA mask (a true 20 dB at 21.0-22.2 dB), and reads noiseless
-#: random-code scenes at 32.3-45.7 dB (GAP-TV fit: 21.1-46.7), in 0.45 s at 256×256×28 on two
-#: cores (the GAP-TV fit: 0.54 s).
+#: random-code scenes at 32.3-45.7 dB (GAP-TV fit: 21.1-46.7), in less time than the GAP-TV fit
+#: (``snr_estimate.md`` times both).
 SUBSPACE_FIT_ITER = 20
 SUBSPACE_FIT_TV = 0.3
 _CACHE: OrderedDict = OrderedDict()

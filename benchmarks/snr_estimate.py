@@ -42,9 +42,8 @@ from _protocol import MASKS, RESULTS, load_mask, problem, write_results  # noqa:
 
 import tensor_cosdi as tc  # noqa: E402
 from tensor_cosdi import _backend as B  # noqa: E402
-from tensor_cosdi.noise import frame_sigmas, snr_db_from_sigma  # noqa: E402
 from tensor_cosdi.solvers.pnp_gap import ACCELERATE_ABOVE_DB as CLEAN  # noqa: E402
-from tensor_cosdi.solvers.snr import estimate_snr  # noqa: E402
+from tensor_cosdi.solvers.snr import estimate_snr, residual_reading_db  # noqa: E402
 from tensor_cosdi.solvers.subspace import subspace_gap_tv  # noqa: E402
 
 
@@ -180,13 +179,11 @@ def sweep_table(iters, weights) -> list[str]:
                 system, _, g = problem(scene, snr, code)
                 g64 = np.asarray(g, dtype=np.float64)
                 gu = g64 / np.abs(g64).max()
-                power = float(np.mean(gu * gu))
                 for it, w in pairs:
                     x = subspace_gap_tv(
                         system, B.as_tensor(gu, "float32"), max_iter=it, tv_weight=w, tv_steps=5
                     )
-                    r = gu - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
-                    read[(it, w)].append(snr_db_from_sigma(power, float(frame_sigmas(r, gu).max())))
+                    read[(it, w)].append(residual_reading_db(system, gu, x))
             cells = []
             for p in pairs:
                 v = np.asarray(read[p])

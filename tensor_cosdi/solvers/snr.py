@@ -58,7 +58,7 @@ from ..noise import frame_sigmas, snr_db_from_sigma
 from .subspace import subspace_gap_tv
 
 __all__ = [
-    "SNREstimate", "estimate_snr", "FITS", "FIT_ITER",
+    "SNREstimate", "estimate_snr", "residual_reading_db", "FITS", "FIT_ITER",
     "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV",
 ]  # fmt: skip
 
@@ -98,6 +98,35 @@ def _fingerprint(g: np.ndarray) -> str:
 FITS = ("auto", "subspace", "gap_tv")
 
 
+def residual_reading_db(system, g_unit, fit) -> float:
+    """The SNR in dB read from the residual ``g_unit − A fit`` (the noisiest frame's wavelet MAD
+    against the measurement's power; ``-inf`` for a non-finite residual).
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+    g_unit : ndarray of ``system.measurement_shape``
+        The measurement scaled to a peak of 1, float64.
+    fit : tensor of ``system.cube_shape``
+        A cube fitted to it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> import tensor_cosdi as tc
+    >>> system = tc.systems.SDCASSI.example((16, 16, 4))
+    >>> cube = np.random.default_rng(0).random(system.cube_shape)
+    >>> g = np.asarray(system.forward(cube)); g = g / g.max()
+    >>> bool(residual_reading_db(system, g, cube / np.asarray(system.forward(cube)).max()) > 100)
+    True
+    """
+    power = float(np.mean(g_unit * g_unit))
+    r = g_unit - np.asarray(B.to_numpy(system.operator.forward(fit)), dtype=np.float64)
+    if not np.isfinite(r).all():
+        return -np.inf
+    return snr_db_from_sigma(power, float(frame_sigmas(r, g_unit).max()))
+
+
 def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     """The measurement's SNR in dB, from the measurement and the fit residual (see the module).
 
@@ -122,7 +151,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     """
     if fit is True:
         fit = "auto"
-    if fit is not False and fit not in FITS:
+    if fit is not False and not (isinstance(fit, str) and fit in FITS):
         raise ValueError(f"fit must be True, False or one of {FITS}, got {fit!r}")
     g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
     if not np.isfinite(g).all():
@@ -160,9 +189,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
             system, g32, max_iter=FIT_ITER, accelerate=False,
             tv_weight=0.1, tv_iter=5, plane_support=False, nonneg=False,
         )  # fmt: skip
-    r = g_unit - np.asarray(B.to_numpy(system.operator.forward(x)), dtype=np.float64)
-    finite = np.isfinite(r).all()
-    res_db = snr_db_from_sigma(power, float(frame_sigmas(r, g_unit).max())) if finite else -np.inf
+    res_db = residual_reading_db(system, g_unit, x)
     est = SNREstimate(max(meas_db, res_db), meas_db, res_db, fit)
     _CACHE[key] = (system, est)  # the system is held so that its id is not reused
     while len(_CACHE) > _CACHE_SIZE:

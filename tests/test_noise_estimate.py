@@ -214,9 +214,13 @@ def test_the_fit_option_names_the_fit_and_refuses_others():
     assert auto == sub and auto.fit == "subspace" and gap.fit == "gap_tv"
     assert gap.from_residual_db != sub.from_residual_db
     assert estimate_snr(p.system, p.measurement, fit=False).fit == "none"
-    for bad in ("tv", "SUBSPACE", 1, None):
+    for bad in ("tv", "SUBSPACE", 1, None, np.array(["auto", "gap_tv"])):
         with pytest.raises(ValueError, match="fit must be True, False or one of"):
             estimate_snr(p.system, p.measurement, fit=bad)
+    # CASSI-VSI without its direct arm is SD-CASSI and gets SD-CASSI's fit
+    assert tc.systems.CASSIVSI.example(alpha_t=1.0).snr_fit == "subspace"
+    assert tc.systems.CASSIVSI.example(alpha_t=0.7).snr_fit == "gap_tv"
+    assert tc.systems.DDCASSI.example().snr_fit == "gap_tv"
 
     class Vague(tc.systems.SDCASSI):
         snr_fit = "auto"  # a system must name its fit, not defer to "auto"

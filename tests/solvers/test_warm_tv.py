@@ -38,6 +38,23 @@ def test_warm_start_reaches_the_converged_denoiser_in_few_steps_per_call():
     assert warm(x[:20, :20], 0.1).shape == (20, 20, 2)
 
 
+def test_planes_split_over_threads_step_exactly_as_in_one_call(monkeypatch):
+    """Each plane takes its steps on its own, in whatever chunk a thread gets: the warm dual
+    and the result are those of one single-thread call, bit for bit."""
+    from tensor_cosdi.solvers import denoisers
+
+    x = np.random.default_rng(3).random((32, 24, 7)).astype(np.float32)
+    outs = {}
+    for workers in (1, 3):
+        monkeypatch.setattr(denoisers, "_workers", lambda n, w=workers: min(n, w))
+        warm = WarmTV(3)
+        outs[workers] = [warm(x * (1 + 0.1 * k), 0.05) for k in range(3)]
+        outs[workers].append(warm.p.copy())
+    for a, b in zip(outs[1], outs[3]):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(outs[1][0], outs[1][1])  # the calls did differ
+
+
 def test_warm_tv_errors():
     with pytest.raises(ValueError, match="n_iter"):
         WarmTV(0)

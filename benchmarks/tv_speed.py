@@ -1,8 +1,8 @@
 """Speed of the warm-started Chambolle TV steps (``solvers.denoisers.WarmTV``) that OTD's first
-stage, the SNR estimate's subspace fit and GAP-TV run every iteration.
+stage, the SNR estimate's subspace fit and the split-TV solver run every iteration.
 
 For float32 images of 256×256 with 6 planes (the six spectral atoms of a 28-band first stage)
-and 28 planes (GAP-TV on every band), prints the median time of 5 steps:
+and 28 planes (every band of a 28-band cube), prints the median time of 5 steps:
 
 * ``one plane at a time``: the library's step loop (each plane takes all its steps before the
   next, every temporary a reused buffer), on one thread and through ``WarmTV`` (planes split

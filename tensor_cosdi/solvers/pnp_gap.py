@@ -167,6 +167,7 @@ def pnp_gap(
     tol: float = 1e-5,
     guard=1.3,
     ensemble="auto",
+    cycle: bool = True,
     precision: str = "float32",
     progress: bool = False,
 ):
@@ -239,6 +240,13 @@ def pnp_gap(
         ``max_iter=120`` gains about 0.2 dB more for twice the time
         (``benchmarks/results/cv_pnp_gap_ensemble.md``: 28.11 → 28.34 dB on
         four tuning scenes, the choice of every fold).
+    cycle : bool
+        Each iteration's denoiser calls take the next symmetries of the image
+        plane, cycling through all eight over the run, instead of the same
+        ``ensemble`` ones every iteration (``self_ensemble(..., cycle=True)``):
+        the network's orientation-dependent errors average out over the
+        iterations at no extra cost (``benchmarks/results/cv_pnp_gap_cycle.md``
+        and ``cv_pnp_fast_cycle.md``: every fold chooses it).
     precision : {"float32", "bfloat16", "auto"}
         The learned denoiser's arithmetic
         (:class:`~tensor_cosdi.learn.spectral_net.SpectralDenoiser`):
@@ -326,7 +334,9 @@ def pnp_gap(
                 f"the ensemble size must be 'auto' or one of 1, 2, 4, 8, got {ensemble!r}"
             )
         ensemble = ENSEMBLE
-    den = self_ensemble(den, ensemble)
+    if not isinstance(cycle, (bool, np.bool_)):
+        raise ValueError(f"cycle must be True or False, got {cycle!r}")
+    den = self_ensemble(den, ensemble, cycle=bool(cycle))
     prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg)
     return warm_started_gap(
         system,
@@ -432,14 +442,16 @@ def _joined(first, second):
 def pnp_fast(
     system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
     warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", pan_atoms="auto",
-    sigma_end="auto", rho="auto", nonneg: bool = True, progress: bool = False,
+    sigma_end="auto", rho="auto", nonneg: bool = True, cycle: bool = True,
+    progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
     ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
-    there), one denoiser call per iteration (``ensemble=1``), the network in bfloat16 where the CPU
-    runs it natively (``precision="auto"``) and a shorter OTD start (:data:`FAST_WARM_ITER`
-    ADMM iterations after OTD's first stage, whose TV takes :data:`FAST_PAN_TV_STEPS` steps an
-    iteration); being a short run, its denoiser level ends
+    there), one denoiser call per iteration (``ensemble=1``), each in the next of the eight
+    symmetries of the image plane (``cycle=True``, as in :func:`pnp_gap`), the network in
+    bfloat16 where the CPU runs it natively (``precision="auto"``) and a shorter OTD start
+    (:data:`FAST_WARM_ITER` ADMM iterations after OTD's first stage, whose TV takes
+    :data:`FAST_PAN_TV_STEPS` steps an iteration); being a short run, its denoiser level ends
     higher (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT`).  Registered as
     ``"pnp_fast"``.
 
@@ -458,7 +470,7 @@ def pnp_fast(
     max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start).
-    sigma_end, rho, nonneg, progress
+    sigma_end, rho, nonneg, cycle, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
 
@@ -472,7 +484,7 @@ def pnp_fast(
     return pnp_gap(
         system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
         warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
-        sigma_end=sigma_end, rho=rho, nonneg=nonneg, progress=progress,
+        sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle, progress=progress,
     )  # fmt: skip
 
 

@@ -76,6 +76,50 @@ def test_self_ensemble_averages_over_the_symmetries():
         assert np.allclose(self_ensemble(lambda v, s: v**2, n)(x, 0.1), x**2)
 
 
+@pytest.mark.parametrize("n", [1, 2, 4])
+def test_cycled_self_ensemble_moves_through_the_eight_symmetries(n):
+    """Call ``i`` sees symmetries ``n·i … n·i + n − 1`` (mod 8), undoes each, and hands back the
+    input's memory order; a call averages its ``n`` terms as without cycling."""
+    from tensor_cosdi.solvers.denoisers import _dihedral, self_ensemble
+
+    x = np.asfortranarray(np.random.default_rng(4).random((6, 6, 3)))
+    seen = []
+
+    def record(v, s):
+        seen.append(next(k for k in range(8) if np.array_equal(v, _dihedral(x, k))))
+        return 2 * v
+
+    den = self_ensemble(record, n, cycle=True)
+    for _ in range(10 // n + 1):
+        out = den(x, 0.1)
+        assert np.allclose(out, 2 * x) and out.flags.f_contiguous
+    assert seen == [k % 8 for k in range(len(seen))] and len(seen) > 8
+    # the same wrapper without cycling starts at the identity every call
+    seen.clear()
+    plain = self_ensemble(record, n)
+    plain(x, 0.1), plain(x, 0.1)
+    assert seen == list(range(n)) * 2
+    # a denoiser with no symmetry (it shifts by one row and two columns): cycling changes what
+    # a call returns, from the second call on
+    down = lambda v, s: np.roll(v, (1, 2), axis=(0, 1))  # noqa: E731
+    cyc, fixed = self_ensemble(down, n, cycle=True), self_ensemble(down, n)
+    assert np.allclose(cyc(x, 0.1), fixed(x, 0.1))
+    assert not np.allclose(cyc(x, 0.1), fixed(x, 0.1))
+    with pytest.raises(ValueError, match="cycle must be True or False"):
+        self_ensemble(down, n, cycle="yes")
+
+
+def test_pnp_gap_cycle_is_checked_and_changes_the_result():
+    p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    down = lambda v, s: 0.5 * (v + np.roll(v, 1, axis=0))  # noqa: E731  (not symmetric)
+    kw = {"denoiser": down, "warm": "none", "max_iter": 4}
+    on = tc.reconstruct(p.system, p.measurement, "pnp_gap", cycle=True, **kw).cube
+    off = tc.reconstruct(p.system, p.measurement, "pnp_gap", cycle=False, **kw).cube
+    assert not np.allclose(on, off)
+    with pytest.raises(ValueError, match="cycle must be True or False"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", cycle=1, **kw)
+
+
 @pytest.mark.parametrize("bad", [0, 3, 16, True, "2", "fast"])
 def test_self_ensemble_sizes(bad):
     p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)

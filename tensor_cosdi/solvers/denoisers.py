@@ -161,8 +161,9 @@ class WarmTV:
     few steps do what 50 cold ones did.  With a cold start (the first call,
     or after :meth:`reset`) ``n_iter`` steps equal scikit-image's
     ``denoise_tv_chambolle(x, weight=sigma, max_num_iter=n_iter, eps=0,
-    channel_axis=-1)`` (tested).  All channels (axes ≥ 2) step together as one
-    channel-first stack; the dual is dropped when the shape changes.
+    channel_axis=-1)`` (tested).  The channels (axes ≥ 2) form one channel-first
+    stack, split over threads, each channel taking its steps in turn; the dual
+    is dropped when the shape changes.
     scikit-image has no warm start, hence this loop.
     """
 

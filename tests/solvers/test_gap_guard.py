@@ -80,13 +80,18 @@ def test_self_ensemble_averages_over_the_symmetries():
 def test_cycled_self_ensemble_moves_through_the_eight_symmetries(n):
     """Call ``i`` sees symmetries ``n·i … n·i + n − 1`` (mod 8), undoes each, and hands back the
     input's memory order; a call averages its ``n`` terms as without cycling."""
-    from tensor_cosdi.solvers.denoisers import _dihedral, self_ensemble
+    from tensor_cosdi.solvers.denoisers import self_ensemble
+
+    def symmetry(v, k):  # the documented order: flip rows, flip columns, then transpose
+        v = v[::-1] if k & 1 else v
+        v = v[:, ::-1] if k & 2 else v
+        return np.swapaxes(v, 0, 1) if k & 4 else v
 
     x = np.asfortranarray(np.random.default_rng(4).random((6, 6, 3)))
     seen = []
 
     def record(v, s):
-        seen.append(next(k for k in range(8) if np.array_equal(v, _dihedral(x, k))))
+        seen.append(next(k for k in range(8) if np.array_equal(v, symmetry(x, k))))
         return 2 * v
 
     den = self_ensemble(record, n, cycle=True)

@@ -87,7 +87,13 @@ SIGMA_END_ADMM_SHORT = {28.5: 0.07, 19.5: 0.2}
 #: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start, 20 do what 40 did
 #: (8 tuning scenes at 30 dB: 27.35 dB in 7.1 s against 27.34 dB in 9.5 s; σ_end 0.05: 27.15,
 #: 0.08: 26.82; OTD alone 26.88).
-MAX_ITER = {True: 100, False: 20}
+#: With the denoiser's symmetries cycling (``cycle=True``) one call per iteration does what two
+#: did, and the freed calls go to twice the iterations: accelerated GAP 100 → 200
+#: (``benchmarks/results/cv_pnp_gap_calls_clean.md``: 8 tuning scenes, 4 folds, noiseless, TSA,
+#: bfloat16; two calls × 100 iterations 32.19 dB, one × 100 32.19, one × 200 32.51, two × 200
+#: 32.50; three folds of four chose one × 200).  Plain GAP keeps its number of denoiser calls
+#: (20 iterations of two → 40 of one; not re-tuned).
+MAX_ITER = {True: 200, False: 40}
 #: ``splitting="auto"``: ADMM below :data:`ACCELERATE_ABOVE_DB`; then ``rho="auto"`` is
 #: :data:`RHO`, ``max_iter="auto"`` :data:`ADMM_ITER` and ``sigma_end="auto"``
 #: :data:`SIGMA_END_ADMM`.  8 tuning scenes, 30 dB, ``σ`` from 0.1, non-negative:
@@ -96,7 +102,12 @@ MAX_ITER = {True: 100, False: 20}
 #: time; 60: −0.3 dB.
 SPLITTINGS = ("auto", "gap", "admm")
 RHO = 0.15
-ADMM_ITER = 80
+#: ADMM 80 → 160 iterations of one call, cross-validated with cycling
+#: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,
+#: bfloat16; one / two calls × 80 iterations 29.94 / 29.94 dB, × 160 30.13 / 30.14 — a tie
+#: within 0.05 dB, won by one call at 10.0 s against 14.0 s).  The levels ``SIGMA_END_ADMM``
+#: were chosen with 80 iterations and not re-tuned.
+ADMM_ITER = 160
 #: Keys are the estimator's readings: on the tuning scenes it reads a true 30 dB as 28.0-28.9 dB
 #: and a true 20 dB as 19.6-19.8 dB.  At 20 dB (ρ 0.15, 80 iterations): σ 0.1 → 0.06 / 0.09 /
 #: 0.13: 23.60 / 24.83 / 25.87 dB; 0.2 throughout 26.70; 0.3 → 0.2 26.71; 0.3 throughout 26.44
@@ -110,7 +121,7 @@ ADMM_ITER = 80
 #: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).
 SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
-ENSEMBLE = 2
+ENSEMBLE = 1
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
 #: (balloons, clay; TSA mask; OTD start, σ 0.1): noiseless, accelerated 31.45 dB against 29.68
 #: plain; at 30 dB accelerated GAP lets the noise through the small code sums (18.6 dB), plain GAP
@@ -226,20 +237,21 @@ def pnp_gap(
         Project the denoiser's output onto ``x ≥ 0`` (default; turn off for
         signed cubes).
     max_iter, tol
-        Iterations (``"auto"``: :data:`MAX_ITER`, 100 for accelerated GAP, 20
+        Iterations (``"auto"``: :data:`MAX_ITER`, 200 for accelerated GAP, 40
         for plain GAP; :data:`ADMM_ITER` for ADMM) and the relative-change
         tolerance.
     ensemble : int or "auto"
         Average the denoiser over this many symmetries of the image plane
         (1, 2, 4 or 8; :func:`~tensor_cosdi.solvers.denoisers.self_ensemble`):
-        costs that many denoiser calls per iteration.  ``"auto"``: 2, with
-        acceleration (clean data; tuning split 30.71 → 31.01 dB) and with
-        ADMM (four tuning scenes at 30 dB, TSA mask, 256×256×28: 29.52 →
-        29.73 dB, every scene +0.11 … +0.34, about 5 s more a cube; 120
-        single-call iterations instead gave 29.66).  At 30 dB, 4 with
-        ``max_iter=120`` gains about 0.2 dB more for twice the time
-        (``benchmarks/results/cv_pnp_gap_ensemble.md``: 28.11 → 28.34 dB on
-        four tuning scenes, the choice of every fold).
+        costs that many denoiser calls per iteration.  ``"auto"``:
+        :data:`ENSEMBLE`, 1: with ``cycle`` the calls of successive
+        iterations already take every symmetry, and a second call per
+        iteration adds nothing that twice the iterations do not
+        (:data:`MAX_ITER`, :data:`ADMM_ITER`).  Without cycling, 2 calls
+        gained on the tuning scenes (clean 30.71 → 31.01 dB; 30 dB, four
+        scenes, 29.52 → 29.73, against 29.66 for 120 single-call
+        iterations), and at 30 dB 4 with ``max_iter=120`` about 0.2 dB more
+        (``benchmarks/results/cv_pnp_gap_ensemble.md``).
     cycle : bool
         Each iteration's denoiser calls take the next symmetries of the image
         plane, cycling through all eight over the run, instead of the same

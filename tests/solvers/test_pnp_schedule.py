@@ -19,11 +19,11 @@ def levels():
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
     seen = {}
     cases = {
-        "plain gap, 20": dict(splitting="gap", accelerate=False),
+        "plain gap, 40": dict(splitting="gap", accelerate=False),
         "admm, 40": dict(max_iter=40),
-        "admm, 80": dict(),
+        "admm, 160": dict(),
         "accelerated, 40": dict(accelerate=True, max_iter=40),
-        "accelerated, 100": dict(accelerate=True),
+        "accelerated, 200": dict(accelerate=True),
     }
     for name, opts in cases.items():
         with mock.patch.object(M, "Denoiser", side_effect=M.Denoiser) as spy:
@@ -36,13 +36,14 @@ def levels():
 def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels):
     seen, snr = levels
     assert seen["admm, 40"] == (snr_schedule(snr, M.SIGMA_END_ADMM_SHORT), 40)
-    assert seen["admm, 80"] == (snr_schedule(snr, M.SIGMA_END_ADMM), 80)
+    assert seen["admm, 160"] == (snr_schedule(snr, M.SIGMA_END_ADMM), 160)
     assert seen["accelerated, 40"] == (snr_schedule(snr, M.SIGMA_END_SHORT), 40)
-    assert seen["accelerated, 100"] == (snr_schedule(snr, M.SIGMA_END), 100)
-    # plain GAP's 20-iteration default was tuned with the long table
-    assert seen["plain gap, 20"] == (snr_schedule(snr, M.SIGMA_END), 20)
-    assert seen["admm, 40"][0] > seen["admm, 80"][0]
-    assert seen["accelerated, 40"][0] > seen["accelerated, 100"][0]
+    assert seen["accelerated, 200"] == (snr_schedule(snr, M.SIGMA_END), 200)
+    # plain GAP's default (20 iterations of two calls, now 40 of one) was tuned with the long
+    # table
+    assert seen["plain gap, 40"] == (snr_schedule(snr, M.SIGMA_END), 40)
+    assert seen["admm, 40"][0] > seen["admm, 160"][0]
+    assert seen["accelerated, 40"][0] > seen["accelerated, 200"][0]
 
 
 @pytest.mark.parametrize("option", ["pan_iter", "pan_tv_steps", "pan_atoms"])

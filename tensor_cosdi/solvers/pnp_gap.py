@@ -106,7 +106,9 @@ RHO = 0.15
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,
 #: bfloat16; one / two calls × 80 iterations 29.94 / 29.94 dB, × 160 30.13 / 30.14 — a tie
 #: within 0.05 dB, won by one call at 10.0 s against 14.0 s).  The levels ``SIGMA_END_ADMM``
-#: were chosen with 80 iterations and not re-tuned.
+#: were chosen with 80 iterations and not re-tuned; at 20 dB, outside that cross-validation, the
+#: report scenes lost 0.1-0.2 dB with the change (``benchmarks/results/real_spectra.md`` and the
+#: changelog).
 ADMM_ITER = 160
 #: Keys are the estimator's readings: on the tuning scenes it reads a true 30 dB as 28.0-28.9 dB
 #: and a true 20 dB as 19.6-19.8 dB.  At 20 dB (ρ 0.15, 80 iterations): σ 0.1 → 0.06 / 0.09 /

@@ -348,9 +348,7 @@ def pnp_gap(
                 f"the ensemble size must be 'auto' or one of 1, 2, 4, 8, got {ensemble!r}"
             )
         ensemble = ENSEMBLE
-    if not isinstance(cycle, (bool, np.bool_)):
-        raise ValueError(f"cycle must be True or False, got {cycle!r}")
-    den = self_ensemble(den, ensemble, cycle=bool(cycle))
+    den = self_ensemble(den, ensemble, cycle=cycle)  # checks cycle
     prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg)
     return warm_started_gap(
         system,

@@ -105,11 +105,14 @@ RHO = 0.15
 #: ADMM 80 → 160 iterations of one call, cross-validated with cycling
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,
 #: bfloat16; one / two calls × 80 iterations 29.94 / 29.94 dB, × 160 30.13 / 30.14 — a tie
-#: within 0.05 dB, won by one call at 10.0 s against 14.0 s).  The levels ``SIGMA_END_ADMM``
-#: were chosen with 80 iterations and not re-tuned; at 20 dB, outside that cross-validation, the
-#: report scenes lost 0.1-0.2 dB with the change (``benchmarks/results/real_spectra.md`` and the
-#: changelog).
-ADMM_ITER = 160
+#: within 0.05 dB, won by one call at 10.0 s against 14.0 s); with twice the iterations the 30-dB
+#: level stays (``benchmarks/results/cv_pnp_gap_iter_30db_zoom4.md``: 8 tuning scenes as they
+#: are and magnified 4×, 160 / 240 iterations × σ_end 0.05 / 0.06 / 0.08; 160 at 0.06 31.98 dB,
+#: 240 at 0.06 31.97).  At 20 dB, where the level stays at 0.2 throughout, more iterations
+#: over-smooth: 80 / 120 / 160 → 27.97 / 27.71 / 27.55 dB, every fold 80
+#: (``benchmarks/results/cv_pnp_gap_iter_20db_zoom4.md``).  Keys are the estimator's readings,
+#: as for :data:`SIGMA_END_ADMM`; log-linear between them, rounded.
+ADMM_ITER = {28.5: 160, 19.5: 80}
 #: Keys are the estimator's readings: on the tuning scenes it reads a true 30 dB as 28.0-28.9 dB
 #: and a true 20 dB as 19.6-19.8 dB.  At 20 dB (ρ 0.15, 80 iterations): σ 0.1 → 0.06 / 0.09 /
 #: 0.13: 23.60 / 24.83 / 25.87 dB; 0.2 throughout 26.70; 0.3 → 0.2 26.71; 0.3 throughout 26.44
@@ -240,7 +243,8 @@ def pnp_gap(
         signed cubes).
     max_iter, tol
         Iterations (``"auto"``: :data:`MAX_ITER`, 200 for accelerated GAP, 40
-        for plain GAP; :data:`ADMM_ITER` for ADMM) and the relative-change
+        for plain GAP; for ADMM :data:`ADMM_ITER` against the estimated SNR,
+        160 at 30 dB, 80 at 20 dB) and the relative-change
         tolerance.
     ensemble : int or "auto"
         Average the denoiser over this many symmetries of the image plane
@@ -295,8 +299,9 @@ def pnp_gap(
     if not isinstance(nonneg, (bool, np.bool_)):
         raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     chosen = accelerate != "auto"
+    auto_admm_iter = splitting == "admm" and isinstance(max_iter, str)
     accelerate, eps, snr = gap_settings(
-        system, measurement, accelerate, eps, need_snr=sigma_end == "auto"
+        system, measurement, accelerate, eps, need_snr=sigma_end == "auto" or auto_admm_iter
     )
     if splitting == "auto":
         splitting = "gap" if accelerate or chosen else "admm"
@@ -309,7 +314,7 @@ def pnp_gap(
     if isinstance(max_iter, str):
         if max_iter != "auto":
             raise ValueError(f"max_iter must be 'auto' or an integer ≥ 1, got {max_iter!r}")
-        max_iter = ADMM_ITER if admm else MAX_ITER[accelerate]
+        max_iter = round(snr_schedule(snr, ADMM_ITER)) if admm else MAX_ITER[accelerate]
     max_iter = engine.check_int("max_iter", max_iter, 1)
     if sigma_end == "auto":
         # plain (unaccelerated) GAP's own 20-iteration default was tuned with SIGMA_END

@@ -21,7 +21,7 @@ def levels():
     cases = {
         "plain gap, 40": dict(splitting="gap", accelerate=False),
         "admm, 40": dict(max_iter=40),
-        "admm, 160": dict(),
+        "admm, auto": dict(),
         "accelerated, 40": dict(accelerate=True, max_iter=40),
         "accelerated, 200": dict(accelerate=True),
     }
@@ -36,14 +36,30 @@ def levels():
 def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels):
     seen, snr = levels
     assert seen["admm, 40"] == (snr_schedule(snr, M.SIGMA_END_ADMM_SHORT), 40)
-    assert seen["admm, 160"] == (snr_schedule(snr, M.SIGMA_END_ADMM), 160)
+    assert seen["admm, auto"] == (
+        snr_schedule(snr, M.SIGMA_END_ADMM), round(snr_schedule(snr, M.ADMM_ITER))
+    )
+    assert seen["admm, auto"][1] > 50  # a long run: the long table
     assert seen["accelerated, 40"] == (snr_schedule(snr, M.SIGMA_END_SHORT), 40)
     assert seen["accelerated, 200"] == (snr_schedule(snr, M.SIGMA_END), 200)
     # plain GAP's default (20 iterations of two calls, now 40 of one) was tuned with the long
     # table
     assert seen["plain gap, 40"] == (snr_schedule(snr, M.SIGMA_END), 40)
-    assert seen["admm, 40"][0] > seen["admm, 160"][0]
+    assert seen["admm, 40"][0] > seen["admm, auto"][0]
     assert seen["accelerated, 40"][0] > seen["accelerated, 200"][0]
+
+
+def test_admm_runs_half_as_long_at_20_db_even_when_nothing_else_needs_the_estimate():
+    """At 20 dB the level stays at its floor and more iterations over-smooth: ``max_iter="auto"``
+    follows the estimated SNR (80 at a 20-dB reading), also when every other setting is given."""
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=20)
+    snr = estimate_snr(p.system, p.measurement).snr_db
+    assert snr < 23
+    for opts in ({}, dict(splitting="admm", accelerate=False, eps=0.1, sigma_end=0.2)):
+        with mock.patch.object(M, "Denoiser", side_effect=M.Denoiser) as spy:
+            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **opts)
+        n = spy.call_args.kwargs["n_steps"]
+        assert n == round(snr_schedule(snr, M.ADMM_ITER)) and 80 <= n < 110, (opts, n)
 
 
 @pytest.mark.parametrize("option", ["pan_iter", "pan_tv_steps", "pan_atoms"])

@@ -13,6 +13,7 @@ __all__ = [
     "snr_db",
     "estimate_sigma",
     "frame_sigmas",
+    "frame_rank_sigma",
     "estimate_snr_db",
     "snr_db_from_sigma",
     "snr_schedule",
@@ -136,6 +137,45 @@ def frame_sigmas(x, support=None) -> np.ndarray:
             frame = frame[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
         out.append(_mad_sigma(frame))
     return np.asarray(out, dtype=np.float64)
+
+
+def frame_rank_sigma(x) -> float:
+    """The noise σ read from a stack of frames whose signal spans fewer dimensions than frames.
+
+    Each pixel's values over the ``K`` frames (axes after the first two, folded) form one row
+    of an ``n × K`` matrix.  Where the noiseless frames are combinations of fewer than ``K``
+    images — CS2LI's phase steps are ``a + b cos(φ + 2πk/K)`` per pixel, three images for
+    any ``K ≥ 4`` — the smallest singular value holds only noise, ``≈ σ √n`` for white noise
+    of the same σ in every frame, whatever the code's texture; it is returned as
+    ``s_min / √n``.  Where the frames span all ``K`` dimensions, signal adds to ``s_min`` and
+    the noise reads high (never low, so an estimate may take the larger SNR of this and
+    another reading).  Frames of different noise levels read as the cleanest one's, so a
+    system declares whether this reading holds for it
+    (:attr:`tensor_cosdi.systems.System.snr_frames_low_rank`).
+
+    Parameters
+    ----------
+    x : tensor of shape ``(rows, columns, ...)``
+        At least 2 frames of at least 4×4 pixels, with more pixels than frames.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> a, b = rng.random((2, 64, 64, 1))
+    >>> steps = np.cos(2 * np.pi * np.arange(4) / 4)
+    >>> g = a * (1 + 0.5 * steps) + b + rng.normal(0, 0.01, (64, 64, 4))
+    >>> round(frame_rank_sigma(g), 3)
+    0.01
+    """
+    fx = _frames(x, "frame_rank_sigma")
+    n, k = fx.shape[0] * fx.shape[1], fx.shape[2]
+    if k < 2 or n <= 4 * k:
+        raise ValueError(
+            f"frame_rank_sigma needs at least 2 frames and more than 4 pixels a frame per frame, "
+            f"got {k} frame(s) of {n} pixels"
+        )
+    s = np.linalg.svd(fx.reshape(n, k), compute_uv=False)
+    return float(s[-1] / np.sqrt(n))
 
 
 def snr_db_from_sigma(power: float, sigma: float) -> float:

@@ -153,12 +153,15 @@ def test_pnp_gap_auto_switches_off_acceleration_for_noisy_data(monkeypatch):
 
 
 @pytest.mark.parametrize(
-    "name", ["sd_cassi", "dd_cassi", "cassi_vsi", "mu_cosdi", "cassdi_dfa", "c3slfi", "lytro_cassi"]
+    "name",
+    ["sd_cassi", "dd_cassi", "cassi_vsi", "mu_cosdi", "cassdi_dfa", "c3slfi", "lytro_cassi"]
+    + ["cs2li"],
 )
 def test_fit_residual_does_not_read_a_random_code_as_noise(name):
     """A real scene through each system's seeded random code (64×64, 16 bands): the
     measurement-only reading takes the code's texture for noise (11-28 dB when noiseless); the
-    fit residual reads a noiseless measurement as clean and a noisy one within 3 dB."""
+    fit residual (with CS2LI's and Mu-CoSDI's fringes, the frames' rank) reads a noiseless
+    measurement as clean and a noisy one within 3 dB."""
     from tensor_cosdi.solvers.snr import estimate_snr
 
     try:
@@ -169,7 +172,9 @@ def test_fit_residual_does_not_read_a_random_code_as_noise(name):
     for snr in (None, 30, 20):
         p = tc.studies.make_problem(name, "cave.balloons", shape=(64, 64), n_bands=16, snr_db=snr)
         est = estimate_snr(p.system, p.measurement)
-        assert est.snr_db == max(est.from_measurement_db, est.from_residual_db)
+        readings_db = [est.from_measurement_db, est.from_residual_db, est.from_frames_db]
+        assert est.snr_db == np.nanmax(readings_db)
+        assert np.isnan(est.from_frames_db) == (name not in ("cs2li", "mu_cosdi"))
         readings[snr] = est
     assert readings[None].snr_db > 32 and readings[None].from_measurement_db < 29, readings
     assert readings[None].fit == ("subspace" if name in ("sd_cassi", "cassdi_dfa") else "gap_tv")
@@ -178,7 +183,8 @@ def test_fit_residual_does_not_read_a_random_code_as_noise(name):
         estimate_snr(p.system, p.measurement) == readings[20]
     )  # cached: the "auto" options of one reconstruction share one fit
     only = estimate_snr(p.system, p.measurement, fit=False)
-    assert only.snr_db == only.from_measurement_db and np.isnan(only.from_residual_db)
+    assert only.snr_db == np.nanmax([only.from_measurement_db, only.from_frames_db])
+    assert np.isnan(only.from_residual_db)
 
 
 def test_a_random_binary_code_at_full_size_reads_clean_when_it_is():
@@ -269,3 +275,49 @@ def test_pan_weight_schedule_follows_the_band_count():
         snr = estimate_snr(p.system, p.measurement).snr_db
         assert pan_weight_for(p.system, p.measurement, "auto") == noise.snr_schedule(snr, table)
     assert PAN_WEIGHTS[30.0] != PAN_WEIGHTS_MANY[30.0]  # the two schedules differ at 30 dB
+
+
+def test_frame_rank_sigma_reads_the_noise_of_low_rank_frames_and_never_reads_low():
+    """Four phase steps of one fringe over a textured (random) image are three images per pixel:
+    the smallest singular value is noise alone, whatever the texture.  Frames that span every
+    dimension read noisier than they are, never cleaner."""
+    rng = np.random.default_rng(3)
+    texture = rng.random((64, 64, 1))  # a code's texture: every pixel independent
+    phase = rng.uniform(0, 2 * np.pi, (64, 64, 1))
+    steps = 2 * np.pi * np.arange(4) / 4
+    clean = texture * (1 + 0.5 * np.cos(phase + steps))
+    assert noise.frame_rank_sigma(clean) < 1e-12
+    for sigma in (0.003, 0.03):
+        got = noise.frame_rank_sigma(clean + rng.normal(0, sigma, clean.shape))
+        assert abs(got - sigma) < 0.05 * sigma, (got, sigma)
+    full = rng.random((64, 64, 4))  # four independent frames
+    assert noise.frame_rank_sigma(full + rng.normal(0, 0.01, full.shape)) > 0.1
+    with pytest.raises(ValueError, match="at least 2 frames"):
+        noise.frame_rank_sigma(clean[..., :1])
+    with pytest.raises(ValueError, match="at least 2 frames and more than 4 pixels"):
+        noise.frame_rank_sigma(rng.random((4, 4, 8)))
+    with pytest.raises(ValueError, match="NaN or inf"):
+        noise.frame_rank_sigma(np.full((8, 8, 4), np.nan))
+
+
+@pytest.mark.parametrize("name", ["cs2li", "mu_cosdi"])
+def test_fringe_systems_read_clean_fringes_as_clean_and_noise_at_its_level(name):
+    """CS2LI's GAP-TV fit read a noiseless measurement at 21 dB (its fringes through the colour
+    code taken for noise) and a true 30 dB at 20.5 dB; the frames' rank reads each within 1 dB."""
+    from tensor_cosdi.solvers.snr import estimate_snr
+
+    system_cls = {"cs2li": tc.systems.CS2LI, "mu_cosdi": tc.systems.MuCoSDI}[name]
+    assert system_cls.example().snr_frames_low_rank
+    got = {}
+    for snr in (None, 30, 20):
+        p = tc.studies.make_problem(name, "chelsea", shape=(48, 48), n_bands=8, snr_db=snr, rng=0)
+        got[snr] = estimate_snr(p.system, p.measurement)
+        assert got[snr].snr_db == max(got[snr][1:3] + (got[snr].from_frames_db,)), got[snr]
+    assert got[None].snr_db > 60, got[None]
+    for snr in (30, 20):
+        assert abs(got[snr].from_frames_db - snr) < 1, got[snr]
+        assert abs(got[snr].snr_db - snr) < 1.5, got[snr]
+    lf = tc.systems.MuCoSDI(np.ones((8, 11)), n_bands=4, modality="lf", views=(2, 2))
+    assert not lf.snr_frames_low_rank and not tc.systems.SDCASSI.example().snr_frames_low_rank
+    only = estimate_snr(p.system, p.measurement, fit=False)
+    assert only.snr_db == max(only.from_measurement_db, only.from_frames_db)

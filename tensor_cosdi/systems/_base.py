@@ -114,6 +114,11 @@ class System(SystemRoles):
     #: along a sheared diagonal, which the subspace cannot hold, so the noise stays in the
     #: residual (see :mod:`tensor_cosdi.solvers.snr`).
     snr_fit: str = "gap_tv"
+    #: Whether the noiseless frames of a measurement span fewer dimensions than there are frames,
+    #: each frame with the same noise (CS2LI's phase steps): then
+    #: :func:`~tensor_cosdi.solvers.snr.estimate_snr` also reads the noise from the frames'
+    #: smallest singular value (:func:`tensor_cosdi.noise.frame_rank_sigma`).
+    snr_frames_low_rank: bool = False
     _frozen = False
 
     def _finish(self, operator: TensorOperator, *, wavelengths, axes, measurement_axes):

@@ -70,6 +70,10 @@ class CS2LI(System):
     has_depth = True
     example_options = {"n_steps": 4}
     depth_kind = "phase"
+    #: Phase-shifted fringes of one frequency are three images per pixel (``a``, ``b cos φ``,
+    #: ``b sin φ``) over ``K ≥ 4`` steps: the frames' smallest singular value is noise, where a
+    #: fit's residual reads the fringes' fine texture through the code as noise.
+    snr_frames_low_rank = True
 
     def _state(self):
         params, arrays = coded_state(self)

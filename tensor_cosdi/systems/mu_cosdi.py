@@ -88,6 +88,12 @@ class MuCoSDI(System):
             return "disparity"
         return None if self.depth_estimator is None else "estimator"
 
+    @property
+    def snr_frames_low_rank(self) -> bool:
+        """``True`` with the projector (``"sl"``): its phase steps are low-rank as CS2LI's (see
+        :attr:`CS2LI.snr_frames_low_rank`)."""
+        return self.modality == "sl"
+
     def _state(self):
         params, arrays = coded_state(self)
         params["modality"] = self.modality

@@ -171,8 +171,8 @@ def frame_rank_sigma(x) -> float:
     n, k = fx.shape[0] * fx.shape[1], fx.shape[2]
     if k < 2 or n <= 4 * k:
         raise ValueError(
-            f"frame_rank_sigma needs at least 2 frames and more than 4 pixels a frame per frame, "
-            f"got {k} frame(s) of {n} pixels"
+            f"frame_rank_sigma needs at least 2 frames and more than 4 times as many pixels a "
+            f"frame as frames, got {k} frame(s) of {n} pixels"
         )
     s = np.linalg.svd(fx.reshape(n, k), compute_uv=False)
     return float(s[-1] / np.sqrt(n))

@@ -321,3 +321,6 @@ def test_fringe_systems_read_clean_fringes_as_clean_and_noise_at_its_level(name)
     assert not lf.snr_frames_low_rank and not tc.systems.SDCASSI.example().snr_frames_low_rank
     only = estimate_snr(p.system, p.measurement, fit=False)
     assert only.snr_db == max(only.from_measurement_db, only.from_frames_db)
+    one = tc.systems.CS2LI.example((16, 16, 4, 1))  # one pattern: no frames to compare
+    g = one.simulate(np.random.default_rng(0).random(one.cube_shape))
+    assert np.isnan(estimate_snr(one, g).from_frames_db)

@@ -178,7 +178,9 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     meas_db = snr_db_from_sigma(power, float(frame_sigmas(g_unit).max()))
     frames_db = float("nan")
     unfitted_db = meas_db  # the larger SNR of the readings without a fit
-    if getattr(system, "snr_frames_low_rank", False):
+    n_frames = int(np.prod(g.shape[2:]))  # one frame (a 2-D measurement): no frames' reading
+    n_pixels = int(np.prod(g.shape[:2]))
+    if getattr(system, "snr_frames_low_rank", False) and 2 <= n_frames < n_pixels / 4:
         frames_db = snr_db_from_sigma(power, frame_rank_sigma(g_unit))
         unfitted_db = max(meas_db, frames_db)
     if not fit:

@@ -294,7 +294,7 @@ def test_frame_rank_sigma_reads_the_noise_of_low_rank_frames_and_never_reads_low
     assert noise.frame_rank_sigma(full + rng.normal(0, 0.01, full.shape)) > 0.1
     with pytest.raises(ValueError, match="at least 2 frames"):
         noise.frame_rank_sigma(clean[..., :1])
-    with pytest.raises(ValueError, match="at least 2 frames and more than 4 pixels"):
+    with pytest.raises(ValueError, match="more than 4 times as many pixels a frame as frames"):
         noise.frame_rank_sigma(rng.random((4, 4, 8)))
     with pytest.raises(ValueError, match="NaN or inf"):
         noise.frame_rank_sigma(np.full((8, 8, 4), np.nan))

@@ -100,9 +100,10 @@ MAX_ITER = {True: 200, False: 40}
 #: 80 iterations, ρ 0.1 / 0.15 / 0.2 / 0.3 → 29.02 / 29.63 / 29.54 / 29.16 dB (σ_end 0.04);
 #: ρ 0.2, σ_end 0.03 / 0.04: 29.49 / 29.54; 120 iterations (σ_end 0.03) 29.73 dB at 1.5× the
 #: time; 60: −0.3 dB.
-#: With 160 iterations of one call, ρ 0.1 / 0.15 / 0.2 → 31.45 / 31.98 / 31.96 dB on 8 tuning
-#: scenes as they are and magnified 4× (``benchmarks/results/cv_pnp_gap_rho_30db_zoom4.md``).
 SPLITTINGS = ("auto", "gap", "admm")
+#: ``rho="auto"``.  With 160 iterations of one call, ρ 0.1 / 0.15 / 0.2 → 31.45 / 31.98 / 31.96
+#: dB at 30 dB on 8 tuning scenes as they are and magnified 4×
+#: (``benchmarks/results/cv_pnp_gap_rho_30db_zoom4.md``).
 RHO = 0.15
 #: ADMM 80 → 160 iterations of one call, cross-validated with cycling
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,

@@ -156,7 +156,13 @@ def frame_rank_sigma(x) -> float:
     Parameters
     ----------
     x : tensor of shape ``(rows, columns, ...)``
-        At least 2 frames of at least 4×4 pixels, with more pixels than frames.
+        At least 2 frames of at least 4×4 pixels, with more than 4 times as many pixels
+        a frame as frames.
+
+    Returns
+    -------
+    float
+        ``s_min / √n`` (0.0 for frames that are exactly low-rank).
 
     Examples
     --------

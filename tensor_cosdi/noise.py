@@ -14,6 +14,7 @@ __all__ = [
     "estimate_sigma",
     "frame_sigmas",
     "frame_rank_sigma",
+    "frame_powers",
     "estimate_snr_db",
     "snr_db_from_sigma",
     "snr_schedule",
@@ -128,15 +129,37 @@ def frame_sigmas(x, support=None) -> np.ndarray:
                 f"got {s.shape}"
             )
         fs = s.reshape(fx.shape)
-    out = []
-    for k in range(fx.shape[2]):
-        nz = fs[..., k] != 0
-        rows, cols = np.flatnonzero(nz.any(axis=1)), np.flatnonzero(nz.any(axis=0))
-        frame = fx[..., k]
-        if rows.size and rows[-1] - rows[0] >= 3 and cols[-1] - cols[0] >= 3:
-            frame = frame[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
-        out.append(_mad_sigma(frame))
-    return np.asarray(out, dtype=np.float64)
+    return np.asarray(
+        [_mad_sigma(_in_box(fx[..., k], fs[..., k])) for k in range(fx.shape[2])], dtype=np.float64
+    )
+
+
+def _in_box(frame, support):
+    """``frame`` cut to the bounding box of ``support``'s non-zero pixels (the whole frame when
+    that box is under 4×4 pixels)."""
+    nz = support != 0
+    rows, cols = np.flatnonzero(nz.any(axis=1)), np.flatnonzero(nz.any(axis=0))
+    if rows.size and rows[-1] - rows[0] >= 3 and cols[-1] - cols[0] >= 3:
+        return frame[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+    return frame
+
+
+def frame_powers(x) -> np.ndarray:
+    """The mean square of each frame of a stack ``x`` (axes after the first two), over the
+    bounding box of its non-zero pixels as :func:`frame_sigmas` reads it: a frame padded with
+    dark columns is measured where it holds data.
+
+    Examples
+    --------
+    >>> x = np.zeros((8, 12, 2)); x[..., 0] = 2.0; x[:, :6, 1] = 1.0
+    >>> frame_powers(x).tolist()
+    [4.0, 1.0]
+    """
+    fx = _frames(x, "frame_powers")
+    return np.asarray(
+        [np.mean(np.square(_in_box(fx[..., k], fx[..., k]))) for k in range(fx.shape[2])],
+        dtype=np.float64,
+    )
 
 
 def frame_rank_sigma(x) -> float:

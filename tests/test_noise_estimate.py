@@ -155,7 +155,7 @@ def test_pnp_gap_auto_switches_off_acceleration_for_noisy_data(monkeypatch):
 @pytest.mark.parametrize(
     "name",
     ["sd_cassi", "dd_cassi", "cassi_vsi", "mu_cosdi", "cassdi_dfa", "c3slfi", "lytro_cassi"]
-    + ["cs2li"],
+    + ["cs2li", "dual_camera_cassi"],
 )
 def test_fit_residual_does_not_read_a_random_code_as_noise(name):
     """A real scene through each system's seeded random code (64×64, 16 bands): the
@@ -324,3 +324,40 @@ def test_fringe_systems_read_clean_fringes_as_clean_and_noise_at_its_level(name)
     one = tc.systems.CS2LI.example((16, 16, 4, 1))  # one pattern: no frames to compare
     g = one.simulate(np.random.default_rng(0).random(one.cube_shape))
     assert np.isnan(estimate_snr(one, g).from_frames_db)
+
+
+def test_frame_powers_read_each_frame_where_it_holds_data():
+    x = np.zeros((8, 12, 2))
+    x[..., 0] = 2.0
+    x[:, :6, 1] = -1.0  # padded with dark columns, as dual-camera CASSI's panchromatic frame
+    assert noise.frame_powers(x).tolist() == [4.0, 1.0]
+    with pytest.raises(ValueError, match="frame_powers needs frames of at least 4×4"):
+        noise.frame_powers(np.ones((3, 8)))
+
+
+def test_cameras_read_against_their_own_signal_and_a_wrong_grouping_is_refused():
+    """Dual-camera CASSI's noise is set against the CASSI frame's signal; its brighter, noiseless
+    panchromatic frame made a true 30 dB read 35.9 dB when the whole measurement's power was
+    the reference.  Each camera is now read against its own power."""
+    from tensor_cosdi.solvers.snr import estimate_snr, grouped_reading_db
+
+    system = tc.systems.DualCameraCASSI.example((32, 32, 8))
+    assert system.snr_frame_groups == ((0,), (1,))
+    lytro = tc.systems.LytroCASSI.example((16, 16, 8), n_snapshots=3)
+    assert lytro.snr_frame_groups == ((0, 1, 2), (3, 4, 5))
+    g = np.zeros(system.measurement_shape)
+    g[..., 0], g[:, :32, 1] = 0.25, 1.0
+    sigmas = np.array([0.0025, 0.0])  # 40 dB on the CASSI frame, a noiseless panchromatic one
+    assert grouped_reading_db(system, g, sigmas) == pytest.approx(40.0)
+    whole = 10 * np.log10(np.mean(g * g) / 0.0025**2)
+    assert whole > 45  # what the whole measurement's power made of it
+    p = tc.studies.make_problem("dual_camera_cassi", "chelsea", shape=(48, 48), n_bands=8,
+                                snr_db=30, rng=0)  # fmt: skip
+    assert abs(estimate_snr(p.system, p.measurement).snr_db - 30) < 3
+
+    class Miscounted(tc.systems.DualCameraCASSI):
+        snr_frame_groups = ((0,),)  # the panchromatic frame left out
+
+    bad = Miscounted(system.code, n_bands=8)
+    with pytest.raises(ValueError, match="Miscounted.snr_frame_groups must name every one"):
+        grouped_reading_db(bad, g, sigmas)

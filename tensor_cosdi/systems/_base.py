@@ -119,6 +119,11 @@ class System(SystemRoles):
     #: :func:`~tensor_cosdi.solvers.snr.estimate_snr` also reads the noise from the frames'
     #: smallest singular value (:func:`tensor_cosdi.noise.frame_rank_sigma`).
     snr_frames_low_rank: bool = False
+    #: Groups of measurement frames (indices along the axes after the first two, folded) whose
+    #: noise is set against the group's own signal — one camera each, as the system's
+    #: :meth:`simulate` adds it; ``None``: one group, the whole measurement.  The SNR estimate
+    #: reads each group against its own power and reports the noisiest.
+    snr_frame_groups: tuple[tuple[int, ...], ...] | None = None
     _frozen = False
 
     def _finish(self, operator: TensorOperator, *, wavelengths, axes, measurement_axes):

@@ -310,6 +310,9 @@ class DualCameraCASSI(System):
 
     name = "dual_camera_cassi"
     example_options = {"code": None}
+    #: Two cameras: the CASSI frame's noise is set against its own signal (:meth:`simulate`), and
+    #: the brighter panchromatic frame must not make it read cleaner.
+    snr_frame_groups = ((0,), (1,))
 
     @property
     def frame_count(self) -> int:

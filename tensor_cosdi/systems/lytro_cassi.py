@@ -155,6 +155,13 @@ class LytroCASSI(System):
         """``K``, the CASSI arm's snapshots."""
         return 1 if self.code.ndim == 2 else self.code.shape[2]
 
+    @property
+    def snr_frame_groups(self) -> tuple[tuple[int, ...], ...]:
+        """The two arms, each a camera with noise against its own signal (:meth:`simulate`):
+        the ``K`` CASSI frames, then the three RGB frames."""
+        k = self.n_snapshots
+        return (tuple(range(k)), (k, k + 1, k + 2))
+
     def _state(self):
         params = {"n_bands": int(self.n_bands)}
         if self.views is not None:

@@ -12,8 +12,10 @@ with ``nonneg=False``.  The verdict per method is computed from the
 differences (more than 0.1 dB on average either way decides) and checked
 against the method's registered default.
 
-Runs are appended to ``<out>/nonneg_methods.json`` as they finish (a killed
-run resumes); ``<out>/nonneg_methods.md`` holds the table.
+Runs are appended to ``<out>/nonneg_methods.json`` as they finish, each with
+the commit it ran at (a killed run resumes; a cached row is not run again —
+delete a method's rows to re-run it); ``<out>/nonneg_methods.md`` holds the
+table and the commits its rows were computed at.
 
     python benchmarks/nonneg_methods.py [--methods avsi,dfa] [--scenes balloons,clay]
         [--size 48] [--bands 16]
@@ -127,6 +129,7 @@ def main(argv=None):
     store = out / f"{args.name}.json"
     runs = json.loads(store.read_text())["runs"] if store.exists() else []
     done = {(r["method"], r["imager"], r["scene"], r["snr_db"], r["nonneg"]) for r in runs}
+    commit = provenance()["commit"]
     for method, imager in CASES:
         if method not in methods or (method == "dcosnet" and not has_torch):
             continue
@@ -146,7 +149,7 @@ def main(argv=None):
                     row = {
                         "method": method, "imager": imager, "scene": scene, "snr_db": snr,
                         "nonneg": nonneg, "psnr": psnr(cube, est), "seconds": sec,
-                        "negative_share": float(np.mean(arr < 0)),
+                        "negative_share": float(np.mean(arr < 0)), "commit": commit,
                     }  # fmt: skip
                     runs.append(row)
                     done.add((method, imager, scene, snr, nonneg))
@@ -156,7 +159,15 @@ def main(argv=None):
                         flush=True,
                     )
                     store.write_text(json.dumps({"runs": runs}, indent=1))
-    text = table(runs) + "\n\n" + provenance_lines(provenance()) + "\n"
+    counts = {}
+    for r in runs:
+        c = r.get("commit", "not recorded")
+        counts[c] = counts.get(c, 0) + 1
+    rows_at = ", ".join(f"{c} ({n} rows)" for c, n in counts.items())
+    text = (
+        table(runs) + f"\n\nRows computed at commit {rows_at}.  \n"
+        + provenance_lines(provenance()) + "\n"
+    )
     (out / f"{args.name}.md").write_text(text)
     print(text)
 

@@ -273,13 +273,13 @@ def _dl_baseline(ns):
 
 def _snr_estimate(ns):
     r = ns["readings"]
-    assert sum(v == "ok" for v in ns["verdicts"].values()) >= 24  # prints 25 of 27
+    assert sum(v == "ok" for v in ns["verdicts"].values()) >= 25  # prints 26 of 27
     for name in ns["systems"]:
         clean = r[name, "noiseless"]
         # the code's texture: the measurement alone reads a clean measurement as noisier
         assert clean.snr_db > clean.from_measurement_db + 4, (name, clean)  # ≥ 5.8 dB printed
-        for label, snr in (("30 dB", 30), ("20 dB", 20)):  # worst printed: C3SLFI 30 dB, −4.6
-            assert abs(r[name, label].snr_db - snr) < 6, (name, label, r[name, label])
+        for label, snr in (("30 dB", 30), ("20 dB", 20)):  # worst printed: C3SLFI 30 dB, −3.2
+            assert abs(r[name, label].snr_db - snr) < 4.5, (name, label, r[name, label])
     for name in ("cs2li", "mu_cosdi"):  # the frames' rank: the truth within 0.5 dB
         assert r[name, "noiseless"].from_frames_db > 100
         assert abs(r[name, "30 dB"].from_frames_db - 30) < 0.5

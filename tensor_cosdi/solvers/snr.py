@@ -73,11 +73,14 @@ from .subspace import subspace_gap_tv
 
 __all__ = [
     "SNREstimate", "estimate_snr", "residual_reading_db", "grouped_reading_db", "FITS", "FIT_ITER",
+    "FIT_TV",
     "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV",
 ]  # fmt: skip
 
-#: Plain GAP-TV iterations of the fit (TV weight 0.1, 5 Chambolle steps each).
+#: Plain GAP-TV iterations of the fit (5 Chambolle steps each).
 FIT_ITER = 10
+#: The GAP-TV fit's TV weight where the system sets none (its ``snr_fit_tv``).
+FIT_TV = 0.1
 #: Accelerated iterations and TV weight of the subspace fit (5 warm-started Chambolle steps
 #: each, the atoms of :func:`~tensor_cosdi.solvers.subspace.pan_atoms_for`), from 20 / 40
 #: iterations × TV 0.1 / 0.3 on the 28 tuning scenes at 256×256×28, TSA mask and a random
@@ -225,7 +228,17 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
             raise ValueError(
                 f"{type(system).__name__}.snr_fit must be one of {FITS[1:]}, got {fit!r}"
             )
-    key = (id(system), g.shape, _fingerprint(g), fit)  # float32 and float64 copies both fit
+    fit_tv = getattr(system, "snr_fit_tv", FIT_TV)
+    if (
+        isinstance(fit_tv, bool)
+        or not isinstance(fit_tv, (int, float, np.integer, np.floating))
+        or not 0 < fit_tv < np.inf
+    ):
+        raise ValueError(
+            f"{type(system).__name__}.snr_fit_tv must be a finite number > 0, got {fit_tv!r}"
+        )
+    # float32 and float64 copies both fit
+    key = (id(system), g.shape, _fingerprint(g), fit, float(fit_tv))
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key][1]
@@ -242,7 +255,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
 
         x, _, _ = gap_tv(
             system, g32, max_iter=FIT_ITER, accelerate=False,
-            tv_weight=0.1, tv_iter=5, plane_support=False, nonneg=False,
+            tv_weight=float(fit_tv), tv_iter=5, plane_support=False, nonneg=False,
         )  # fmt: skip
     res_db = residual_reading_db(system, g_unit, x)
     est = SNREstimate(max(unfitted_db, res_db), meas_db, res_db, fit, frames_db)

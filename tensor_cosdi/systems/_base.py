@@ -114,6 +114,11 @@ class System(SystemRoles):
     #: along a sheared diagonal, which the subspace cannot hold, so the noise stays in the
     #: residual (see :mod:`tensor_cosdi.solvers.snr`).
     snr_fit: str = "gap_tv"
+    #: The TV weight of the ``"gap_tv"`` fit (the measurement at a peak of 1).  A system whose
+    #: pixels each see only a few codes of one spectrum (C3SLFI) sets less: the fit cannot
+    #: recover the spectral detail the codes mix, and the heavier weight's spectral error,
+    #: modulated by the code, reads as noise.
+    snr_fit_tv: float = 0.1
     #: Whether the noiseless frames of a measurement span fewer dimensions than there are frames,
     #: each frame with the same noise (CS2LI's phase steps): then
     #: :func:`~tensor_cosdi.solvers.snr.estimate_snr` also reads the noise from the frames'

@@ -47,6 +47,7 @@ __all__ = [
     "initial_bases",
     "panchromatic_estimate",
     "tucker_admm",
+    "lam_schedule",
     "theta_step",
     "omega_step",
     "subspace_gap_tv",
@@ -200,7 +201,8 @@ def tucker_admm(
         (:func:`tensor_cosdi.solvers.snr.estimate_snr`) through
         :data:`LAM_SCHEDULE` (or, where a panchromatic axis has 24 bands
         or more, :data:`LAM_SCHEDULE_MANY`; log-linear between the anchors,
-        constant beyond).
+        constant beyond), with the anchors the system replaces
+        (``otd_lam_anchors``: CS2LI) — :func:`lam_schedule`.
     weights : array of ``system.cube_shape``, optional
         Per-coefficient ℓ1 weights (``λ‖w ∘ Θ‖₁``), e.g. larger on atoms
         known to carry noise.
@@ -232,7 +234,7 @@ def tucker_admm(
         from ..noise import snr_schedule
         from .snr import estimate_snr
 
-        table = LAM_SCHEDULE_MANY if has_many_bands(system) else LAM_SCHEDULE
+        table = lam_schedule(system)
         lam = snr_schedule(estimate_snr(system, measurement).snr_db, table)
     lam = check_positive("lam", lam)
     tol = check_positive("tol", tol)
@@ -282,6 +284,45 @@ LAM_SCHEDULE = {40.0: 0.03, 30.0: 0.1, 20.0: 0.3}
 #: / 0.015 / 0.03 → 33.48 / 33.53 / 33.45 / 33.21 dB, every fold chose 0.0075 (a finer grid
 #: below the earlier grid's lowest value, 0.03).
 LAM_SCHEDULE_MANY = {40.0: 0.0075, 30.0: 0.1, 20.0: 0.3}
+
+
+def lam_schedule(system) -> dict:
+    """The ``{SNR dB: weight}`` anchors of OTD's ``lam="auto"`` on ``system``:
+    :data:`LAM_SCHEDULE` (:data:`LAM_SCHEDULE_MANY` from 24 bands on) with the anchors the
+    system's ``otd_lam_anchors`` replaces.
+
+    Examples
+    --------
+    >>> import tensor_cosdi as tc
+    >>> lam_schedule(tc.systems.SDCASSI.example())
+    {40.0: 0.03, 30.0: 0.1, 20.0: 0.3}
+    >>> lam_schedule(tc.systems.CS2LI.example())
+    {40.0: 0.03, 30.0: 0.03, 20.0: 0.1}
+    """
+    table = dict(LAM_SCHEDULE_MANY if has_many_bands(system) else LAM_SCHEDULE)
+    extra = getattr(system, "otd_lam_anchors", None)
+    if extra is None:
+        return table
+    name = type(system).__name__
+    if not isinstance(extra, dict) or not extra:
+        raise ValueError(
+            f"{name}.otd_lam_anchors must be None or a non-empty dict {{SNR dB: weight}}, "
+            f"got {extra!r}"
+        )
+    for snr, weight in extra.items():
+        for what, v, low in (("SNR", snr, -np.inf), ("weight", weight, 0.0)):
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, (int, float, np.integer, np.floating))
+                or not low < v < np.inf
+            ):
+                raise ValueError(
+                    f"{name}.otd_lam_anchors: each {what} must be a finite number"
+                    + (" > 0" if what == "weight" else "")
+                    + f", got {v!r}"
+                )
+        table[float(snr)] = float(weight)
+    return table
 
 
 def online_tucker_admm(

@@ -129,6 +129,10 @@ class System(SystemRoles):
     #: :meth:`simulate` adds it; ``None``: one group, the whole measurement.  The SNR estimate
     #: reads each group against its own power and reports the noisiest.
     snr_frame_groups: tuple[tuple[int, ...], ...] | None = None
+    #: Anchors ``{SNR dB: weight}`` of OTD's ``lam="auto"`` schedule that this system replaces
+    #: (cross-validated on it); the others stay those of
+    #: :data:`~tensor_cosdi.solvers.otd.LAM_SCHEDULE` / ``LAM_SCHEDULE_MANY``.  ``None``: none.
+    otd_lam_anchors: dict | None = None
     _frozen = False
 
     def _finish(self, operator: TensorOperator, *, wavelengths, axes, measurement_axes):

@@ -359,19 +359,26 @@ def test_the_first_stage_spans_many_bands_with_more_atoms():
         tc.solvers.panchromatic.panchromatic_estimate(exact.system, exact.measurement, pan_atoms=-1)
 
 
-def test_lam_auto_takes_the_many_band_schedule_from_24_bands(monkeypatch):
+def test_lam_auto_takes_the_many_band_schedule_from_24_bands_and_a_systems_own_anchors(
+    monkeypatch,
+):
     """``lam="auto"``: the 28-band schedule (chosen on 28-band scenes) from MANY_BANDS bands on,
     the earlier one below; both read the same SNR estimate and give different weights when
-    clean."""
+    clean.  CS2LI replaces the 30 and 20 dB anchors of either (``otd_lam_anchors``)."""
     from tensor_cosdi import noise
     from tensor_cosdi.solvers import otd, snr
     from tensor_cosdi.solvers.panchromatic import has_many_bands
 
     assert otd.LAM_SCHEDULE_MANY[40.0] != otd.LAM_SCHEDULE[40.0]
+    cs2li = {30.0: 0.03, 20.0: 0.1}
+    tables = [
+        otd.LAM_SCHEDULE, otd.LAM_SCHEDULE_MANY,
+        {**otd.LAM_SCHEDULE, **cs2li}, {**otd.LAM_SCHEDULE_MANY, **cs2li},
+    ]  # fmt: skip
     seen = []
 
     def spy(snr_db, anchors):
-        if anchors in (otd.LAM_SCHEDULE, otd.LAM_SCHEDULE_MANY):
+        if anchors in tables:
             seen.append(anchors)
             raise RuntimeError("stop after the weight")  # the weight is all this test needs
         return real(snr_db, anchors)
@@ -379,9 +386,26 @@ def test_lam_auto_takes_the_many_band_schedule_from_24_bands(monkeypatch):
     real = noise.snr_schedule
     monkeypatch.setattr(noise, "snr_schedule", spy)
     monkeypatch.setattr(snr, "estimate_snr", lambda s, g: snr.SNREstimate(45.0, 45.0, 45.0))
-    for bands, table in ((28, otd.LAM_SCHEDULE_MANY), (16, otd.LAM_SCHEDULE)):
-        p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=bands)
+    for name, bands, table in (
+        ("sd_cassi", 28, tables[1]), ("sd_cassi", 16, tables[0]),
+        ("cs2li", 16, tables[2]), ("cs2li", 28, tables[3]),
+    ):  # fmt: skip
+        p = tc.studies.make_problem(name, "colorchecker", shape=(24, 24), n_bands=bands)
         assert has_many_bands(p.system) == (bands == 28)
         with pytest.raises(RuntimeError, match="stop after"):
             otd.online_tucker_admm(p.system, p.measurement, max_iter=3)
-        assert seen[-1] is table
+        assert seen[-1] == table == otd.lam_schedule(p.system), (name, bands)
+    assert tc.systems.CS2LI.otd_lam_anchors == cs2li
+    assert tc.systems.MuCoSDI.otd_lam_anchors is None  # its CV gain (+0.08 dB) is a tie
+
+
+@pytest.mark.parametrize(
+    "bad", [{}, [(30.0, 0.1)], {30.0: 0.0}, {30.0: -1}, {30.0: float("nan")},
+            {float("inf"): 0.1}, {"30": 0.1}, {30.0: True}, 0.1],
+)  # fmt: skip
+def test_a_systems_bad_lam_anchors_are_refused_by_name(monkeypatch, bad):
+    from tensor_cosdi.solvers import otd
+
+    monkeypatch.setattr(tc.systems.CS2LI, "otd_lam_anchors", bad)
+    with pytest.raises(ValueError, match="CS2LI.otd_lam_anchors"):
+        otd.lam_schedule(tc.systems.CS2LI.example())

@@ -421,6 +421,18 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument(
         "--zoom-max", type=float, default=3.0, help="largest magnification (default 3)"
     )
+    tr.add_argument(
+        "--illumination", type=float, default=0.5, metavar="P",
+        help="probability of a random illuminant and, apart, of a shading ramp (default 0.5)",
+    )  # fmt: skip
+    tr.add_argument(
+        "--max-shift", type=_positive_int, default=3,
+        help="null-space noise: shifts of 1 to this many pixels per band (default 3)",
+    )  # fmt: skip
+    tr.add_argument(
+        "--density-spread", type=float, default=0.2,
+        help="null-space noise: code densities in 0.5 ± this (default 0.2)",
+    )  # fmt: skip
     tr.set_defaults(func=run_train_denoiser)
 
     dc = sub.add_parser(

@@ -67,6 +67,9 @@ def run_train_denoiser(args) -> int:
         blocks=args.blocks,
         zoom=args.zoom,
         zoom_max=args.zoom_max,
+        illumination=args.illumination,
+        max_shift=args.max_shift,
+        density_spread=args.density_spread,
         seed=args.seed,
         hold_out=args.hold_out,
     )

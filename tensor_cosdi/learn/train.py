@@ -60,6 +60,11 @@ class TrainConfig:
     #: nothing from the random stream (earlier recipes reproduce exactly)
     zoom: float = 0.0
     zoom_max: float = 3.0
+    #: the null-space noise's SD-CASSI operator: a shift of 1 to ``max_shift`` pixels per band
+    #: and a code density drawn from ``0.5 ± density_spread`` (the recipe of the shipped
+    #: weights: 2 and 0)
+    max_shift: int = 3
+    density_spread: float = 0.2
     r_max: int = 12
     width: int = 64
     blocks: int = 4
@@ -72,8 +77,15 @@ class TrainConfig:
         from ._loop import check_config
 
         check_config(
-            self, ("steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every")
+            self,
+            (
+                "steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every",
+                "max_shift",
+            ),  # fmt: skip
         )
+        d = self.density_spread
+        if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0 <= d < 0.5:
+            raise ValueError(f"density_spread must be a number in [0, 0.5), got {d!r}")
         if self.patch < 8 or self.patch % 2:
             raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
         for name in ("coded_fraction", "illumination", "zoom"):
@@ -210,17 +222,17 @@ def _illuminate(rng, patch, position, probability):
     return out
 
 
-def _nullspace_noise(torch, noise, rng, p: int):
+def _nullspace_noise(torch, noise, rng, p: int, max_shift: int = 3, density_spread: float = 0.2):
     """White noise ``(B, p², n)`` minus its projection onto the row space of a random SD-CASSI
     operator: ``(I − Aᵀ(AAᵀ)⁻¹A) n``, the error a plug-and-play GAP step leaves.
 
-    A random binary code per sample (density drawn from 0.3–0.7 per batch) and
-    a random shift of 1, 2 or 3 pixels per band; ``AAᵀ`` is diagonal (the code sums ``Φ``), so the
-    projection is one shear-sum, a division and the transposed shear.
+    A random binary code per sample (density drawn from ``0.5 ± density_spread`` per batch)
+    and a random shift of 1 to ``max_shift`` pixels per band; ``AAᵀ`` is diagonal (the code
+    sums ``Φ``), so the projection is one shear-sum, a division and the transposed shear.
     """
     b, _, n = noise.shape
-    step = int(rng.choice([1, 2, 3]))
-    density = rng.uniform(0.3, 0.7)
+    step = int(rng.choice(np.arange(1, max_shift + 1)))
+    density = rng.uniform(0.5 - density_spread, 0.5 + density_spread)
     x = noise.reshape(b, p, p, n)
     code = torch.from_numpy((rng.random((b, p, p)) < density).astype(np.float32)).to(noise.device)
     width = p + step * (n - 1)
@@ -245,7 +257,9 @@ def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
     noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
     if rng.random() < cfg.coded_fraction:
-        noise = _nullspace_noise(torch, noise, rng, cfg.patch)
+        noise = _nullspace_noise(
+            torch, noise, rng, cfg.patch, cfg.max_shift, cfg.density_spread
+        )
     noisy = clean + noise
     scale = noisy.abs().amax(dim=(1, 2)).clamp_min(1e-6)
     noisy, clean = noisy / scale[:, None, None], clean / scale[:, None, None]

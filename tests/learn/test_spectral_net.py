@@ -187,6 +187,46 @@ def test_cli_train_denoiser(tmp_path, capsys):
     assert cfg["zoom"] == 0.5 and cfg["zoom_max"] == 2.0
     assert cli.main(args[:1] + ["--out", str(tmp_path / "z.pt"), "--zoom", "2"] + args[3:]) == 2
     assert "zoom must be a number in [0, 1]" in capsys.readouterr().err
+    # the shipped weights' recipe: no illumination, shifts of 1-2 px, codes of density ½
+    old = tmp_path / "old.pt"
+    recipe = ["--illumination", "0", "--max-shift", "2", "--density-spread", "0"]
+    assert cli.main(args[:1] + ["--out", str(old)] + recipe + args[3:]) == 0
+    cfg = json.loads(torch.load(old, weights_only=True)["train_config"])
+    assert (cfg["illumination"], cfg["max_shift"], cfg["density_spread"]) == (0.0, 2, 0.0)
+    for bad, msg in ((["--density-spread", "0.5"], "density_spread must be a number in [0, 0.5)"),
+                     (["--illumination", "-1"], "illumination must be a number in [0, 1]")):
+        assert cli.main(args[:1] + ["--out", str(tmp_path / "b.pt")] + bad + args[3:]) == 2
+        assert msg in capsys.readouterr().err
+
+
+@needs_torch
+def test_nullspace_noise_leaves_nothing_the_operator_sees_for_each_shift_and_density():
+    """The training noise ``(I − Aᵀ(AAᵀ)⁻¹A) n``: the drawn SD-CASSI operator maps it to zero
+    on every measured pixel, with shifts of 1 to ``max_shift`` and the drawn densities."""
+    import torch
+
+    from tensor_cosdi.learn import train
+
+    p, n, b = 16, 5, 4
+    seen_steps, seen_density = set(), []
+    for seed in range(24):
+        noise = torch.from_numpy(np.random.default_rng(100 + seed).normal(size=(b, p * p, n)))
+        rng = np.random.default_rng(seed)
+        peek = np.random.default_rng(seed)
+        step = int(peek.choice(np.arange(1, 3)))
+        density = peek.uniform(0.5 - 0.1, 0.5 + 0.1)
+        code = (peek.random((b, p, p)) < density).astype(np.float64)
+        out = train._nullspace_noise(torch, noise, rng, p, 2, 0.1).numpy().reshape(b, p, p, n)
+        g = np.zeros((b, p, p + step * (n - 1)))
+        for k in range(n):
+            g[:, :, step * k : step * k + p] += code * out[..., k]
+        assert np.abs(g).max() < 1e-9  # A (noise) = 0: nothing the measurement sees is left
+        assert np.abs(out).mean() > 0.3  # and most of the noise is
+        seen_steps.add(step)
+        seen_density.append(code.mean())
+    # densities drawn from 0.4-0.6 (each read on 1024 pixels: ±0.05 at 3σ), not all the same
+    assert seen_steps == {1, 2} and 0.35 < min(seen_density) < max(seen_density) < 0.65
+    assert max(seen_density) - min(seen_density) > 0.1
 
 
 @needs_torch

@@ -396,7 +396,7 @@ def test_lam_auto_takes_the_many_band_schedule_from_24_bands_and_a_systems_own_a
             otd.online_tucker_admm(p.system, p.measurement, max_iter=3)
         assert seen[-1] == table == otd.lam_schedule(p.system), (name, bands)
     assert tc.systems.CS2LI.otd_lam_anchors == cs2li
-    assert tc.systems.MuCoSDI.otd_lam_anchors is None  # its CV gain (+0.08 dB) is a tie
+    assert tc.systems.MuCoSDI.otd_lam_anchors is None  # its CV gain: +0.05 dB held out
 
 
 @pytest.mark.parametrize(

@@ -36,7 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["TrainConfig", "magnify", "sample_batch", "train_denoiser", "training_data"]
+__all__ = [
+    "TrainConfig", "magnify", "nullspace_noise", "sample_batch", "train_denoiser", "training_data",
+]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -222,13 +224,29 @@ def _illuminate(rng, patch, position, probability):
     return out
 
 
-def _nullspace_noise(torch, noise, rng, p: int, max_shift: int = 3, density_spread: float = 0.2):
+def nullspace_noise(torch, noise, rng, p: int, max_shift: int = 3, density_spread: float = 0.2):
     """White noise ``(B, p², n)`` minus its projection onto the row space of a random SD-CASSI
     operator: ``(I − Aᵀ(AAᵀ)⁻¹A) n``, the error a plug-and-play GAP step leaves.
 
     A random binary code per sample (density drawn from ``0.5 ± density_spread`` per batch)
     and a random shift of 1 to ``max_shift`` pixels per band; ``AAᵀ`` is diagonal (the code
     sums ``Φ``), so the projection is one shear-sum, a division and the transposed shear.
+
+    Parameters
+    ----------
+    torch : module
+        PyTorch (:func:`tensor_cosdi.learn.require_torch`).
+    noise : torch.Tensor ``(batch, p², bands)``
+    rng : numpy.random.Generator
+        Draws the shift, the density and the codes, in that order.
+    p : int
+        The patch side.
+    max_shift : int
+    density_spread : float
+
+    Returns
+    -------
+    torch.Tensor of ``noise``'s shape
     """
     b, _, n = noise.shape
     step = int(rng.choice(np.arange(1, max_shift + 1)))
@@ -257,7 +275,7 @@ def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
     noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
     if rng.random() < cfg.coded_fraction:
-        noise = _nullspace_noise(
+        noise = nullspace_noise(
             torch, noise, rng, cfg.patch, cfg.max_shift, cfg.density_spread
         )
     noisy = clean + noise

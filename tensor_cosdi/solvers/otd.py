@@ -202,7 +202,7 @@ def tucker_admm(
         :data:`LAM_SCHEDULE` (or, where a panchromatic axis has 24 bands
         or more, :data:`LAM_SCHEDULE_MANY`; log-linear between the anchors,
         constant beyond), with the anchors the system replaces
-        (``otd_lam_anchors``: CS2LI) — :func:`lam_schedule`.
+        (``otd_lam_anchors``: CS2LI with a colour code) — :func:`lam_schedule`.
     weights : array of ``system.cube_shape``, optional
         Per-coefficient ℓ1 weights (``λ‖w ∘ Θ‖₁``), e.g. larger on atoms
         known to carry noise.

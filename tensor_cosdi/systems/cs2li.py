@@ -78,8 +78,8 @@ class CS2LI(System):
     @property
     def otd_lam_anchors(self):
         """OTD's sparsity weight at 30 and 20 dB (``System.otd_lam_anchors``) with a colour
-        code: its per-band filters over four phase steps want a third of SD-CASSI's weight.
-        4-fold cross-validation over 16 tuning scenes at 64×64×16 with the example's colour code
+        code, where a third of SD-CASSI's weight serves best.  4-fold cross-validation over 16
+        tuning scenes at 64×64×16 with the example's colour code
         (``benchmarks/results/otd_lam_cs2li.md``): 30 dB 0.03 (every fold; held out 31.93 dB
         against 31.50 at SD-CASSI's 0.1), 20 dB 0.1 (three folds of four; 29.23 against 29.11
         at ≈ 0.3); noiseless stays at the general anchor.  A binary (2-D) code was not

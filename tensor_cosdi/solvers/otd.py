@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bases import DCT, Dense, Wavelet, block_hosvd, block_sizes, tucker_bases
-from ..validate import integer
+from ..validate import integer, number
 from . import engine
 from ._base import check_positive, register_method
 from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
@@ -310,18 +310,8 @@ def lam_schedule(system) -> dict:
             f"got {extra!r}"
         )
     for snr, weight in extra.items():
-        for what, v, low in (("SNR", snr, -np.inf), ("weight", weight, 0.0)):
-            if (
-                isinstance(v, bool)
-                or not isinstance(v, (int, float, np.integer, np.floating))
-                or not low < v < np.inf
-            ):
-                raise ValueError(
-                    f"{name}.otd_lam_anchors: each {what} must be a finite number"
-                    + (" > 0" if what == "weight" else "")
-                    + f", got {v!r}"
-                )
-        table[float(snr)] = float(weight)
+        snr = number(f"{name}.otd_lam_anchors' SNR", snr)
+        table[snr] = number(f"{name}.otd_lam_anchors' weight", weight, low=0, low_open=True)
     return table
 
 

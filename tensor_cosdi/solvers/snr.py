@@ -69,6 +69,7 @@ import numpy as np
 
 from .. import _backend as B
 from ..noise import frame_powers, frame_rank_sigma, frame_sigmas, snr_db_from_sigma
+from ..validate import number
 from .subspace import subspace_gap_tv
 
 __all__ = [
@@ -228,17 +229,12 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
             raise ValueError(
                 f"{type(system).__name__}.snr_fit must be one of {FITS[1:]}, got {fit!r}"
             )
-    fit_tv = getattr(system, "snr_fit_tv", FIT_TV)
-    if (
-        isinstance(fit_tv, bool)
-        or not isinstance(fit_tv, (int, float, np.integer, np.floating))
-        or not 0 < fit_tv < np.inf
-    ):
-        raise ValueError(
-            f"{type(system).__name__}.snr_fit_tv must be a finite number > 0, got {fit_tv!r}"
-        )
+    fit_tv = number(
+        f"{type(system).__name__}.snr_fit_tv", getattr(system, "snr_fit_tv", FIT_TV),
+        low=0, low_open=True,
+    )  # fmt: skip
     # float32 and float64 copies both fit
-    key = (id(system), g.shape, _fingerprint(g), fit, float(fit_tv))
+    key = (id(system), g.shape, _fingerprint(g), fit, fit_tv)
     if key in _CACHE:
         _CACHE.move_to_end(key)
         return _CACHE[key][1]
@@ -255,7 +251,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
 
         x, _, _ = gap_tv(
             system, g32, max_iter=FIT_ITER, accelerate=False,
-            tv_weight=float(fit_tv), tv_iter=5, plane_support=False, nonneg=False,
+            tv_weight=fit_tv, tv_iter=5, plane_support=False, nonneg=False,
         )  # fmt: skip
     res_db = residual_reading_db(system, g_unit, x)
     est = SNREstimate(max(unfitted_db, res_db), meas_db, res_db, fit, frames_db)

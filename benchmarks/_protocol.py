@@ -302,6 +302,17 @@ class Store:
         return row
 
 
+def positive_numbers(text: str, flag: str) -> list[float]:
+    """A command line's comma-separated finite numbers > 0, or ``SystemExit`` naming ``flag``."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(np.isfinite(v) and v > 0 for v in values):
+        raise SystemExit(f"{flag} takes finite numbers > 0, comma-separated, got {text!r}")
+    return values
+
+
 def snr_label(snr) -> str:
     return "noiseless" if snr is None else f"{snr:g} dB"
 

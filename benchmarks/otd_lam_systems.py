@@ -31,7 +31,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import RESULTS, cross_validate, snr_label, write_results  # noqa: E402
+from _protocol import (  # noqa: E402
+    RESULTS,
+    cross_validate,
+    positive_numbers,
+    snr_label,
+    write_results,
+)
 
 import tensor_cosdi as tc  # noqa: E402
 from tensor_cosdi.solvers.otd import lam_schedule  # noqa: E402
@@ -75,12 +81,7 @@ def main(argv=None):
     if args.system not in tc.studies.SYSTEMS:
         raise SystemExit(f"--system must be one of {list(tc.studies.SYSTEMS)}")
     snrs = _snrs(args.snr)
-    try:
-        lams = [float(v) for v in args.lams.split(",")]
-    except ValueError:
-        raise SystemExit("--lams takes numbers, comma-separated") from None
-    if not (min(lams) > 0 and np.isfinite(lams).all()):
-        raise SystemExit("--lams must be finite numbers > 0")
+    lams = positive_numbers(args.lams, "--lams")
     if not 1 <= args.scenes_per_fold <= 7:
         raise SystemExit("--scenes-per-fold must be 1 to 7")
     if not args.tie_db >= 0:

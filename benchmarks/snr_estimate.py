@@ -58,7 +58,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import MASKS, RESULTS, load_mask, problem, write_results  # noqa: E402
+from _protocol import (  # noqa: E402
+    MASKS,
+    RESULTS,
+    load_mask,
+    positive_numbers,
+    problem,
+    write_results,
+)
 
 import tensor_cosdi as tc  # noqa: E402
 from tensor_cosdi import _backend as B  # noqa: E402
@@ -114,12 +121,7 @@ def main(argv=None):
     if args.fit_tv is not None:
         if args.fit_tv not in tc.studies.SYSTEMS:
             raise SystemExit(f"--fit-tv must be a system of {list(tc.studies.SYSTEMS)}")
-        try:
-            weights = [float(v) for v in args.weights.split(",")]
-        except ValueError:
-            raise SystemExit("--weights takes numbers, comma-separated") from None
-        if not (min(weights) > 0 and np.isfinite(weights).all()):
-            raise SystemExit("--weights must be finite numbers > 0")
+        weights = positive_numbers(args.weights, "--weights")
         default_out = args.out == str(RESULTS / "snr_estimate.md")
         out = RESULTS / f"snr_fit_tv_{args.fit_tv}.md" if default_out else args.out
         write_results(out, fit_tv_table(args.fit_tv, weights))

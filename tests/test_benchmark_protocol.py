@@ -72,3 +72,10 @@ def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_pat
     with pytest.raises(SystemExit, match=message):
         mod.main([*argv, "--out", str(tmp_path)])
     assert not any(tmp_path.iterdir())  # refused before any run or file
+
+
+def test_positive_numbers_parses_a_list_and_refuses_anything_else_by_flag(protocol):
+    assert protocol.positive_numbers("0.1,0.05,3", "--lams") == [0.1, 0.05, 3.0]
+    for bad in ("", "0.1,", "x", "0", "-0.1", "nan", "inf", "0.1;0.2"):
+        with pytest.raises(SystemExit, match="--lams takes finite numbers > 0"):
+            protocol.positive_numbers(bad, "--lams")

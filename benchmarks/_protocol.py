@@ -58,15 +58,19 @@ def load_mask(kind: str) -> np.ndarray:
     raise ValueError(f"mask must be one of {MASKS}, got {kind!r}")
 
 
-def problem(scene: str, snr, mask, seed: int = 0, zoom: float = 1.0):
+def problem(scene: str, snr, mask, seed: int = 0, zoom: float = 1.0, illuminant=None):
     """``(system, cube, measurement)``: ``scene`` through SD-CASSI with ``mask`` (an array).
 
     ``zoom > 1``: the scene's centre crop of ``1/zoom`` its side, magnified back to the
-    full size (:func:`magnified`).
+    full size (:func:`magnified`).  ``illuminant`` (a key of ``colour.SDS_ILLUMINANTS``):
+    the reflectance lit by that light and scaled to a peak of 1
+    (:func:`tensor_cosdi.colour.radiance`), as radiance databases are.
     """
     cube, wl = datasets.load_hsi(scene, "kaist", dtype="float32")
     if zoom != 1:
         cube = magnified(cube, zoom)
+    if illuminant is not None:
+        cube = tc.colour.radiance(cube, wl, illuminant).astype(np.float32)
     system = tc.systems.SDCASSI(mask, n_bands=28, shifts=2, wavelengths=wl)
     g = system.simulate(cube, snr_db=snr, rng=seed)
     return system, cube, np.asarray(g, dtype=np.float32)

@@ -1,19 +1,21 @@
 """Spectral-denoiser weight files compared inside ``pnp_gap`` (or ``pnp_fast``) on tuning
 scenes.
 
-Whether a retrained denoiser should replace the shipped one is decided here,
-on tuning scenes both were trained on (never the report scenes): the
-protocol of ``benchmarks/_protocol.py`` (256×256×28 SD-CASSI, 2 px per band,
-``--mask`` code, PSNR with data range 1), ``--method`` at its defaults with
-each weight file's denoiser (``pnp_fast``: its settings with the denoiser in ``precision="auto"``),
-noiseless and at 30 dB.  ``--zoom Z`` scores magnified views of the scenes instead (the
-centre crop of ``1/Z`` of the side, magnified back to 256×256: the smoother, larger-scale
-structure of another camera, a proxy for scenes from another database).  Each candidate's
-verdict line is computed from the means.
+Whether a retrained denoiser should replace the shipped one is decided here, on tuning scenes
+both were trained on (never the report scenes): the protocol of ``benchmarks/_protocol.py``
+(256×256×28 SD-CASSI, 2 px per band, ``--mask`` code, PSNR with data range 1), ``--method`` at
+its defaults with each weight file's denoiser (``pnp_fast``: its settings with the denoiser in
+``precision="auto"``), noiseless and at 30 dB. ``--zoom Z`` scores magnified views of the
+scenes instead (the centre crop of ``1/Z`` of the side, magnified back to 256×256: the
+smoother, larger-scale structure of another camera, a proxy for scenes from another database).
+``--illuminant A`` scores the scenes lit by a CIE illuminant and scaled to a peak of 1
+(:func:`tensor_cosdi.colour.radiance`): a radiance database's scenes carry their light's
+spectrum, which the reflectance scenes trained on do not. Each candidate's verdict line is
+computed from the means.
 
     python benchmarks/denoiser_weights.py CANDIDATE.pt [CANDIDATE2.pt …] [--reference shipped]
         [--scenes balloons,cd,clay,feathers] [--snr none,30] [--mask tsa] [--threads 1]
-        [--method pnp_gap|pnp_fast] [--zoom 1]
+        [--method pnp_gap|pnp_fast] [--zoom 1] [--illuminant A]
         [--out benchmarks/results/denoiser_weights.md]
 
 Never asserts anything; read the numbers.
@@ -62,6 +64,9 @@ def main(argv=None):
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--method", default="pnp_gap", choices=("pnp_gap", "pnp_fast"))
     ap.add_argument("--zoom", type=float, default=1.0, help="score magnified views (≥ 1)")
+    ap.add_argument(
+        "--illuminant", default=None, help="light the scenes (a key of colour.SDS_ILLUMINANTS)"
+    )
     ap.add_argument("--out", default=str(RESULTS / "denoiser_weights.md"))
     args = ap.parse_args(argv)
     if not args.zoom >= 1:
@@ -83,6 +88,9 @@ def main(argv=None):
         if not path.is_file():
             raise SystemExit(f"candidate weights not found: {path}")
         files["candidate" if len(names) == 1 else f"candidate {i + 1}"] = path
+    known = tc.colour.colour_science().SDS_ILLUMINANTS
+    if args.illuminant is not None and args.illuminant not in known:
+        raise SystemExit(f"--illuminant: unknown {args.illuminant!r}; e.g. A, D65, LED-B3")
     mask = load_mask(args.mask)
     run = _in_pnp_fast if args.method == "pnp_fast" else _in_pnp_gap
     rows = {k: {snr: [] for snr in snrs} for k in files}
@@ -91,13 +99,17 @@ def main(argv=None):
         den = SpectralDenoiser(path, precision="auto" if args.method == "pnp_fast" else "float32")
         for scene in scenes:
             for snr in snrs:
-                system, cube, g = problem(scene, snr, mask, zoom=args.zoom)
+                system, cube, g = problem(
+                    scene, snr, mask, zoom=args.zoom, illuminant=args.illuminant
+                )
                 t0 = time.perf_counter()
                 est = run(system, g, den)
                 secs[key].append(time.perf_counter() - t0)
                 rows[key][snr].append(score(cube, est)["psnr"])
                 print(key, scene, snr_label(snr), f"{rows[key][snr][-1]:.2f}", flush=True)
     view = "" if args.zoom == 1 else f", magnified {args.zoom:g}×"
+    if args.illuminant is not None:
+        view += f", lit by CIE {args.illuminant}"
     lines = [
         f"# Denoiser weights in `{args.method}`: {', '.join(scenes)} ({args.mask} code{view})",
         "",

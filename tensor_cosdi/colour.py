@@ -7,8 +7,9 @@ import warnings
 import numpy as np
 
 from . import _backend as B
+from . import validate
 
-__all__ = ["to_srgb", "rgb_to_cube", "reflectance"]
+__all__ = ["to_srgb", "rgb_to_cube", "reflectance", "radiance"]
 
 
 def colour_science():
@@ -179,3 +180,68 @@ def reflectance(cube, white, dark=0.0):
             "(is the dark frame brighter than the white reference?)"
         )
     return B.tensor_like((x - d) / denom, cube)
+
+
+def radiance(cube, wavelengths, illuminant: str = "D65", *, band_axis: int = 2):
+    """A reflectance cube lit by a CIE illuminant, scaled to a peak of 1.
+
+    ``L_l = R_l S(λ_l) / max(R S)`` with ``S`` the illuminant's spectral power
+    distribution of colour-science (``colour.SDS_ILLUMINANTS``) interpolated
+    at the band centres.  Databases of reflectance (CAVE) and of radiance
+    (KAIST, scenes captured under their own light, each scaled to a peak of
+    1) differ by this factor: it simulates the second kind from the first.
+
+    Parameters
+    ----------
+    cube : tensor of shape (..., Nλ, ...)
+        Non-negative reflectance per band, not all zero.
+    wavelengths : array_like of shape (Nλ,)
+        Band centres in nm, strictly increasing within the illuminant's
+        tabulated range.
+    illuminant : str
+        A key of ``colour.SDS_ILLUMINANTS`` (``"D65"`` daylight, ``"A"``
+        tungsten, ``"FL2"`` fluorescent, ``"LED-B3"`` white LED, …).
+    band_axis : int
+        Axis of ``cube`` holding the bands (default 2, SPEC §1).
+
+    Returns
+    -------
+    ndarray of ``cube``'s shape, float64, peak 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> lit = radiance(np.ones((1, 1, 3)), [450, 550, 650], "A")
+    >>> lit.round(3).ravel().tolist()  # tungsten light rises toward the red
+    [0.2, 0.563, 1.0]
+    """
+    colour = colour_science()
+    c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    if c.ndim == 0:
+        raise ValueError("cube must have a band axis, got a scalar")
+    axis = validate.integer("band_axis", band_axis, low=-c.ndim, high=c.ndim - 1) % c.ndim
+    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    if wl.size != c.shape[axis]:
+        raise ValueError(
+            f"expected {c.shape[axis]} wavelengths (one per band of axis {axis}), got {wl.size}"
+        )
+    if not isinstance(illuminant, str) or illuminant not in colour.SDS_ILLUMINANTS:
+        raise ValueError(f"unknown illuminant {illuminant!r}; e.g. 'D65', 'A', 'FL2', 'LED-B3'")
+    ill = colour.SDS_ILLUMINANTS[illuminant]
+    lo, hi = float(ill.wavelengths[0]), float(ill.wavelengths[-1])
+    if not np.isfinite(wl).all() or wl.min() < lo or wl.max() > hi or (np.diff(wl) <= 0).any():
+        raise ValueError(
+            f"wavelengths must increase strictly within {lo:g}–{hi:g} nm (the tabulated range "
+            f"of {illuminant!r}), got {wl.tolist()}"
+        )
+    if not np.isfinite(c).all():
+        raise ValueError("cube contains NaN or inf")
+    if c.min() < 0:
+        raise ValueError(f"cube must be a non-negative reflectance, got a minimum of {c.min():g}")
+    shape = [1] * c.ndim
+    shape[axis] = wl.size
+    lit = c * np.interp(wl, ill.wavelengths, ill.values).reshape(shape)
+    peak = lit.max() if lit.size else 0.0
+    if not peak > 0:
+        raise ValueError("cube is all zero under this illuminant: nothing to scale to a peak of 1")
+    return lit / peak

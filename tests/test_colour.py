@@ -88,3 +88,46 @@ def test_colour_science_leaves_numpys_print_options_alone():
                           timeout=120)  # fmt: skip
     assert done.returncode == 0, done.stderr[-1500:]
     assert done.stdout.strip() == "array([3., 4.])"
+
+
+def test_radiance_is_reflectance_times_the_illuminant_scaled_to_one():
+    import colour
+
+    from tensor_cosdi.colour import radiance
+
+    wl = default_wavelengths(28)
+    refl = colorchecker((4, 6), wl)
+    lit = radiance(refl, wl, "A")
+    assert lit.shape == refl.shape and lit.max() == pytest.approx(1.0)
+    spd = colour.SDS_ILLUMINANTS["A"]
+    s = np.interp(wl, spd.wavelengths, spd.values)
+    ratio = lit / (refl * s)  # one constant for every voxel
+    np.testing.assert_allclose(ratio, ratio.flat[0], rtol=1e-9)
+    # tungsten light: a white patch is far dimmer in the blue than in the red
+    white = lit[3, 0]
+    assert white[0] < 0.35 * white[-1]
+    # the band axis is honoured
+    moved = radiance(np.moveaxis(refl, 2, 0), wl, "A", band_axis=0)
+    np.testing.assert_allclose(np.moveaxis(moved, 0, 2), lit, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "args, kwargs, match",
+    [
+        ((np.ones((2, 2, 3)), [450, 550, 650], "nope"), {}, "unknown illuminant"),
+        ((np.ones((2, 2, 3)), [450, 550], "A"), {}, "expected 3 wavelengths"),
+        ((np.ones((2, 2, 3)), [450, 650, 550], "A"), {}, "increase strictly"),
+        ((np.ones((2, 2, 3)), [450, 550, 900], "A"), {}, "tabulated range"),
+        ((-np.ones((2, 2, 3)), [450, 550, 650], "A"), {}, "non-negative"),
+        ((np.zeros((2, 2, 3)), [450, 550, 650], "A"), {}, "all zero"),
+        ((np.full((2, 2, 3), np.nan), [450, 550, 650], "A"), {}, "NaN"),
+        ((np.ones((2, 2, 3)), [450, 550, 650], "A"), {"band_axis": 3}, "band_axis"),
+        ((np.ones((2, 2, 3)), [450, 550, 650], "A"), {"band_axis": 1.5}, "band_axis"),
+        ((np.float64(1.0), [450], "A"), {}, "band axis"),
+    ],
+)
+def test_radiance_refuses_bad_input(args, kwargs, match):
+    from tensor_cosdi.colour import radiance
+
+    with pytest.raises(ValueError, match=match):
+        radiance(*args, **kwargs)

@@ -4,7 +4,8 @@
 (:data:`tensor_cosdi.solvers.otd.LAM_SCHEDULE`) chosen on SD-CASSI.  A system
 may replace some of its anchors (``System.otd_lam_anchors``;
 :func:`tensor_cosdi.solvers.otd.lam_schedule`).  This script reconstructs
-``--system`` (64×64, 16 bands, the system's seeded codes and example options)
+``--system`` (64×64, 16 bands, the system's seeded codes and example options, or
+``--options`` in their place, e.g. ``'{"n_filters": 1}'`` for CS2LI with a binary code)
 on tuning scenes (``--scenes-per-fold`` of each fold of
 ``datasets.tune_folds(4)``) at each ``--snr`` with OTD at ``lam="auto"`` and
 at every ``--lams`` value, and for each noise level chooses the weight by
@@ -12,9 +13,9 @@ at every ``--lams`` value, and for each noise level chooses the weight by
 fourth; ``auto`` wins a tie within ``--tie-db``).  Rows are cached in a JSON
 file beside the results, so an interrupted run resumes where it stopped.
 
-    python benchmarks/otd_lam_systems.py --system cs2li [--snr none,30]
-        [--lams 0.03,0.06,0.1,0.2,0.3] [--scenes-per-fold 4] [--tie-db 0.05]
-        [--out benchmarks/results/otd_lam_cs2li.md]
+    python benchmarks/otd_lam_systems.py --system cs2li [--options '{"n_filters": 1}']
+        [--snr none,30] [--lams 0.03,0.06,0.1,0.2,0.3] [--scenes-per-fold 4] [--tie-db 0.05]
+        [--out benchmarks/results/otd_lam_cs2li.md (with --options: otd_lam_cs2li_n_filters1.md)]
 
 Never asserts anything; read the numbers.
 """
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -53,9 +55,25 @@ def _snrs(text):
         raise SystemExit(f"--snr takes 'none' or numbers, comma-separated, got {text!r}") from None
 
 
-def _row(system_name, scene, snr, lam):
+def _options(text):
+    try:
+        options = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise SystemExit(f"--options must be a JSON object, got {text!r}: {exc}") from None
+    if not isinstance(options, dict):
+        raise SystemExit(f"--options must be a JSON object, got {text!r}")
+    return options
+
+
+def _row(system_name, scene, snr, lam, options):
     p = tc.studies.make_problem(
-        system_name, f"cave.{scene}", shape=(SIDE, SIDE), n_bands=BANDS, snr_db=snr, rng=0
+        system_name,
+        f"cave.{scene}",
+        shape=(SIDE, SIDE),
+        n_bands=BANDS,
+        snr_db=snr,
+        rng=0,
+        **options,
     )
     options = {} if lam == "auto" else {"lam": lam}
     t0 = time.perf_counter()
@@ -72,15 +90,19 @@ def _row(system_name, scene, snr, lam):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--system", required=True, help="a system of tensor_cosdi.studies.SYSTEMS")
+    ap.add_argument("--options", default="{}", help="the system's example options, JSON")
     ap.add_argument("--snr", default="none,30")
     ap.add_argument("--lams", default="0.03,0.06,0.1,0.2,0.3")
     ap.add_argument("--scenes-per-fold", type=int, default=4)
     ap.add_argument("--tie-db", type=float, default=0.05)
-    ap.add_argument("--out", default=None, help="default benchmarks/results/otd_lam_SYSTEM.md")
+    ap.add_argument(
+        "--out", default=None, help="default benchmarks/results/otd_lam_SYSTEM[_OPTIONS].md"
+    )
     args = ap.parse_args(argv)
     if args.system not in tc.studies.SYSTEMS:
         raise SystemExit(f"--system must be one of {list(tc.studies.SYSTEMS)}")
     snrs = _snrs(args.snr)
+    options = _options(args.options)
     lams = positive_numbers(args.lams, "--lams")
     if not 1 <= args.scenes_per_fold <= 7:
         raise SystemExit("--scenes-per-fold must be 1 to 7")
@@ -90,22 +112,29 @@ def main(argv=None):
         tc.datasets.data_dir()
     except FileNotFoundError as exc:
         raise SystemExit(f"otd_lam_systems.py needs the research scenes: {exc}") from None
-    out = Path(args.out) if args.out else RESULTS / f"otd_lam_{args.system}.md"
+    suffix = "".join(f"_{k}{v}" for k, v in sorted(options.items()))
+    if args.out is None and (len(suffix) > 60 or not re.fullmatch(r"[\w.-]*", suffix)):
+        raise SystemExit("--options do not make a file name: give --out")
+    out = Path(args.out) if args.out else RESULTS / f"otd_lam_{args.system}{suffix}.md"
     cache_path = out.with_suffix(".json")
     cache_path.parent.mkdir(parents=True, exist_ok=True)
     cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
     folds = [list(f[: args.scenes_per_fold]) for f in tc.datasets.tune_folds(4)]
     cands = ["auto"] + lams
 
-    example = tc.studies.make_problem(
-        args.system, "colorchecker", shape=(SIDE, SIDE), n_bands=BANDS, snr_db=None
-    ).system
+    try:
+        example = tc.studies.make_problem(
+            args.system, "colorchecker", shape=(SIDE, SIDE), n_bands=BANDS, snr_db=None, **options
+        ).system
+    except ValueError as exc:
+        raise SystemExit(f"--options: {exc}") from None
     schedule = lam_schedule(example)
 
     def key(scene, snr, lam):
         # rows of lam="auto" are kept apart for each schedule it has followed
         label = f"auto {json.dumps(schedule, sort_keys=True)}" if lam == "auto" else lam
-        return f"{args.system}|{scene}|{snr_label(snr)}|{label}"
+        system = args.system + (json.dumps(options, sort_keys=True) if options else "")
+        return f"{system}|{scene}|{snr_label(snr)}|{label}"
 
     for snr in snrs:
         for scene in [s for f in folds for s in f]:
@@ -113,14 +142,16 @@ def main(argv=None):
                 k = key(scene, snr, lam)
                 if k in cache:
                     continue
-                cache[k] = _row(args.system, scene, snr, lam)
+                cache[k] = _row(args.system, scene, snr, lam, options)
                 print(k, f"{cache[k]['psnr']:.2f} dB {cache[k]['seconds']:.1f} s", flush=True)
                 cache_path.write_text(json.dumps(cache, indent=1, sort_keys=True))
 
     lines = [
         f"# OTD's sparsity weight on {args.system}: cross-validated over tuning scenes",
         "",
-        f"{SIDE}×{SIDE}, {BANDS} bands, the system's seeded codes and example options, noise "
+        f"{SIDE}×{SIDE}, {BANDS} bands, the system's seeded codes and example options"
+        + (f" with {json.dumps(options, sort_keys=True)}" if options else "")
+        + ", noise "
         f"seed 0; PSNR over the cube (data range 1, the estimate clipped to [0, 1]).  4 folds "
         f"of {args.scenes_per_fold} tuning scenes (`datasets.tune_folds(4)`): "
         + "; ".join(f"fold {k}: {', '.join(f)}" for k, f in enumerate(folds))

@@ -9,6 +9,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
+from .. import validate
 from ..codes import colour_coded_aperture
 from ._base import (
     System,
@@ -68,7 +69,9 @@ class CS2LI(System):
     name = "cs2li"
     demo_scene = "coffee"
     has_depth = True
-    example_options = {"n_steps": 4}
+    #: ``n_filters``: colour filters of the example's code (1: a binary code, the same for
+    #: every band).
+    example_options = {"n_steps": 4, "n_filters": 6}
     depth_kind = "phase"
     #: Phase-shifted fringes of one frequency are three images per pixel (``a``, ``b cos φ``,
     #: ``b sin φ``) over ``K ≥ 4`` steps: the frames' smallest singular value is noise, where a
@@ -100,8 +103,9 @@ class CS2LI(System):
         return np.asarray(B.to_numpy(cube), dtype=np.float64).mean(axis=3)
 
     @classmethod
-    def _example(cls, scene, shape, wl, seed, shifts, n_steps):
-        return fringe_example(cls, scene, shape, wl, seed, shifts, n_steps)
+    def _example(cls, scene, shape, wl, seed, shifts, n_steps, n_filters):
+        n_filters = validate.integer("n_filters", n_filters, low=1)
+        return fringe_example(cls, scene, shape, wl, seed, shifts, n_steps, n_filters=n_filters)
 
     def __init__(self, code, *, n_bands, n_patterns, shifts=1, wavelengths=None):
         self.code = as_code(code, "code", (2, 3))
@@ -221,14 +225,17 @@ def fringe_phase(cube, n_steps: int):
     return np.stack([wrapped_phase(z[..., i * K : (i + 1) * K]) for i in range(nt // K)], axis=-1)
 
 
-def fringe_example(cls, scene, shape, wl, seed, shifts, n_steps):
-    """The CS2LI / Mu-CoSDI ``"sl"`` problem: one fringe frequency of ``n_steps`` phase steps."""
+def fringe_example(cls, scene, shape, wl, seed, shifts, n_steps, **example):
+    """The CS2LI / Mu-CoSDI ``"sl"`` problem: one fringe frequency of ``n_steps`` phase steps
+    (``example``: options of ``cls.example``)."""
     from .. import scenes
 
     reflectance = scenes.scene_cube(scene, shape, wl)
     sl = scenes.structured_light(shape, wl, rng=seed)
     cube = np.asarray(fringe_cube(reflectance, sl.phase, n_steps=n_steps, amplitude=0.5))
-    system = cls.example(shape + (len(wl), n_steps), rng=seed, shifts=shifts, wavelengths=wl)
+    system = cls.example(
+        shape + (len(wl), n_steps), rng=seed, shifts=shifts, wavelengths=wl, **example
+    )
     return (
         system,
         cube,

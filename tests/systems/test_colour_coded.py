@@ -38,3 +38,15 @@ def test_colour_code_beats_the_binary_code_on_a_real_crop():
         lsq = tc.reconstruct(sd, g, "lsq").cube
         assert psnr[name] > metrics.psnr(cube, np.asarray(lsq), data_range=1.0) + 3, name
     assert psnr["colour"] > psnr["binary"], psnr  # 34.84 against 33.45 dB
+
+
+def test_cs2li_example_problem_takes_a_binary_code():
+    """``n_filters=1``: the same seeded problem through a binary code (one 2-D code for every
+    band); the default keeps the colour code."""
+    kw = dict(shape=(8, 8), n_bands=4, snr_db=None, rng=0)
+    colour = tc.studies.make_problem("cs2li", "colorchecker", **kw)
+    binary = tc.studies.make_problem("cs2li", "colorchecker", n_filters=1, **kw)
+    assert colour.system.code.ndim == 3 and binary.system.code.ndim == 2
+    np.testing.assert_array_equal(binary.cube, colour.cube)  # same scene and fringes
+    assert set(np.unique(binary.system.code)) <= {0.0, 1.0}
+    assert binary.system.otd_lam_anchors is None and colour.system.otd_lam_anchors is not None

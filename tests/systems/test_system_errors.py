@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from tensor_cosdi import codes
+from tensor_cosdi.studies import make_problem
 from tensor_cosdi.systems import (
     C3SLFI,
     CASSDIDFA,
@@ -76,6 +77,10 @@ CASES = [
     # CS2LI / Mu-CoSDI
     (lambda: CS2LI(ones((4, 7, 2)), n_bands=3, n_patterns=2), "has 2 bands, expected n_bands = 3"),
     (lambda: CS2LI(ones((4, 7)), n_bands=3, n_patterns=0), "n_patterns must be an integer ≥ 1"),
+    (
+        lambda: make_problem("cs2li", "colorchecker", shape=(8, 8), n_bands=3, n_filters=0),
+        "n_filters must be an integer ≥ 1, got 0",
+    ),
     (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="stereo"), "modality must be one of"),
     (
         lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="sl"),

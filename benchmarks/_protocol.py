@@ -92,19 +92,29 @@ def magnified(cube, zoom: float):
     return np.maximum(out, 0.0).astype(cube.dtype)
 
 
-def scene_view(label: str) -> tuple[str, float]:
-    """``(scene, zoom)`` of a scene label: ``"cloth"`` is the scene as it is, ``"cloth@2"`` its
-    centre half magnified 2× (:func:`magnified`)."""
-    name, sep, z = str(label).partition("@")
-    if not sep:
-        return name, 1.0
-    try:
-        zoom = float(z)
-    except ValueError:
-        zoom = float("nan")
-    if not zoom >= 1:
-        raise ValueError(f"scene view {label!r}: the zoom after '@' must be a number ≥ 1")
-    return name, zoom
+def scene_view(label: str) -> tuple[str, float, str | None]:
+    """``(scene, zoom, illuminant)`` of a scene label ``name[@zoom][~illuminant]``: ``"cloth"``
+    is the scene as it is, ``"cloth@2"`` its centre half magnified 2× (:func:`magnified`),
+    ``"cloth~A"`` the scene lit by CIE illuminant A and scaled to a peak of 1 (a radiance
+    database's kind of scene; :func:`tensor_cosdi.colour.radiance`), ``"cloth@2~A"`` both."""
+    rest, tilde, illuminant = str(label).partition("~")
+    if tilde:
+        known = tc.colour.colour_science().SDS_ILLUMINANTS
+        if illuminant not in list(known):  # exact keys: the mapping also takes other cases
+            raise ValueError(
+                f"scene view {label!r}: the illuminant after '~' must be a key of "
+                f"colour.SDS_ILLUMINANTS (e.g. A, D65, LED-B3), got {illuminant!r}"
+            )
+    name, sep, z = rest.partition("@")
+    zoom = 1.0
+    if sep:
+        try:
+            zoom = float(z)
+        except ValueError:
+            zoom = float("nan")
+        if not zoom >= 1:
+            raise ValueError(f"scene view {label!r}: the zoom after '@' must be a number ≥ 1")
+    return name, zoom, (illuminant if tilde else None)
 
 
 def views(scenes, zoom) -> tuple[str, ...]:
@@ -284,8 +294,8 @@ class Store:
         pk = (scene, snr, mask_kind)
         if pk not in cache:
             cache.clear()
-            name, zoom = scene_view(scene)
-            cache[pk] = problem(name, snr, load_mask(mask_kind), zoom=zoom)
+            name, zoom, light = scene_view(scene)
+            cache[pk] = problem(name, snr, load_mask(mask_kind), zoom=zoom, illuminant=light)
         system, cube, g = cache[pk]
         est, sec = run(method, system, g, options)
         row = {

@@ -89,7 +89,7 @@ def main(argv=None):
             raise SystemExit(f"candidate weights not found: {path}")
         files["candidate" if len(names) == 1 else f"candidate {i + 1}"] = path
     known = tc.colour.colour_science().SDS_ILLUMINANTS
-    if args.illuminant is not None and args.illuminant not in known:
+    if args.illuminant is not None and args.illuminant not in list(known):
         raise SystemExit(f"--illuminant: unknown {args.illuminant!r}; e.g. A, D65, LED-B3")
     mask = load_mask(args.mask)
     run = _in_pnp_fast if args.method == "pnp_fast" else _in_pnp_gap

@@ -37,7 +37,9 @@ commits the rows were computed at.
 ``--zoom Z`` adds every tuning scene magnified ``Z``× (the view ``scene@Z``,
 in its scene's fold) to the cross-validation: data from a camera of finer
 resolution than the CAVE scenes, where a default chosen on CAVE alone does
-less well.  A scene label ``name@Z`` works in report mode too (``--scenes``).
+less well.  A scene label ``name@Z`` works in report mode too (``--scenes``), as does
+``name~A``: the scene lit by a CIE illuminant (a key of ``colour.SDS_ILLUMINANTS``) and
+scaled to a peak of 1, the kind of scene a radiance database holds (``name@Z~A``: both).
 
 Never asserts anything; read the numbers.
 """

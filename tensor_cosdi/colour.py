@@ -225,7 +225,8 @@ def radiance(cube, wavelengths, illuminant: str = "D65", *, band_axis: int = 2):
         raise ValueError(
             f"expected {c.shape[axis]} wavelengths (one per band of axis {axis}), got {wl.size}"
         )
-    if not isinstance(illuminant, str) or illuminant not in colour.SDS_ILLUMINANTS:
+    # exact keys only: colour-science's mapping also matches other spellings of a key
+    if not isinstance(illuminant, str) or illuminant not in list(colour.SDS_ILLUMINANTS):
         raise ValueError(f"unknown illuminant {illuminant!r}; e.g. 'D65', 'A', 'FL2', 'LED-B3'")
     ill = colour.SDS_ILLUMINANTS[illuminant]
     lo, hi = float(ill.wavelengths[0]), float(ill.wavelengths[-1])

@@ -38,12 +38,17 @@ def test_cross_validate_keeps_the_default_in_a_tie(protocol):
 
 
 def test_scene_views(protocol):
-    assert protocol.scene_view("cloth") == ("cloth", 1.0)
-    assert protocol.scene_view("cloth@2") == ("cloth", 2.0)
+    assert protocol.scene_view("cloth") == ("cloth", 1.0, None)
+    assert protocol.scene_view("cloth@2") == ("cloth", 2.0, None)
+    assert protocol.scene_view("cloth~A") == ("cloth", 1.0, "A")
+    assert protocol.scene_view("cloth@2~LED-B3") == ("cloth", 2.0, "LED-B3")
     assert protocol.views(("a", "b"), 2) == ("a", "b", "a@2", "b@2")
     assert protocol.views(("a",), None) == ("a",)
     for bad in ("cloth@0.5", "cloth@x", "cloth@"):
         with pytest.raises(ValueError, match="zoom after '@'"):
+            protocol.scene_view(bad)
+    for bad in ("cloth~", "cloth~sun", "cloth@2~a"):
+        with pytest.raises(ValueError, match="illuminant after '~'"):
             protocol.scene_view(bad)
 
 

@@ -115,6 +115,7 @@ def test_radiance_is_reflectance_times_the_illuminant_scaled_to_one():
     "args, kwargs, match",
     [
         ((np.ones((2, 2, 3)), [450, 550, 650], "nope"), {}, "unknown illuminant"),
+        ((np.ones((2, 2, 3)), [450, 550, 650], "a"), {}, "unknown illuminant"),
         ((np.ones((2, 2, 3)), [450, 550], "A"), {}, "expected 3 wavelengths"),
         ((np.ones((2, 2, 3)), [450, 650, 550], "A"), {}, "increase strictly"),
         ((np.ones((2, 2, 3)), [450, 550, 900], "A"), {}, "tabulated range"),

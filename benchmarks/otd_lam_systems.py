@@ -103,6 +103,12 @@ def main(argv=None):
         raise SystemExit(f"--system must be one of {list(tc.studies.SYSTEMS)}")
     snrs = _snrs(args.snr)
     options = _options(args.options)
+    try:
+        example = tc.studies.make_problem(
+            args.system, "colorchecker", shape=(SIDE, SIDE), n_bands=BANDS, snr_db=None, **options
+        ).system
+    except ValueError as exc:
+        raise SystemExit(f"--options: {exc}") from None
     lams = positive_numbers(args.lams, "--lams")
     if not 1 <= args.scenes_per_fold <= 7:
         raise SystemExit("--scenes-per-fold must be 1 to 7")
@@ -122,12 +128,6 @@ def main(argv=None):
     folds = [list(f[: args.scenes_per_fold]) for f in tc.datasets.tune_folds(4)]
     cands = ["auto"] + lams
 
-    try:
-        example = tc.studies.make_problem(
-            args.system, "colorchecker", shape=(SIDE, SIDE), n_bands=BANDS, snr_db=None, **options
-        ).system
-    except ValueError as exc:
-        raise SystemExit(f"--options: {exc}") from None
     schedule = lam_schedule(example)
 
     def key(scene, snr, lam):

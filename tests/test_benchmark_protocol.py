@@ -84,3 +84,41 @@ def test_positive_numbers_parses_a_list_and_refuses_anything_else_by_flag(protoc
     for bad in ("", "0.1,", "x", "0", "-0.1", "nan", "inf", "0.1;0.2"):
         with pytest.raises(SystemExit, match="--lams takes finite numbers > 0"):
             protocol.positive_numbers(bad, "--lams")
+
+
+def _script(name, monkeypatch):
+    monkeypatch.syspath_prepend(str(_PATH.parent))
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", _PATH.parent / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ("[1]", "--options must be a JSON object"),
+        ("{n_filters", "--options must be a JSON object"),
+        ('{"n_filters": 0}', "n_filters must be an integer ≥ 1"),
+        ('{"nfilters": 1}', r"unknown option\(s\) \['nfilters'\]"),
+        ('{"n_filters": "../x"}', "n_filters must be an integer"),
+    ],
+)
+def test_otd_lam_systems_refuses_bad_options_before_any_run(
+    options, message, monkeypatch, tmp_path
+):
+    mod = _script("otd_lam_systems", monkeypatch)
+    out = tmp_path / "lam.md"
+    with pytest.raises(SystemExit, match=message):
+        mod.main(["--system", "cs2li", "--options", options, "--out", str(out)])
+    assert not any(tmp_path.iterdir())
+
+
+def test_denoiser_weights_refuses_an_unknown_illuminant(monkeypatch, tmp_path):
+    pytest.importorskip("torch")
+    mod = _script("denoiser_weights", monkeypatch)
+    weights = tmp_path / "w.pt"
+    weights.write_bytes(b"")
+    with pytest.raises(SystemExit, match="--illuminant: unknown 'a'"):
+        mod.main([str(weights), "--illuminant", "a", "--out", str(tmp_path / "dw.md")])
+    assert not (tmp_path / "dw.md").exists()

@@ -117,12 +117,16 @@ def scene_view(label: str) -> tuple[str, float, str | None]:
     return name, zoom, (illuminant if tilde else None)
 
 
-def views(scenes, zoom) -> tuple[str, ...]:
-    """``scenes`` followed by their ``@zoom`` views (``zoom`` ``None`` or 1: ``scenes``)."""
+def views(scenes, zoom, lights=()) -> tuple[str, ...]:
+    """``scenes`` followed by their ``@zoom`` views (``zoom`` ``None`` or 1: none) and their
+    ``~light`` views, one per illuminant of ``lights``."""
     scenes = tuple(scenes)
-    if zoom is None or zoom == 1:
-        return scenes
-    return scenes + tuple(f"{s}@{zoom:g}" for s in scenes)
+    out = scenes
+    if zoom is not None and zoom != 1:
+        out += tuple(f"{s}@{zoom:g}" for s in scenes)
+    for light in lights:
+        out += tuple(f"{s}~{light}" for s in scenes)
+    return out
 
 
 def score(truth, est) -> dict:

@@ -33,13 +33,16 @@ commits the rows were computed at.
         --options '{"pnp_gap+bf16": {"precision": "bfloat16"}}'   (a method twice)
     python benchmarks/real_spectra.py --cv otd --grid '{"lam": [0.05, 0.1, 0.2]}'
         [--snr none,30,20] [--masks tsa,random] [--scenes-per-fold N] [--zoom Z]
+        [--light A,LED-B3]
 
 ``--zoom Z`` adds every tuning scene magnified ``Z``× (the view ``scene@Z``,
 in its scene's fold) to the cross-validation: data from a camera of finer
 resolution than the CAVE scenes, where a default chosen on CAVE alone does
-less well.  A scene label ``name@Z`` works in report mode too (``--scenes``), as does
-``name~A``: the scene lit by a CIE illuminant (a key of ``colour.SDS_ILLUMINANTS``) and
-scaled to a peak of 1, the kind of scene a radiance database holds (``name@Z~A``: both).
+less well.  A scene label ``name@Z`` works in report mode too (``--scenes``), as
+does ``name~A``: the scene lit by a CIE illuminant (a key of ``colour.SDS_ILLUMINANTS``)
+and scaled to a peak of 1, the kind of scene a radiance database holds (``name@Z~A``:
+both).  ``--light A,LED-B3`` adds every tuning scene's ``~A`` and ``~LED-B3`` views to the
+cross-validation, in its scene's fold.
 
 Never asserts anything; read the numbers.
 """
@@ -65,6 +68,7 @@ from _protocol import (  # noqa: E402  (the benchmarks folder is not a package)
     problem,
     provenance,
     provenance_lines,
+    scene_view,
     score,
     snr_label,
     views,
@@ -160,7 +164,7 @@ def cv(args, store, cache):
         folds = tuple(f[: args.scenes_per_fold] for f in folds)
     # a scene and its magnified view stay in one fold: no fold scores a view of a scene it
     # chose on
-    folds = tuple(views(f, args.zoom) for f in folds)
+    folds = tuple(views(f, args.zoom, args.light) for f in folds)
     tune = [s for f in folds for s in f]
     conds = _conditions(args)
     # cheapest first: every candidate on a scene before the next scene
@@ -246,14 +250,19 @@ def _cv_markdown(method, grid, folds, results, args):
     keep = args.keep is not None
     n = sum(len(f) for f in folds)
     zoomed = args.zoom not in (None, 1)
-    seen = (
-        f"{n // 2} tuning scenes as they are and magnified {args.zoom:g}× (`@{args.zoom:g}`: "
-        "the centre crop magnified back to 256×256, the larger-scale structure of a "
-        "finer camera)"
-        if zoomed
-        else f"{n} tuning scenes"
-    )
-    n = f"{n} views" if zoomed else n
+    per_scene = 1 + zoomed + len(args.light)
+    seen = f"{n // per_scene} tuning scenes as they are"
+    if zoomed:
+        seen += (
+            f", magnified {args.zoom:g}× (`@{args.zoom:g}`: the centre crop magnified back to "
+            "256×256, the larger-scale structure of a finer camera)"
+        )
+    if args.light:
+        seen += (
+            ", lit by CIE illuminant " + " and ".join(f"`{x}` (`~{x}`)" for x in args.light)
+            + " and scaled to a peak of 1 (a radiance database's kind of scene)"
+        )
+    n = f"{n} views" if per_scene > 1 else n
     lines = [
         f"# Cross-validated choice for `{method}`",
         "",
@@ -346,6 +355,10 @@ def main(argv=None):
         help="--cv: also each tuning scene magnified ZOOM× (its view 'scene@ZOOM', same fold)",
     )  # fmt: skip
     ap.add_argument(
+        "--light", default="",
+        help="--cv: also each tuning scene lit by these CIE illuminants (views 'scene~ILL')",
+    )  # fmt: skip
+    ap.add_argument(
         "--baseline-on-tune", action="store_true", help="--cv: also plain GAP-TV on the folds"
     )
     ap.add_argument(
@@ -376,6 +389,14 @@ def main(argv=None):
         raise SystemExit(f"--tie-db must be a number ≥ 0, got {args.tie_db:g}")
     if args.zoom is not None and not args.zoom >= 1:
         raise SystemExit(f"--zoom must be a number ≥ 1, got {args.zoom:g}")
+    args.light = tuple(x for x in args.light.split(",") if x)
+    for light in args.light:
+        try:
+            scene_view(f"scene~{light}")
+        except ValueError:
+            raise SystemExit(
+                f"--light: {light!r} is not a key of colour.SDS_ILLUMINANTS (e.g. A, D65, LED-B3)"
+            ) from None
     try:
         datasets.data_dir()
     except FileNotFoundError as exc:

@@ -44,6 +44,7 @@ def test_scene_views(protocol):
     assert protocol.scene_view("cloth@2~LED-B3") == ("cloth", 2.0, "LED-B3")
     assert protocol.views(("a", "b"), 2) == ("a", "b", "a@2", "b@2")
     assert protocol.views(("a",), None) == ("a",)
+    assert protocol.views(("a",), 2, ("A", "LED-B3")) == ("a", "a@2", "a~A", "a~LED-B3")
     for bad in ("cloth@0.5", "cloth@x", "cloth@"):
         with pytest.raises(ValueError, match="zoom after '@'"):
             protocol.scene_view(bad)
@@ -57,6 +58,7 @@ def test_scene_views(protocol):
     [
         (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--zoom", "0.5"], "--zoom must be"),
         (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "-1"], "--tie-db must be"),
+        (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--light", "A,sun"], "--light: 'sun'"),
         (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--keep", '{"lam": 0.1}'], "--keep needs"),
         (
             ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--keep", "{lam"],

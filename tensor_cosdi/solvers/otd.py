@@ -74,6 +74,7 @@ def initial_bases(
     pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps: int | None = 10,
+    pan_spectrum: str = "flat",
     spatial_block: int | None = None,
     progress: bool = False,
 ):
@@ -94,7 +95,7 @@ def initial_bases(
     wavelet_level : int, "auto" or "boundary"
         Its depth (:func:`tensor_cosdi.bases.wavelet`; ``"auto"``: as deep as
         the periodised transform allows).
-    pan_iter, pan_atoms, pan_weight, pan_tv_steps
+    pan_iter, pan_atoms, pan_weight, pan_tv_steps, pan_spectrum
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
         estimated SNR, :data:`PAN_WEIGHTS`; ``pan_atoms``: spectral DCT atoms,
@@ -128,6 +129,7 @@ def initial_bases(
             pan_atoms=pan_atoms,
             pan_weight=pan_weight,
             pan_tv_steps=pan_tv_steps,
+            pan_spectrum=pan_spectrum,
             progress=progress,
         )
         for m in (0, 1):
@@ -328,6 +330,7 @@ def online_tucker_admm(
     pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps=10,
+    pan_spectrum="flat",
     spatial_block=None,
     lam="auto",
     mu: float = 0.2,
@@ -395,6 +398,7 @@ def online_tucker_admm(
         pan_atoms=pan_atoms,
         pan_weight=pan_weight,
         pan_tv_steps=pan_tv_steps,
+        pan_spectrum=pan_spectrum,
         spatial_block=spatial_block,
         progress=bool(progress),
     )

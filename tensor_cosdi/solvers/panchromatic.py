@@ -3,11 +3,14 @@ start the spatial bases, and the cube on the way to it (:func:`subspace_gap_tv`)
 
 from __future__ import annotations
 
+import tensorly as tl
+
 from . import engine
 from .subspace import (  # noqa: F401  (the subspace fit and its atom counts, re-exported here)
     MANY_BANDS,
     PAN_ATOMS,
     PAN_ATOMS_MANY,
+    fitted_mean_spectrum,
     has_many_bands,
     pan_atoms_for,
     subspace_denoise,
@@ -18,10 +21,13 @@ __all__ = [
     "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for",
     "has_many_bands", "PAN_WEIGHTS",
     "PAN_WEIGHTS_MANY",
-    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
+    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS", "PAN_SPECTRA",
 ]  # fmt: skip
 
 _check_int = engine.check_int
+
+#: ``pan_spectrum``: how the first stage's atoms span the bands (:func:`panchromatic_estimate`).
+PAN_SPECTRA = ("flat", "fitted", "auto")
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
 #: (:func:`tensor_cosdi.noise.snr_schedule`), for panchromatic axes shorter than
@@ -74,6 +80,7 @@ def panchromatic_estimate(
     pan_atoms="auto",
     pan_weight="auto",
     pan_tv_steps: int | None = 10,
+    pan_spectrum: str = "flat",
     progress: bool = False,
 ):
     """SPEC §5 step 1: ``Z`` and, where one was computed on the way, a starting cube.
@@ -86,6 +93,12 @@ def panchromatic_estimate(
     ``None``: 50 cold ones) and ``Z = D x``; with ``pan_iter = 0`` they
     fall back to the Tikhonov solve of the flat decimated model.
 
+    ``pan_spectrum`` (:data:`PAN_SPECTRA`): ``"flat"`` spans the bands by plain DCT atoms;
+    ``"fitted"`` runs the stage twice, the second time with the atoms weighted by the scene's
+    mean spectrum fitted from the first (:func:`fitted_mean_spectrum`; a light with sharp
+    spectral features); ``"auto"`` does the same and keeps whichever of the two fits the
+    measurement better (the smaller ``‖A x − g‖``).  Systems with one panchromatic axis only.
+
     Returns
     -------
     Z : tensor of ``system.panchromatic_shape``
@@ -94,15 +107,32 @@ def panchromatic_estimate(
     pan_iter = _check_int("pan_iter", pan_iter, 0)
     _check_pan_weight(pan_weight)
     pan_atoms_for(MANY_BANDS, pan_atoms)  # checked even where the exact estimate needs none
+    if pan_spectrum not in PAN_SPECTRA:
+        raise ValueError(f"pan_spectrum must be one of {PAN_SPECTRA}, got {pan_spectrum!r}")
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
-    x = subspace_gap_tv(
-        system,
-        measurement,
+    axes = list(system.panchromatic_axes)
+    if pan_spectrum != "flat" and len(axes) != 1:
+        raise ValueError(
+            f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"
+        )
+    common = dict(
         n_atoms=pan_atoms,
         max_iter=pan_iter,
         tv_weight=pan_weight_for(system, measurement, pan_weight),
         tv_steps=pan_tv_steps,
         progress=progress,
     )
+    x = subspace_gap_tv(system, measurement, **common)
+    if pan_spectrum != "flat":
+        w = fitted_mean_spectrum(system, measurement, x, axes[0])
+        xw = subspace_gap_tv(system, measurement, spectral_weights={axes[0]: w}, **common)
+        if pan_spectrum == "fitted" or _misfit(system, xw, measurement) < _misfit(
+            system, x, measurement
+        ):
+            x = xw
     return system.decimation.forward(x), x
+
+
+def _misfit(system, x, g) -> float:
+    return float(tl.norm(system.operator.apply(x) - g))

@@ -20,7 +20,7 @@ from .priors import TV
 
 __all__ = [
     "subspace_gap_tv", "subspace_denoise", "pan_atoms_for", "has_many_bands",
-    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
+    "fitted_mean_spectrum", "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
 ]  # fmt: skip
 
 _check_int = engine.check_int
@@ -113,6 +113,7 @@ def subspace_gap_tv(
     tv_weight: float = 0.05,
     tv_steps: int | None = 10,
     eps: float = 1e-6,
+    spectral_weights=None,
     progress: bool = False,
 ):
     """A fast first estimate for the panchromatic image: GAP-TV in a smooth spectral subspace.
@@ -126,6 +127,12 @@ def subspace_gap_tv(
     accelerated GAP iterations ``x ← P TV(Pᵀ(x + Aᵀ(AAᵀ + εI)⁻¹(ĝ − Ax)))``.
     TV runs on ``n_atoms`` images instead of ``Nλ``, so it costs a fraction
     of full GAP-TV.
+
+    ``spectral_weights`` (``{axis name: positive weights of its length}``) spans an axis by
+    its DCT atoms times those weights instead (orthonormalised): spectra that are a smooth
+    reflectance times a light's spectrum with sharp features (a white LED's blue peak) need
+    many plain DCT atoms but few weighted by the light
+    (:func:`fitted_mean_spectrum` estimates it).
 
     Returns
     -------
@@ -141,7 +148,13 @@ def subspace_gap_tv(
     modes = [names.index(a) for a in system.panchromatic_axes]
     shape = system.cube_shape
     keep = {m: pan_atoms_for(shape[m], n_atoms, name="n_atoms") for m in modes}
-    mats = [B.tensor_like(dct(shape[m])[:, : keep[m]], g) for m in modes]
+    weights = _check_weights(spectral_weights, system)
+    mats = []
+    for m in modes:
+        atoms = dct(shape[m])
+        if names[m] in weights:  # the span of the weighted atoms, orthonormal
+            atoms = np.linalg.qr(weights[names[m]][:, None] * atoms)[0]
+        mats.append(B.tensor_like(atoms[:, : keep[m]], g))
 
     denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
 
@@ -159,6 +172,81 @@ def subspace_gap_tv(
         objective=False,  # an internal stage: its history is not returned
     )
     return x
+
+
+def _check_weights(spectral_weights, system) -> dict:
+    if spectral_weights is None:
+        return {}
+    if not isinstance(spectral_weights, dict):
+        raise ValueError(
+            f"spectral_weights must be None or a dict {{axis name: weights}}, got "
+            f"{type(spectral_weights).__name__}"
+        )
+    names = list(system.axes)
+    out = {}
+    for name, w in spectral_weights.items():
+        if name not in system.panchromatic_axes:
+            raise ValueError(
+                f"spectral_weights: {name!r} is not a panchromatic axis of {system.name} "
+                f"({list(system.panchromatic_axes)})"
+            )
+        n = system.cube_shape[names.index(name)]
+        w = np.asarray(B.to_numpy(w), dtype=np.float64)
+        if w.shape != (n,) or not np.isfinite(w).all() or not (w > 0).all():
+            raise ValueError(
+                f"spectral_weights[{name!r}] must be {n} finite weights > 0, got shape "
+                f"{w.shape} with values in [{np.min(w, initial=np.inf):g}, "
+                f"{np.max(w, initial=-np.inf):g}]"
+            )
+        out[name] = w
+    return out
+
+
+def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float = 1e-3):
+    """The scene's mean spectrum along the panchromatic ``axis``, fitted to the measurement.
+
+    With ``a`` the sum of ``cube`` (a first estimate, e.g. :func:`subspace_gap_tv`'s) over
+    ``axis``, the cube ``a ⊗ s`` — every pixel the same spectrum ``s``, scaled — is fitted to
+    the measurement by non-negative least squares over ``s`` (one forward pass per band: the
+    columns ``A(a ⊗ e_l)``).  A light's sharp spectral features (a white LED's blue peak)
+    survive the fit, though the estimate itself had to be smooth; on a scene whose mean
+    spectrum is flat the fit is mostly noise, which is why
+    :func:`~tensor_cosdi.solvers.panchromatic.panchromatic_estimate` keeps whichever basis
+    fits the measurement better.
+
+    Returns
+    -------
+    ndarray of the axis' length: ``s`` scaled to a peak of 1, at least ``floor``.
+    """
+    from scipy.optimize import nnls
+
+    names = list(system.axes)
+    if axis not in system.panchromatic_axes:
+        raise ValueError(
+            f"{axis!r} is not a panchromatic axis of {system.name} "
+            f"({list(system.panchromatic_axes)})"
+        )
+    mode = names.index(axis)
+    x = np.maximum(np.asarray(B.to_numpy(cube), dtype=np.float64), 0.0)
+    if x.shape != tuple(system.cube_shape):
+        raise ValueError(f"cube of shape {x.shape} does not match {tuple(system.cube_shape)}")
+    a = x.sum(axis=mode, keepdims=True)
+    g = np.asarray(B.to_numpy(measurement), dtype=np.float64).ravel()
+    n = x.shape[mode]
+    cols = np.empty((g.size, n))
+    for band in range(n):
+        e = np.zeros(x.shape, dtype=np.float32)
+        index = [slice(None)] * x.ndim
+        index[mode] = slice(band, band + 1)
+        e[tuple(index)] = a
+        cols[:, band] = np.asarray(
+            B.to_numpy(system.operator.apply(B.tensor_like(e, measurement)))
+        ).ravel()
+    s, _ = nnls(cols.T @ cols, cols.T @ g)
+    peak = s.max()
+    if not peak > 0:
+        return np.ones(n)
+    return np.maximum(s / peak, floor)
 
 
 def subspace_denoise(v, atoms, modes, denoise, weight):

@@ -96,8 +96,9 @@ def panchromatic_estimate(
     ``pan_spectrum`` (:data:`PAN_SPECTRA`): ``"flat"`` spans the bands by plain DCT atoms;
     ``"fitted"`` runs the stage twice, the second time with the atoms weighted by the scene's
     mean spectrum fitted from the first (:func:`fitted_mean_spectrum`; a light with sharp
-    spectral features); ``"auto"`` does the same and keeps whichever of the two fits the
-    measurement better (the smaller ``‖A x − g‖``).  Systems with one panchromatic axis only.
+    spectral features); ``"auto"``, from :data:`MANY_BANDS` bands on, does the same and keeps
+    whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and below
+    that is ``"flat"`` (not measured there).  Weighted atoms need one panchromatic axis.
 
     Returns
     -------
@@ -112,6 +113,8 @@ def panchromatic_estimate(
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     axes = list(system.panchromatic_axes)
+    if pan_spectrum == "auto" and not (len(axes) == 1 and has_many_bands(system)):
+        pan_spectrum = "flat"
     if pan_spectrum != "flat" and len(axes) != 1:
         raise ValueError(
             f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"

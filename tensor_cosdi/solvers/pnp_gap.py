@@ -406,8 +406,10 @@ def warm_started_gap(
 
         first = {"pan_iter": pan_iter, "pan_tv_steps": pan_tv_steps, "pan_atoms": pan_atoms}
         pan = {k: v for k, v in first.items() if v != "auto"}
+        # the start keeps plain spectral atoms: the fitted ones (OTD's pan_spectrum="auto")
+        # were cross-validated for OTD alone and cost the fast path its budget
         start, hist, _ = online_tucker_admm(
-            system, g, admm_iter=warm_iter, progress=progress, **pan
+            system, g, admm_iter=warm_iter, progress=progress, pan_spectrum="flat", **pan
         )
     elif warm == "dcosnet":  # one pass of the shipped network (torch; weights for this system)
         from ._base import History

@@ -227,13 +227,13 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
             f"({list(system.panchromatic_axes)})"
         )
     mode = names.index(axis)
-    x = np.maximum(np.asarray(B.to_numpy(cube), dtype=np.float64), 0.0)
+    x = np.maximum(np.asarray(B.to_numpy(cube), dtype=np.float32), 0.0)
     if x.shape != tuple(system.cube_shape):
         raise ValueError(f"cube of shape {x.shape} does not match {tuple(system.cube_shape)}")
     a = x.sum(axis=mode, keepdims=True)
-    g = np.asarray(B.to_numpy(measurement), dtype=np.float64).ravel()
+    g = np.asarray(B.to_numpy(measurement), dtype=np.float32).ravel()
     n = x.shape[mode]
-    cols = np.empty((g.size, n))
+    cols = np.empty((g.size, n), dtype=np.float32)  # one measurement per band: a cube's worth
     for band in range(n):
         e = np.zeros(x.shape, dtype=np.float32)
         index = [slice(None)] * x.ndim
@@ -242,7 +242,7 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
         cols[:, band] = np.asarray(
             B.to_numpy(system.operator.apply(B.tensor_like(e, measurement)))
         ).ravel()
-    s, _ = nnls(cols.T @ cols, cols.T @ g)
+    s, _ = nnls((cols.T @ cols).astype(np.float64), (cols.T @ g).astype(np.float64))
     peak = s.max()
     if not peak > 0:
         return np.ones(n)

@@ -429,7 +429,7 @@ def test_fitted_mean_spectrum_recovers_a_shared_spectrum_with_a_sharp_peak():
     sd = SDCASSI(tc.codes.random_binary((16, 16), rng=1), n_bands=nl)
     cube = a[:, :, None] * s
     got = fitted_mean_spectrum(sd, sd.forward(cube), cube, "λ")
-    np.testing.assert_allclose(got, s / s.max(), rtol=1e-6)
+    np.testing.assert_allclose(got, s / s.max(), rtol=1e-4)  # float32 columns
     with pytest.raises(ValueError, match="'x' is not a panchromatic axis"):
         fitted_mean_spectrum(sd, sd.forward(cube), cube, "x")
     with pytest.raises(ValueError, match="does not match"):

@@ -219,6 +219,8 @@ def radiance(cube, wavelengths, illuminant: str = "D65", *, band_axis: int = 2):
     c = np.asarray(B.to_numpy(cube), dtype=np.float64)
     if c.ndim == 0:
         raise ValueError("cube must have a band axis, got a scalar")
+    if c.size == 0:
+        raise ValueError(f"cube is empty (shape {c.shape}): nothing to light")
     axis = validate.integer("band_axis", band_axis, low=-c.ndim, high=c.ndim - 1) % c.ndim
     wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
     if wl.size != c.shape[axis]:
@@ -242,7 +244,7 @@ def radiance(cube, wavelengths, illuminant: str = "D65", *, band_axis: int = 2):
     shape = [1] * c.ndim
     shape[axis] = wl.size
     lit = c * np.interp(wl, ill.wavelengths, ill.values).reshape(shape)
-    peak = lit.max() if lit.size else 0.0
+    peak = lit.max()
     if not peak > 0:
         raise ValueError("cube is all zero under this illuminant: nothing to scale to a peak of 1")
     return lit / peak

@@ -125,6 +125,7 @@ def test_radiance_is_reflectance_times_the_illuminant_scaled_to_one():
         ((np.ones((2, 2, 3)), [450, 550, 650], "A"), {"band_axis": 3}, "band_axis"),
         ((np.ones((2, 2, 3)), [450, 550, 650], "A"), {"band_axis": 1.5}, "band_axis"),
         ((np.float64(1.0), [450], "A"), {}, "band axis"),
+        ((np.ones((2, 2, 0)), [], "A"), {}, "cube is empty"),
     ],
 )
 def test_radiance_refuses_bad_input(args, kwargs, match):

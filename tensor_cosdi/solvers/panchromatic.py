@@ -21,13 +21,19 @@ __all__ = [
     "panchromatic_estimate", "subspace_gap_tv", "pan_weight_for", "pan_atoms_for",
     "has_many_bands", "PAN_WEIGHTS",
     "PAN_WEIGHTS_MANY",
-    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS", "PAN_SPECTRA",
+    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS", "PAN_SPECTRA", "FITTED_SPECTRUM_ABOVE_DB",
 ]  # fmt: skip
 
 _check_int = engine.check_int
 
 #: ``pan_spectrum``: how the first stage's atoms span the bands (:func:`panchromatic_estimate`).
 PAN_SPECTRA = ("flat", "fitted", "auto")
+#: ``pan_spectrum="auto"`` weighs the fitted spectrum only from this estimated SNR (dB) on.  On
+#: noisy data the misfit rule fails: the fitted spectrum is noisy and the weighted atoms fit
+#: the noise (clay, 96×96×28, TSA, 20 dB: OTD at lam 0.1 27.99 → 22.74 dB).  At 30 dB the
+#: cross-validation tied (``benchmarks/results/cv_otd_pan_spectrum.md``), so only clean data
+#: pay for the second stage; a noise-free TSA measurement estimates at 40-47 dB.
+FITTED_SPECTRUM_ABOVE_DB = 38.0
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
 #: (:func:`tensor_cosdi.noise.snr_schedule`), for panchromatic axes shorter than
@@ -96,9 +102,10 @@ def panchromatic_estimate(
     ``pan_spectrum`` (:data:`PAN_SPECTRA`): ``"flat"`` spans the bands by plain DCT atoms;
     ``"fitted"`` runs the stage twice, the second time with the atoms weighted by the scene's
     mean spectrum fitted from the first (:func:`fitted_mean_spectrum`; a light with sharp
-    spectral features); ``"auto"``, from :data:`MANY_BANDS` bands on, does the same and keeps
-    whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and below
-    that is ``"flat"`` (not measured there).  Weighted atoms need one panchromatic axis.
+    spectral features); ``"auto"``, from :data:`MANY_BANDS` bands on and on a clean
+    measurement (estimated SNR from :data:`FITTED_SPECTRUM_ABOVE_DB`), does the same and
+    keeps whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and
+    is ``"flat"`` otherwise.  Weighted atoms need one panchromatic axis.
 
     Returns
     -------
@@ -113,8 +120,13 @@ def panchromatic_estimate(
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     axes = list(system.panchromatic_axes)
-    if pan_spectrum == "auto" and not (len(axes) == 1 and has_many_bands(system)):
-        pan_spectrum = "flat"
+    if pan_spectrum == "auto":
+        clean = len(axes) == 1 and has_many_bands(system)
+        if clean:
+            from .snr import estimate_snr
+
+            clean = estimate_snr(system, measurement).snr_db >= FITTED_SPECTRUM_ABOVE_DB
+        pan_spectrum = "auto" if clean else "flat"
     if pan_spectrum != "flat" and len(axes) != 1:
         raise ValueError(
             f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"

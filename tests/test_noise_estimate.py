@@ -50,8 +50,9 @@ def test_auto_weights_rescue_otd_at_20db_on_a_real_scene_and_mask():
     With the panchromatic stage's TV weight tied to the start's maximum, OTD
     gave 16.86 dB at lam 0.1 and 21.98 with lam="auto".  With the robust
     peak, pan_weight="auto" and the non-negative z-step (the defaults) lam 0.1
-    gives 27.99 dB and lam="auto" (0.3 here) 26.95: both rescued.  On this crop
-    0.1 is the better weight; over 12 tuning scenes at 256×256 the
+    gave 27.99 dB and lam="auto" (0.3 here) 26.95: both rescued (lam 0.1 now 29.36; with the
+    fitted-spectrum first stage taken on noisy data, 22.74: why it needs a clean
+    measurement).  On this crop 0.1 is the better weight; over 12 tuning scenes at 256×256 the
     cross-validation chose 0.3 at 20 dB (``benchmarks/results/nonneg.md``).
     """
 

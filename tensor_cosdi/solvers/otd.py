@@ -378,8 +378,8 @@ def online_tucker_admm(
     ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also
     tried with its spectral atoms weighted by the scene's fitted mean spectrum, the better fit
     kept): 4-fold cross-validation over 8 tuning scenes as they are and lit by CIE LED-B3 and
-    A (``benchmarks/results/cv_otd_pan_spectrum.md``, run with the second stage at every
-    noise level): noiseless 31.32 → 31.99 dB over the 24 views, every fold chose it; at 30
+    A (``benchmarks/results/cv_otd_pan_spectrum.md``, run with the second stage at both
+    noise levels): noiseless 31.32 → 31.99 dB over the 24 views, every fold chose it; at 30
     dB a tie (30.28 both); at 20 dB it lost, so noisy data keep the plain atoms
     (:data:`~.panchromatic.FITTED_SPECTRUM_ABOVE_DB`).  It costs a second first stage, about
     2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run); ``pan_spectrum="flat"``

@@ -30,7 +30,7 @@ _check_int = engine.check_int
 PAN_SPECTRA = ("flat", "fitted", "auto")
 #: ``pan_spectrum="auto"`` weighs the fitted spectrum only from this estimated SNR (dB) on.  On
 #: noisy data the misfit rule fails: the fitted spectrum is noisy and the weighted atoms fit
-#: the noise (clay, 96×96×28, TSA, 20 dB: OTD at lam 0.1 27.99 → 22.74 dB).  At 30 dB the
+#: the noise (clay, 96×96×28, TSA, 20 dB: OTD at lam 0.1 29.36 → 22.74 dB).  At 30 dB the
 #: cross-validation tied (``benchmarks/results/cv_otd_pan_spectrum.md``), so only clean data
 #: pay for the second stage; a noise-free TSA measurement estimates at 40-47 dB.
 FITTED_SPECTRUM_ABOVE_DB = 38.0

@@ -234,14 +234,15 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
     g = np.asarray(B.to_numpy(measurement), dtype=np.float32).ravel()
     n = x.shape[mode]
     cols = np.empty((g.size, n), dtype=np.float32)  # one measurement per band: a cube's worth
+    e = np.zeros(x.shape, dtype=np.float32)  # one cube, its band slice filled in turn
+    index = [slice(None)] * x.ndim
     for band in range(n):
-        e = np.zeros(x.shape, dtype=np.float32)
-        index = [slice(None)] * x.ndim
         index[mode] = slice(band, band + 1)
         e[tuple(index)] = a
         cols[:, band] = np.asarray(
             B.to_numpy(system.operator.apply(B.tensor_like(e, measurement)))
         ).ravel()
+        e[tuple(index)] = 0.0
     s, _ = nnls((cols.T @ cols).astype(np.float64), (cols.T @ g).astype(np.float64))
     peak = s.max()
     if not peak > 0:

@@ -37,6 +37,7 @@ from _protocol import (  # noqa: E402
     load_mask,
     pnp_fast_settings,
     problem,
+    scene_view,
     score,
     snr_label,
     write_results,
@@ -88,9 +89,13 @@ def main(argv=None):
         if not path.is_file():
             raise SystemExit(f"candidate weights not found: {path}")
         files["candidate" if len(names) == 1 else f"candidate {i + 1}"] = path
-    known = tc.colour.colour_science().SDS_ILLUMINANTS
-    if args.illuminant is not None and args.illuminant not in list(known):
-        raise SystemExit(f"--illuminant: unknown {args.illuminant!r}; e.g. A, D65, LED-B3")
+    if args.illuminant is not None:
+        try:
+            scene_view(f"scene~{args.illuminant}")  # the protocol's check of a light's name
+        except ValueError:
+            raise SystemExit(
+                f"--illuminant: unknown {args.illuminant!r}; e.g. A, D65, LED-B3"
+            ) from None
     mask = load_mask(args.mask)
     run = _in_pnp_fast if args.method == "pnp_fast" else _in_pnp_gap
     rows = {k: {snr: [] for snr in snrs} for k in files}

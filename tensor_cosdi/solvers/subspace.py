@@ -214,6 +214,17 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
     :func:`~tensor_cosdi.solvers.panchromatic.panchromatic_estimate` keeps whichever basis
     fits the measurement better.
 
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+    measurement : tensor of ``system.measurement_shape``
+    cube : tensor of ``system.cube_shape``
+        A first estimate; only its sum over ``axis`` is used (negative values count as 0).
+    axis : str
+        A name of ``system.panchromatic_axes`` (the bands, ``"λ"``).
+    floor : float
+        The smallest weight returned, relative to the peak (weighted atoms need weights > 0).
+
     Returns
     -------
     ndarray of the axis' length: ``s`` scaled to a peak of 1, at least ``floor``.

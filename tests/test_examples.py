@@ -287,7 +287,27 @@ def _snr_estimate(ns):
         assert abs(r[name, "20 dB"].from_frames_db - 20) < 0.5
 
 
+def _radiance_light(ns):
+    refl, lit = ns["refl"], ns["lit"]
+    seen = refl > 0.05  # voxels of non-negligible reflectance
+    for light, cube in lit.items():
+        assert cube.shape == refl.shape and abs(cube.max() - 1.0) < 1e-9, light
+        # one spectral factor for the whole scene: the light's, the same at every pixel
+        factor = np.broadcast_to(ns["shape_of_light"][light], refl.shape)
+        np.testing.assert_allclose(cube[seen], refl[seen] * factor[seen], rtol=1e-5)
+    a = ns["shape_of_light"]["A"]
+    assert (np.diff(a) > 0).all()  # tungsten rises toward the red
+    p = ns["psnr"]
+    for light in ns["lights"]:
+        assert p[light, "flat"] > 22, p  # CAVE paints 96×96: 27.57 / 32.80 / 27.25 dB
+        assert p[light, "auto"] > p[light, "flat"] - 1.0, p  # the misfit rule's worst pick
+    if ns["source"].startswith("CAVE"):  # prints +0.33 (D65), +0.81 (A), +3.24 dB (LED-B3)
+        assert p["LED-B3", "auto"] > p["LED-B3", "flat"] + 1.5, p
+        assert p["A", "auto"] > p["A", "flat"], p
+
+
 CHECKS = {
+    "plot_radiance_light": _radiance_light,
     "plot_snr_estimate": _snr_estimate,
     "plot_dl_baseline": _dl_baseline,
     "plot_conditioning": _conditioning,

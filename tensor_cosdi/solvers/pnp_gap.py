@@ -36,6 +36,7 @@ from ..noise import snr_schedule
 from . import engine
 from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
+from .panchromatic import PAN_SPECTRA
 from .priors import Denoiser
 
 __all__ = ["pnp_gap", "pnp_fast"]
@@ -128,6 +129,12 @@ ADMM_ITER = {28.5: 160, 19.5: 80}
 #: magnified scenes (balloons ×4: 33.84 dB, OTD's start 33.82; 0.06: 37.45), tuning means
 #: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).
 SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
+#: ``pan_spectrum``: the OTD start's spectral atoms (see :func:`pnp_gap`).  OTD's own default,
+#: ``"auto"``, ties with plain atoms here: 8 tuning scenes as they are and lit by CIE A and
+#: LED-B3, 4 folds, noiseless, TSA, bfloat16 (``benchmarks/results/cv_pnp_gap_pan_spectrum.md``):
+#: 34.66 dB plain against 34.67 for a second first stage (about +2.7 s a cube); the 200
+#: denoiser iterations wash the start's spectral atoms out, so the start stays single.
+PAN_SPECTRUM = "flat"
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 1
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
@@ -178,6 +185,7 @@ def pnp_gap(
     pan_iter="auto",
     pan_tv_steps="auto",
     pan_atoms="auto",
+    pan_spectrum=PAN_SPECTRUM,
     accelerate="auto",
     eps="auto",
     splitting="auto",
@@ -227,6 +235,13 @@ def pnp_gap(
         With ``warm="otd"``: the spectral DCT atoms of that first stage (OTD's
         ``pan_atoms``; ``"auto"``: OTD's default,
         :func:`~tensor_cosdi.solvers.subspace.pan_atoms_for`).
+    pan_spectrum : ``"flat"``, ``"fitted"`` or ``"auto"``
+        With ``warm="otd"``: how that first stage spans the bands (OTD's
+        ``pan_spectrum``, :data:`~tensor_cosdi.solvers.panchromatic.PAN_SPECTRA`).
+        ``"flat"`` (default, :data:`PAN_SPECTRUM`): plain DCT atoms, one first stage;
+        ``"auto"`` also tries the atoms weighted by the fitted mean spectrum on a clean
+        measurement (OTD's default; a second first stage, about 2.7 s at 256×256×28, which
+        gained 0.01 dB here).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration
@@ -334,6 +349,7 @@ def pnp_gap(
     pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
     pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
     pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
+    pan_spectrum = _check_pan_spectrum(pan_spectrum, warm)
     den = resolve(denoiser)
     if den is spectral_net:  # fail before the warm start, naming the extra
         from ..learn import require_torch
@@ -367,6 +383,7 @@ def pnp_gap(
         pan_iter=pan_iter,
         pan_tv_steps=pan_tv_steps,
         pan_atoms=pan_atoms,
+        pan_spectrum=pan_spectrum,
         accelerate=accelerate,
         eps=eps,
         max_iter=max_iter,
@@ -381,13 +398,15 @@ def pnp_gap(
 def warm_started_gap(
     system, g, prior, *, warm, warm_iter, accelerate, eps, max_iter, tol, progress, desc,
     guard=None, rho=None, pan_iter="auto", pan_tv_steps="auto", pan_atoms="auto",
+    pan_spectrum="flat",
 ):  # fmt: skip
     """:func:`~tensor_cosdi.solvers.engine.gap` (or, with ``rho``, :func:`~.engine.admm`) with
     ``prior`` from a ``warm`` start (:data:`WARM_STARTS`: ``warm_iter`` GAP-TV iterations at its
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
     first-stage iterations, ``pan_tv_steps`` its Chambolle steps and ``pan_atoms`` its spectral
-    atoms, ``"auto"`` its own); one history for both stages.  Returns ``(x, history,
+    atoms, ``"auto"`` its own; ``pan_spectrum`` its spectral atoms' weighting, ``"flat"`` by
+    default); one history for both stages.  Returns ``(x, history,
     converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
@@ -395,6 +414,7 @@ def warm_started_gap(
     pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
     pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
     pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
+    pan_spectrum = _check_pan_spectrum(pan_spectrum, warm)
     start, hist = None, None
     if warm == "gap_tv":
         from .gap_tv import gap_tv
@@ -406,10 +426,8 @@ def warm_started_gap(
 
         first = {"pan_iter": pan_iter, "pan_tv_steps": pan_tv_steps, "pan_atoms": pan_atoms}
         pan = {k: v for k, v in first.items() if v != "auto"}
-        # the start keeps plain spectral atoms: the fitted ones (OTD's pan_spectrum="auto")
-        # were cross-validated for OTD alone and cost the fast path its budget
         start, hist, _ = online_tucker_admm(
-            system, g, admm_iter=warm_iter, progress=progress, pan_spectrum="flat", **pan
+            system, g, admm_iter=warm_iter, progress=progress, pan_spectrum=pan_spectrum, **pan
         )
     elif warm == "dcosnet":  # one pass of the shipped network (torch; weights for this system)
         from ._base import History
@@ -450,6 +468,19 @@ def _check_first_stage(value, warm, name):
         raise ValueError(
             f"{name} sets the first stage of the OTD start; warm={warm!r} has none "
             f"(use warm='otd' or leave {name}='auto')"
+        )
+    return value
+
+
+def _check_pan_spectrum(value, warm):
+    """The OTD start's ``pan_spectrum``: one of ``PAN_SPECTRA``; anything but ``"flat"`` is
+    refused with another start."""
+    if not isinstance(value, str) or value not in PAN_SPECTRA:
+        raise ValueError(f"pan_spectrum must be one of {PAN_SPECTRA}, got {value!r}")
+    if value != "flat" and warm in WARM_STARTS and warm != "otd":
+        raise ValueError(
+            f"pan_spectrum sets the first stage of the OTD start; warm={warm!r} has none "
+            f"(use warm='otd' or leave pan_spectrum='flat')"
         )
     return value
 

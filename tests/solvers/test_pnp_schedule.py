@@ -89,3 +89,27 @@ def test_first_stage_options_reach_the_otd_start_and_other_starts_refuse_them(op
     for bad in (0, 2.5, "many", True):
         with pytest.raises(ValueError, match=option):
             tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **{option: bad})
+
+
+def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    otd = importlib.import_module("tensor_cosdi.solvers.otd")
+    seen = []
+    real = otd.online_tucker_admm
+
+    def spy(*args, **kw):
+        seen.append(kw["pan_spectrum"])
+        return real(*args, **kw)
+
+    with mock.patch.object(otd, "online_tucker_admm", side_effect=spy):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=2, warm_iter=2)
+        for value in ("auto", "fitted"):
+            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=2,
+                           warm_iter=2, pan_spectrum=value)  # fmt: skip
+    assert seen == [M.PAN_SPECTRUM, "auto", "fitted"]
+    with pytest.raises(ValueError, match="pan_spectrum sets the first stage of the OTD start"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="gap_tv",
+                       pan_spectrum="auto")  # fmt: skip
+    for bad in ("led", None, 1):
+        with pytest.raises(ValueError, match=r"pan_spectrum must be one of \('flat'"):
+            tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", pan_spectrum=bad)

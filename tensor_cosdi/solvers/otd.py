@@ -383,7 +383,9 @@ def online_tucker_admm(
     dB a tie (30.28 both); at 20 dB it lost, so noisy data keep the plain atoms
     (:data:`~.panchromatic.FITTED_SPECTRUM_ABOVE_DB`).  It costs a second first stage, about
     2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run); ``pan_spectrum="flat"``
-    is the faster, single first stage.
+    is the faster, single first stage.  ``"fitted_z"`` (the spatial bases from the weighted
+    atoms' estimate, the start from the plain one's) gained 0.06 dB at 30 dB in the same
+    cross-validation and lost 0.47 at 20 dB (``benchmarks/results/cv_otd_fitted_z.md``).
 
     Examples
     --------

@@ -232,7 +232,7 @@ def test_progress_bar_on_request(capsys):
         ({"weights": np.ones((2, 2))}, r"weights must be finite, ≥ 0 and of shape \(8, 8, 4\)"),
         ({"colour": 1}, r"unknown option\(s\) \['colour'\] for method 'otd'"),
         ({"nonneg": 1}, "option nonneg must be True or False"),
-        ({"pan_spectrum": "led"}, r"pan_spectrum must be one of \('flat', 'fitted', 'auto'\)"),
+        ({"pan_spectrum": "led"}, r"pan_spectrum must be one of \('flat', 'fitted', 'fitted_z'"),
     ],
 )
 def test_bad_options_are_clear_errors(options, message):
@@ -461,3 +461,23 @@ def test_first_stage_weighted_by_the_fitted_spectrum_under_an_led():
     assert errors["LED-B3", "auto"] == led_fit
     flat, fit = errors[None, "flat"], errors[None, "fitted"]
     assert errors[None, "auto"] == (flat if flat[1] <= fit[1] else fit)
+
+
+def test_fitted_z_takes_z_from_the_weighted_atoms_and_the_start_from_the_plain_ones():
+    """``pan_spectrum="fitted_z"``: ``Z`` is the weighted-atom estimate's band sum (the
+    ``"fitted"`` run's), the starting cube the plain-atom one (the ``"flat"`` run's)."""
+    from tensor_cosdi.colour import radiance
+    from tensor_cosdi.scenes import colorchecker
+    from tensor_cosdi.solvers.panchromatic import panchromatic_estimate
+
+    wl = np.linspace(453.3, 648.1, 28)
+    sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
+    g = sd.forward(radiance(colorchecker((32, 32), wl), wl, "LED-B3"))
+    runs = {m: panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=m) for m in PAN_MODES}
+    z, start = runs["fitted_z"]
+    np.testing.assert_array_equal(z, runs["fitted"][0])
+    np.testing.assert_array_equal(start, runs["flat"][1])
+    assert np.abs(runs["fitted"][0] - runs["flat"][0]).max() > 1e-3  # the two differ here
+
+
+PAN_MODES = ("flat", "fitted", "fitted_z")

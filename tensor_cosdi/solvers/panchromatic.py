@@ -109,9 +109,9 @@ def panchromatic_estimate(
     mean spectrum fitted from the first (:func:`fitted_mean_spectrum`; a light with sharp
     spectral features); ``"fitted_z"`` runs both and takes ``Z`` from the weighted atoms'
     estimate and the starting cube from the plain one's; ``"auto"``, from
-    :data:`MANY_BANDS` bands on and on a clean
-    measurement (estimated SNR from :data:`FITTED_SPECTRUM_ABOVE_DB`), does the same and
-    keeps whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and
+    :data:`MANY_BANDS` bands on and on a clean measurement (estimated SNR from
+    :data:`FITTED_SPECTRUM_ABOVE_DB`), runs both stages as ``"fitted"`` does and keeps
+    whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and
     is ``"flat"`` otherwise.  Weighted atoms need one panchromatic axis.
 
     Returns

@@ -36,8 +36,8 @@ PAN_SPECTRA = ("flat", "fitted", "fitted_z", "auto")
 #: ``"fitted_z"`` (``Z`` from the weighted atoms, the start from the plain ones) pay on noisy
 #: data: 8 tuning scenes as they are and lit by A and LED-B3, 4 folds, TSA
 #: (``benchmarks/results/cv_otd_fitted_z.md``): 30 dB 30.28 → 30.34 dB (every fold chose it,
-#: report scenes 29.57 → 29.55) for a second first stage (5.5 → 8.2 s a cube), 20 dB
-#: 28.87 → 28.40.
+#: report scenes 29.57 → 29.55) for a second first stage (median 5.4 → 8.1 s a cube over
+#: the 24 views), 20 dB 28.87 → 28.40.
 FITTED_SPECTRUM_ABOVE_DB = 38.0
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR

@@ -132,8 +132,12 @@ SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
 #: ``pan_spectrum``: the OTD start's spectral atoms (see :func:`pnp_gap`).  OTD's own default,
 #: ``"auto"``, ties with plain atoms here: 8 tuning scenes as they are and lit by CIE A and
 #: LED-B3, 4 folds, noiseless, TSA, bfloat16 (``benchmarks/results/cv_pnp_gap_pan_spectrum.md``):
-#: 34.66 dB plain against 34.67 for a second first stage (about +2.7 s a cube); the 200
+#: 34.66 dB plain against 34.67 for a second first stage (median 14.0 → 16.9 s a cube); the 200
 #: denoiser iterations wash the start's spectral atoms out, so the start stays single.
+#: :func:`pnp_fast`'s 46 iterations keep more of it: 33.53 → 33.73 dB, every fold
+#: (``benchmarks/results/cv_pnp_fast_pan_spectrum.md``; up to +1.4 dB on scenes lit by
+#: LED-B3), but its median time went from 4.8 to 6.2 s a cube, past its 5-s budget, so it
+#: stays an option there too (``pnp_fast(..., pan_spectrum="auto")``).
 PAN_SPECTRUM = "flat"
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 1
@@ -240,7 +244,7 @@ def pnp_gap(
         ``pan_spectrum``, :data:`~tensor_cosdi.solvers.panchromatic.PAN_SPECTRA`).
         ``"flat"`` (default, :data:`PAN_SPECTRUM`): plain DCT atoms, one first stage;
         ``"auto"`` also tries the atoms weighted by the fitted mean spectrum on a clean
-        measurement (OTD's default; a second first stage, about 2.7 s at 256×256×28, which
+        measurement (OTD's default; a second first stage, about 2.9 s at 256×256×28, which
         gained 0.01 dB here).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
@@ -495,8 +499,8 @@ def _joined(first, second):
 def pnp_fast(
     system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
     warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", pan_atoms="auto",
-    sigma_end="auto", rho="auto", nonneg: bool = True, cycle: bool = True,
-    progress: bool = False,
+    pan_spectrum=PAN_SPECTRUM, sigma_end="auto", rho="auto", nonneg: bool = True,
+    cycle: bool = True, progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
     ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
@@ -520,7 +524,7 @@ def pnp_fast(
 
     Parameters
     ----------
-    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms
+    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms, pan_spectrum
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start).
     sigma_end, rho, nonneg, cycle, progress
@@ -537,7 +541,8 @@ def pnp_fast(
     return pnp_gap(
         system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
         warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
-        sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle, progress=progress,
+        pan_spectrum=pan_spectrum, sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle,
+        progress=progress,
     )  # fmt: skip
 
 

@@ -106,6 +106,10 @@ def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
         for value in ("auto", "fitted"):
             tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=2,
                            warm_iter=2, pan_spectrum=value)  # fmt: skip
+        if importlib.util.find_spec("torch"):  # pnp_fast passes it on (the learned denoiser)
+            tc.reconstruct(p.system, p.measurement, "pnp_fast", max_iter=1, warm_iter=2,
+                           pan_spectrum="fitted_z")  # fmt: skip
+            assert seen.pop() == "fitted_z"
     assert seen == [M.PAN_SPECTRUM, "auto", "fitted"]
     with pytest.raises(ValueError, match="pan_spectrum sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="gap_tv",

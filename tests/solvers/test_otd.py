@@ -473,11 +473,9 @@ def test_fitted_z_takes_z_from_the_weighted_atoms_and_the_start_from_the_plain_o
     wl = np.linspace(453.3, 648.1, 28)
     sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
     g = sd.forward(radiance(colorchecker((32, 32), wl), wl, "LED-B3"))
-    runs = {m: panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=m) for m in PAN_MODES}
+    modes = ("flat", "fitted", "fitted_z")
+    runs = {m: panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=m) for m in modes}
     z, start = runs["fitted_z"]
     np.testing.assert_array_equal(z, runs["fitted"][0])
     np.testing.assert_array_equal(start, runs["flat"][1])
     assert np.abs(runs["fitted"][0] - runs["flat"][0]).max() > 1e-3  # the two differ here
-
-
-PAN_MODES = ("flat", "fitted", "fitted_z")

@@ -301,7 +301,7 @@ def _radiance_light(ns):
     for light in ns["lights"]:
         assert p[light, "flat"] > 22, p  # CAVE paints 96×96: 27.57 / 32.80 / 27.25 dB
         assert p[light, "auto"] > p[light, "flat"] - 1.0, p  # the misfit rule's worst pick
-    if ns["source"].startswith("CAVE"):  # prints +0.33 (D65), +0.81 (A), +3.24 dB (LED-B3)
+    if ns["scene"].startswith("cave."):  # prints +0.33 (D65), +0.81 (A), +3.24 dB (LED-B3)
         assert p["LED-B3", "auto"] > p["LED-B3", "flat"] + 1.5, p
         assert p["A", "auto"] > p["A", "flat"], p
 

@@ -34,14 +34,11 @@ import tensor_cosdi as tc
 from tensor_cosdi import datasets
 
 n = 96
-try:
-    refl, wl = datasets.load_hsi("paints", "kaist", shape=(n, n))  # a tune-split scene
-    source = "CAVE 'paints' (real reflectance spectra)"
-except FileNotFoundError as err:  # stops unless TENSOR_COSDI_ALLOW_FALLBACK=1
-    source = datasets.stand_in(err, "ColorChecker reflectances")
-    wl = datasets.KAIST_WAVELENGTHS
-    refl = tc.scenes.colorchecker((n, n), wl)
-print(source)
+wl = datasets.KAIST_WAVELENGTHS
+# a tune-split scene; without the data it stops unless TENSOR_COSDI_ALLOW_FALLBACK=1
+scene, note = datasets.scene_or("cave.paints", "colorchecker")
+print(note or f"{scene}: real reflectance spectra")
+refl = tc.scenes.scene_cube(scene, (n, n), wl)
 lights = ("D65", "A", "LED-B3")
 lit = {light: tc.colour.radiance(refl, wl, light) for light in lights}
 # the light's spectrum, recovered from any pixel of non-zero reflectance: L / R is S / max(L)

@@ -433,6 +433,15 @@ def build_parser() -> argparse.ArgumentParser:
         "--density-spread", type=float, default=0.2,
         help="null-space noise: code densities in 0.5 ± this (default 0.2)",
     )  # fmt: skip
+    tr.add_argument(
+        "--init", default="",
+        help="starting weights: shipped (fine-tune the package's network) or a train-denoiser "
+        ".pt file of the same --width/--blocks (default: random, from --seed)",
+    )  # fmt: skip
+    tr.add_argument("--lr", type=float, default=1e-3, help="peak learning rate (default 1e-3)")
+    tr.add_argument(
+        "--warmup", type=int, default=200, help="linear warm-up steps (default 200)"
+    )
     tr.set_defaults(func=run_train_denoiser)
 
     dc = sub.add_parser(

@@ -72,6 +72,10 @@ def run_train_denoiser(args) -> int:
         density_spread=args.density_spread,
         seed=args.seed,
         hold_out=args.hold_out,
+        init=args.init,
+        lr=args.lr,
+        lr_end=min(1e-5, args.lr),
+        warmup=args.warmup,
     )
     return _run_training(args, train_denoiser, cfg.check())
 

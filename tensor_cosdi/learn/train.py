@@ -74,6 +74,9 @@ class TrainConfig:
     checkpoint_every: int = 200
     #: -1: train on every tuning scene; k: leave fold k of ``tune_folds(4)`` out (validation)
     hold_out: int = -1
+    #: the starting weights: ``""`` (random, seeded), ``"shipped"`` (fine-tune the package's
+    #: network) or a ``train-denoiser`` weights file of the same ``r_max``, ``width``, ``blocks``
+    init: str = ""
 
     def check(self):
         from ._loop import check_config
@@ -105,6 +108,8 @@ class TrainConfig:
                 + f", got {z!r}"
             )
         training_scenes(self.hold_out)
+        if not isinstance(self.init, str):
+            raise ValueError(f"init must be '', 'shipped' or a weights file, got {self.init!r}")
         if not 0 < self.sigma_min < self.sigma_max:
             raise ValueError(
                 f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
@@ -265,6 +270,27 @@ def nullspace_noise(torch, noise, rng, p: int, max_shift: int = 3, density_sprea
     return (x - proj).reshape(noise.shape)
 
 
+def _build(torch, cfg: TrainConfig):
+    """The network of ``cfg``: random (seeded), or ``cfg.init``'s weights to fine-tune."""
+    from . import load_weights
+    from .spectral_net import _build_net, default_weights
+
+    net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks)
+    if not cfg.init:
+        return net
+    path = default_weights() if cfg.init == "shipped" else cfg.init
+    ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
+    want = {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks}
+    got = {k: ckpt["config"].get(k) for k in want} if isinstance(ckpt["config"], dict) else None
+    if got != want:
+        raise ValueError(
+            f"init weights {path} are a network of {got}, not the {want} being trained; "
+            "pass the same --width/--blocks"
+        )
+    net.load_state_dict(ckpt["model"])
+    return net
+
+
 def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     """One batch's loss (see the module docstring)."""
     from .spectral_net import subspace
@@ -318,7 +344,6 @@ def train_denoiser(
     ``command`` is stored as provenance.
     """
     from ._loop import run
-    from .spectral_net import _build_net
 
     return run(
         desc="train-denoiser",
@@ -326,7 +351,7 @@ def train_denoiser(
         config=config,
         config_cls=TrainConfig,
         prepare=lambda cfg: training_data(folder, cfg.hold_out),
-        build=lambda torch, cfg, data: _build_net(torch, cfg.r_max, cfg.width, cfg.blocks),
+        build=lambda torch, cfg, data: _build(torch, cfg),
         batch_loss=_denoiser_loss,
         weights_config=lambda cfg: {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},
         resume=resume,

@@ -200,6 +200,40 @@ def test_cli_train_denoiser(tmp_path, capsys):
 
 
 @needs_torch
+def test_fine_tuning_starts_from_the_given_weights(tmp_path, capsys):
+    import torch
+
+    from tensor_cosdi import cli
+    from tensor_cosdi.learn.spectral_net import default_weights
+
+    _real()
+    small = ["--steps", "1", "--batch", "2", "--patch", "16", "--quiet", "--device", "cpu"]
+    # a learning rate of 1e-12: one Adam step moves no weight by more than ~1e-12
+    out = tmp_path / "ft.pt"
+    assert cli.main(["train-denoiser", "--out", str(out), "--init", "shipped", "--lr", "1e-12",
+                     "--warmup", "0"] + small) == 0  # fmt: skip
+    tuned = torch.load(out, weights_only=True)
+    shipped = torch.load(default_weights(), weights_only=True)["model"]
+    for k, v in shipped.items():
+        torch.testing.assert_close(tuned["model"][k], v, rtol=0, atol=1e-9)
+    cfg = json.loads(tuned["train_config"])
+    assert (cfg["init"], cfg["lr"], cfg["warmup"]) == ("shipped", 1e-12, 0)
+    # a random start (the default) is far from the shipped network
+    scratch = tmp_path / "scratch.pt"
+    assert cli.main(["train-denoiser", "--out", str(scratch)] + small) == 0
+    w = torch.load(scratch, weights_only=True)["model"]
+    assert max(float((w[k] - v).abs().max()) for k, v in shipped.items()) > 1e-2
+    # a file of another shape, a missing file, a bad learning rate: one-line errors
+    for bad, msg in (
+        (["--init", str(out), "--width", "8"], "pass the same --width/--blocks"),
+        (["--init", str(tmp_path / "none.pt")], "weights not found"),
+        (["--lr", "-1"], "need 0 < lr_end ≤ lr"),
+    ):
+        assert cli.main(["train-denoiser", "--out", str(tmp_path / "b.pt")] + bad + small) == 2
+        assert msg in capsys.readouterr().err
+
+
+@needs_torch
 def test_nullspace_noise_leaves_nothing_the_operator_sees_for_each_shift_and_density():
     """The training noise ``(I − Aᵀ(AAᵀ)⁻¹A) n``: the drawn SD-CASSI operator maps it to zero
     on every measured pixel, with shifts of 1 to ``max_shift`` and the drawn densities."""

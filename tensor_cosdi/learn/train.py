@@ -20,7 +20,10 @@ percentile, which agrees within a few per cent on such patches but not on a
 plug-and-play iterate, whose maximum is one outlier); the loss is the
 squared error of the predicted eigen-image noise as a fraction of the noise
 energy (so every level weighs the same).  Adam (gradients clipped to norm
-1) with a linear warm-up and a cosine-decayed step.
+1) with a linear warm-up and a cosine-decayed step, from a seeded random
+start or, to fine-tune, from the shipped or another network of the same
+shape (``init``; the shipped network is its base fine-tuned on 128×128
+patches, closer to the whole-image subspaces the denoiser meets).
 
 Checkpoints (model, optimiser, step, random states) are written atomically
 to ``OUT.ckpt`` every ``checkpoint_every`` steps; ``resume=True`` continues

@@ -227,7 +227,8 @@ def test_fine_tuning_starts_from_the_given_weights(tmp_path, capsys):
     for bad, msg in (
         (["--init", str(out), "--width", "8"], "pass the same --width/--blocks"),
         (["--init", str(tmp_path / "none.pt")], "weights not found"),
-        (["--lr", "-1"], "need 0 < lr_end ≤ lr"),
+        (["--lr", "-1"], "lr must be a finite positive number"),
+        (["--lr", "inf"], "lr must be a finite positive number"),
     ):
         assert cli.main(["train-denoiser", "--out", str(tmp_path / "b.pt")] + bad + small) == 2
         assert msg in capsys.readouterr().err

@@ -127,7 +127,9 @@ ADMM_ITER = {28.5: 160, 19.5: 80}
 #: tuning scenes as they are and magnified 4× (4 folds, TSA mask;
 #: ``benchmarks/results/pnp_gap_admm_30db_zoom4.md``): 0.04 kept the noise on smooth,
 #: magnified scenes (balloons ×4: 33.84 dB, OTD's start 33.82; 0.06: 37.45), tuning means
-#: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).
+#: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).  Checked again
+#: with the fine-tuned network (``benchmarks/results/cv_pnp_gap_sigma_30db_ft128.md``, the same
+#: 16 views): σ_end 0.05 / 0.06 / 0.07 → 32.00 / 32.18 / 32.22 dB, a tie within 0.05 dB.
 SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
 #: ``guard``: accelerated GAP stops when its residual has risen three iterations in a row to
 #: above this many times its lowest (see :func:`pnp_gap`).  At 1.3 it stopped a converging run

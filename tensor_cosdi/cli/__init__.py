@@ -438,7 +438,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="starting weights: shipped (fine-tune the package's network) or a train-denoiser "
         ".pt file of the same --width/--blocks (default: random, from --seed)",
     )  # fmt: skip
-    tr.add_argument("--lr", type=float, default=1e-3, help="peak learning rate (default 1e-3)")
     tr.add_argument(
         "--warmup", type=int, default=200, help="linear warm-up steps (default 200)"
     )
@@ -490,10 +489,6 @@ def build_parser() -> argparse.ArgumentParser:
         "the network adapts (default 0.5)",
     )  # fmt: skip
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
-    dc.add_argument(
-        "--lr", type=float, default=1e-3,
-        help="peak learning rate (default 1e-3; lower to fine-tune the spectral prior)",
-    )  # fmt: skip
     dc.set_defaults(func=run_train_dcosnet)
     return parser
 

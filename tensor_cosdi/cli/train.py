@@ -13,6 +13,10 @@ def _training_options(p, *, steps: int, batch: int):
     p.add_argument("--steps", type=_positive_int, default=steps, help="optimiser steps")
     p.add_argument("--batch", type=_positive_int, default=batch, help="samples per step")
     p.add_argument("--seed", type=int, default=0, help="seed of samples and noise (default 0)")
+    p.add_argument(
+        "--lr", type=float, default=1e-3,
+        help="peak learning rate (default 1e-3; lower to fine-tune a trained network)",
+    )  # fmt: skip
     p.add_argument("--data", help="folder of the NAME.npz scenes (default: datasets.data_dir())")
     p.add_argument("--device", help="cpu, cuda, … (default: cuda when available)")
     p.add_argument("--threads", type=_positive_int, help="CPU threads for torch")

@@ -139,7 +139,7 @@ SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
 #: 1.3, 2 and 4 never stopped a run and tied (34.66 dB), so the looser 2.0 is the default.
 #: It is not free: on the report scenes 1.3 had stopped real_and_fake_apples (noiseless) at a
 #: better iterate, and the report rows lost 0.13 dB (TSA) and 0.35 dB (random code) with 2.0
-#: (CHANGELOG; ``benchmarks/results/real_spectra.md``).
+#: (measured with the earlier denoiser network; the CHANGELOG keeps both runs).
 GUARD = 2.0
 #: ``pan_spectrum``: the OTD start's spectral atoms (see :func:`pnp_gap`).  OTD's own default,
 #: ``"auto"``, ties with plain atoms here: 8 tuning scenes as they are and lit by CIE A and

@@ -20,7 +20,8 @@ from .priors import TV
 
 __all__ = [
     "subspace_gap_tv", "subspace_denoise", "pan_atoms_for", "has_many_bands",
-    "fitted_mean_spectrum", "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
+    "fitted_mean_spectrum", "spectral_roughness", "gate_spectrum", "ROUGH_SPECTRUM",
+    "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS",
 ]  # fmt: skip
 
 _check_int = engine.check_int
@@ -114,6 +115,7 @@ def subspace_gap_tv(
     tv_steps: int | None = 10,
     eps: float = 1e-6,
     spectral_weights=None,
+    refit_at=None,
     progress: bool = False,
 ):
     """A fast first estimate for the panchromatic image: GAP-TV in a smooth spectral subspace.
@@ -133,6 +135,12 @@ def subspace_gap_tv(
     reflectance times a light's spectrum with sharp features (a white LED's blue peak) need
     many plain DCT atoms but few weighted by the light
     (:func:`fitted_mean_spectrum` estimates it).
+
+    ``refit_at`` (one panchromatic axis, no ``spectral_weights``): after that many
+    iterations, fit the mean spectrum to the measurement from the iterate
+    (:func:`gate_spectrum`) and, where it reads rougher than :data:`ROUGH_SPECTRUM`, span the
+    axis by the atoms weighted by it for the remaining iterations, in the same run (its
+    acceleration kept); a smooth spectrum leaves the run as it would have been.
 
     Returns
     -------
@@ -161,10 +169,23 @@ def subspace_gap_tv(
     def subspace_tv(v, weight):
         return subspace_denoise(v, mats, modes, denoise, weight)
 
+    prior = TV(tv_weight, denoise=subspace_tv)
+    if refit_at is not None:
+        refit_at = _check_int("refit_at", refit_at, 1)
+        if len(modes) != 1 or weights:
+            raise ValueError("refit_at needs one panchromatic axis and no spectral_weights")
+
+        def refit(x):
+            w, rough = gate_spectrum(system, g, x, names[modes[0]])
+            if rough > ROUGH_SPECTRUM:
+                atoms = np.linalg.qr(w[:, None] * dct(shape[modes[0]]))[0]
+                mats[0] = B.tensor_like(atoms[:, : keep[modes[0]]], g)
+
+        prior = _Refit(prior, refit_at, refit)
     x, _, _ = engine.gap(
         system.operator,
         g,
-        TV(tv_weight, denoise=subspace_tv),
+        prior,
         eps=eps,
         max_iter=max_iter,
         progress=progress,
@@ -172,6 +193,43 @@ def subspace_gap_tv(
         objective=False,  # an internal stage: its history is not returned
     )
     return x
+
+
+#: ``refit_at``'s gate: a fitted mean spectrum whose :func:`spectral_roughness` exceeds this
+#: weights the atoms.  Read on every tuning scene as it is and lit by A, D65, LED-B3, FL11
+#: and FL2, noiseless, 30 and 20 dB (``benchmarks/results/spectral_roughness.md``).
+ROUGH_SPECTRUM = 0.1
+#: :func:`spectral_roughness`: the DCT atoms that count as smooth.
+SMOOTH_ATOMS = 6
+
+
+def spectral_roughness(w, n_smooth: int = SMOOTH_ATOMS) -> float:
+    """How far a spectrum ``w`` lies from its projection onto its first ``n_smooth`` DCT atoms,
+    relative to its norm: about 0 for a smooth spectrum, large for a light's sharp lines."""
+    w = np.asarray(w, dtype=np.float64)
+    atoms = dct(w.size)[:, : min(n_smooth, w.size)]
+    rest = w - atoms @ (atoms.T @ w)
+    return float(np.linalg.norm(rest) / max(np.linalg.norm(w), 1e-300))
+
+
+def gate_spectrum(system, measurement, cube, axis: str):
+    """``(w, roughness)``: the mean spectrum fitted from ``cube`` (:func:`fitted_mean_spectrum`)
+    and its :func:`spectral_roughness`, the reading that ``refit_at`` of
+    :func:`subspace_gap_tv` compares with :data:`ROUGH_SPECTRUM`."""
+    w = fitted_mean_spectrum(system, measurement, cube, axis)
+    return w, spectral_roughness(w)
+
+
+class _Refit(TV):
+    """``inner`` (a :class:`TV`) that calls ``refit(x)`` once, after iteration ``at``."""
+
+    def __init__(self, inner, at, refit):
+        super().__init__(inner.weight, denoise=inner._denoise)
+        self.at, self.refit = at, refit
+
+    def update(self, x, iteration: int) -> None:
+        if iteration == self.at:
+            self.refit(x)
 
 
 def _check_weights(spectral_weights, system) -> dict:

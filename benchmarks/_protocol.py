@@ -242,17 +242,14 @@ def candidates(grid: dict) -> list[dict]:
 
 
 def pnp_fast_settings() -> dict:
-    """``pnp_fast``'s own settings (its signature's defaults, less ``precision`` and
-    ``progress``): ``pnp_gap`` with these and another denoiser is ``pnp_fast`` with it."""
-    import inspect
+    """``pnp_fast``'s own settings as ``pnp_gap`` options, less ``precision``
+    (:func:`tensor_cosdi.solvers.pnp_gap.fast_settings`): ``pnp_gap`` with these and another
+    denoiser is ``pnp_fast`` with it."""
+    from tensor_cosdi.solvers.pnp_gap import fast_settings
 
-    from tensor_cosdi.solvers.pnp_gap import pnp_fast
-
-    return {
-        k: p.default
-        for k, p in inspect.signature(pnp_fast).parameters.items()
-        if p.default is not inspect.Parameter.empty and k not in ("precision", "progress")
-    }
+    out = fast_settings()
+    del out["precision"]
+    return out
 
 
 def key(scene, snr, mask, method, options) -> str:

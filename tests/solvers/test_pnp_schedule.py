@@ -117,3 +117,22 @@ def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
     for bad in ("led", None, 1):
         with pytest.raises(ValueError, match=r"pan_spectrum must be one of \('flat'"):
             tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", pan_spectrum=bad)
+
+
+def test_fast_settings_resolve_the_start_as_pnp_fast_does():
+    """``fast_settings()``: ``pnp_fast``'s own pnp_gap options — its 5 TV steps and gated
+    first stage with the OTD start; with another start the default first-stage weighting is
+    dropped to ``"flat"`` (that start has none), an explicit one is passed on and refused by
+    ``pnp_gap``; an unknown option is named."""
+    assert M.fast_settings()["pan_tv_steps"] == M.FAST_PAN_TV_STEPS
+    assert M.fast_settings()["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
+    other = M.fast_settings(warm="gap_tv")
+    assert other["pan_spectrum"] == "flat" and other["pan_tv_steps"] == "auto"
+    assert M.fast_settings(warm="gap_tv", pan_spectrum="gated")["pan_spectrum"] == "gated"
+    with pytest.raises(ValueError, match=r"\['denoiser'\] are not options of pnp_fast"):
+        M.fast_settings(denoiser="tv")
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    with pytest.raises(ValueError, match="pan_spectrum sets the first stage of the OTD start"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv",
+                       **{**M.fast_settings(warm="gap_tv", pan_spectrum="gated"),
+                          "precision": "float32", "max_iter": 1})  # fmt: skip

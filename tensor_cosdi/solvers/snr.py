@@ -72,7 +72,7 @@ import numpy as np
 from .. import _backend as B
 from ..noise import frame_powers, frame_rank_sigma, frame_sigmas, snr_db_from_sigma
 from ..validate import number
-from .subspace import subspace_gap_tv
+from .subspace import has_many_bands, subspace_gap_tv
 
 __all__ = [
     "SNREstimate", "estimate_snr", "residual_reading_db", "grouped_reading_db", "FITS", "FIT_ITER",
@@ -96,7 +96,8 @@ FIT_TV = 0.1
 #: (``snr_estimate.md`` times both).
 SUBSPACE_FIT_ITER = 20
 SUBSPACE_FIT_TV = 0.3
-#: The subspace fit's light gate (``subspace_gap_tv(refit_at=...)``, one panchromatic axis):
+#: The subspace fit's light gate (``subspace_gap_tv(refit_at=...)``; one panchromatic axis of
+#: :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` samples or more, where it was measured):
 #: after this many iterations its atoms follow the fitted mean spectrum where that spectrum
 #: reads rough.  Smooth atoms cannot hold a fluorescent lamp's lines, and the fit read them as
 #: noise: a noiseless tuning scene lit by CIE FL11 at 27.4-46.2 dB, 13 of 28 under the clean
@@ -254,10 +255,10 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     # noiseless / 30 / 20 dB); the residual is taken in float64.
     g32 = B.as_tensor(g_unit, "float32")
     if fit == "subspace":
-        one_axis = len(system.panchromatic_axes) == 1
+        gated = len(system.panchromatic_axes) == 1 and has_many_bands(system)
         x = subspace_gap_tv(
             system, g32, max_iter=SUBSPACE_FIT_ITER, tv_weight=SUBSPACE_FIT_TV, tv_steps=5,
-            refit_at=SUBSPACE_FIT_REFIT if one_axis else None,
+            refit_at=SUBSPACE_FIT_REFIT if gated else None,
         )  # fmt: skip
     else:
         from .gap_tv import gap_tv

@@ -170,7 +170,7 @@ def subspace_gap_tv(
         return subspace_denoise(v, mats, modes, denoise, weight)
 
     prior = TV(tv_weight, denoise=subspace_tv)
-    if refit_at is not None:
+    if refit_at is not None:  # checked here, before any iteration
         refit_at = _check_int("refit_at", refit_at, 1)
         if len(modes) != 1 or weights:
             raise ValueError("refit_at needs one panchromatic axis and no spectral_weights")
@@ -181,7 +181,7 @@ def subspace_gap_tv(
                 atoms = np.linalg.qr(w[:, None] * dct(shape[modes[0]]))[0]
                 mats[0] = B.tensor_like(atoms[:, : keep[modes[0]]], g)
 
-        prior = _Refit(prior, refit_at, refit)
+        prior = _RefitTV(tv_weight, denoise=subspace_tv, at=refit_at, refit=refit)
     x, _, _ = engine.gap(
         system.operator,
         g,
@@ -205,8 +205,23 @@ SMOOTH_ATOMS = 6
 
 def spectral_roughness(w, n_smooth: int = SMOOTH_ATOMS) -> float:
     """How far a spectrum ``w`` lies from its projection onto its first ``n_smooth`` DCT atoms,
-    relative to its norm: about 0 for a smooth spectrum, large for a light's sharp lines."""
-    w = np.asarray(w, dtype=np.float64)
+    relative to its norm: about 0 for a smooth spectrum, large for a light's sharp lines.
+
+    >>> round(spectral_roughness([1.0, 1.0, 1.0, 1.0]), 6)
+    0.0
+    >>> spectral_roughness([0.0, 0.0, 1.0, 0.0], 2) > 0.5
+    True
+    """
+    n_smooth = _check_int("n_smooth", n_smooth, 1)
+    try:
+        w = np.asarray(w, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"the spectrum must be numbers, got {type(w).__name__}") from None
+    if w.ndim != 1 or w.size < 2 or not np.isfinite(w).all() or not np.abs(w).max() > 0:
+        raise ValueError(
+            f"the spectrum must be a 1-D array of at least 2 finite values, not all 0; got shape "
+            f"{w.shape}"
+        )
     atoms = dct(w.size)[:, : min(n_smooth, w.size)]
     rest = w - atoms @ (atoms.T @ w)
     return float(np.linalg.norm(rest) / max(np.linalg.norm(w), 1e-300))
@@ -220,11 +235,11 @@ def gate_spectrum(system, measurement, cube, axis: str):
     return w, spectral_roughness(w)
 
 
-class _Refit(TV):
-    """``inner`` (a :class:`TV`) that calls ``refit(x)`` once, after iteration ``at``."""
+class _RefitTV(TV):
+    """:class:`TV` that calls ``refit(x)`` once, after iteration ``at``."""
 
-    def __init__(self, inner, at, refit):
-        super().__init__(inner.weight, denoise=inner._denoise)
+    def __init__(self, weight, *, denoise, at, refit):
+        super().__init__(weight, denoise=denoise)
         self.at, self.refit = at, refit
 
     def update(self, x, iteration: int) -> None:

@@ -123,8 +123,10 @@ def panchromatic_estimate(
     :data:`GATE_FRACTION` of its iterations and, only when that spectrum has sharp lines
     (:func:`~tensor_cosdi.solvers.subspace.spectral_roughness` above
     :data:`~tensor_cosdi.solvers.subspace.ROUGH_SPECTRUM`), weights the atoms of the
-    remaining iterations by it — the plain stage, at its cost, under a smooth light.
-    Weighted atoms need one panchromatic axis.
+    remaining iterations by it — the plain stage, at its cost, under a smooth light, and
+    wherever ``"auto"`` would be ``"flat"`` (noisy data, fewer bands, several panchromatic
+    axes).  Weighted atoms need one panchromatic axis (``"fitted"`` and ``"fitted_z"``
+    refuse more).
 
     Returns
     -------
@@ -139,8 +141,8 @@ def panchromatic_estimate(
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     axes = list(system.panchromatic_axes)
-    if pan_spectrum == "auto":
-        pan_spectrum = "auto" if _clean(system, measurement) else "flat"
+    if pan_spectrum in ("auto", "gated") and not _clean(system, measurement):
+        pan_spectrum = "flat"  # no gate to read: the plain stage
     if pan_spectrum != "flat" and len(axes) != 1:
         raise ValueError(
             f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"
@@ -153,7 +155,7 @@ def panchromatic_estimate(
         progress=progress,
     )
     if pan_spectrum == "gated":  # one stage, its atoms weighted part-way where the light is sharp
-        at = max(1, round(pan_iter * GATE_FRACTION)) if _clean(system, measurement) else None
+        at = max(1, round(pan_iter * GATE_FRACTION))
         x = subspace_gap_tv(system, measurement, refit_at=at, **common)
         return system.decimation.forward(x), x
     x = subspace_gap_tv(system, measurement, **common)

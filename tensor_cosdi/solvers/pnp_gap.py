@@ -269,7 +269,9 @@ def pnp_gap(
         ``"auto"`` also tries the atoms weighted by the fitted mean spectrum on a clean
         measurement (OTD's default; a second first stage, about 2.9 s at 256×256×28, which
         gained 0.01 dB here); ``"gated"`` weights one stage's atoms part-way through, only
-        under a light with sharp lines (:func:`pnp_fast`'s default, :data:`FAST_PAN_SPECTRUM`).
+        under a light with sharp lines on a clean measurement (:func:`pnp_fast`'s default,
+        :data:`FAST_PAN_SPECTRUM`; with another start, which has no first stage, it does
+        nothing).
     accelerate : bool or "auto"
         Accelerated GAP (``ĝ ← ĝ + (g − A x)``); ``"auto"``: only when the
         estimated SNR is above :data:`ACCELERATE_ABOVE_DB` (acceleration
@@ -503,11 +505,12 @@ def _check_first_stage(value, warm, name):
 
 
 def _check_pan_spectrum(value, warm):
-    """The OTD start's ``pan_spectrum``: one of ``PAN_SPECTRA``; anything but ``"flat"`` is
-    refused with another start."""
+    """The OTD start's ``pan_spectrum``: one of ``PAN_SPECTRA``; anything but ``"flat"`` and
+    ``"gated"`` (a gate that stays shut where there is no first stage) is refused with another
+    start."""
     if not isinstance(value, str) or value not in PAN_SPECTRA:
         raise ValueError(f"pan_spectrum must be one of {PAN_SPECTRA}, got {value!r}")
-    if value != "flat" and warm in WARM_STARTS and warm != "otd":
+    if value not in ("flat", "gated") and warm in WARM_STARTS and warm != "otd":
         raise ValueError(
             f"pan_spectrum sets the first stage of the OTD start; warm={warm!r} has none "
             f"(use warm='otd' or leave pan_spectrum='flat')"
@@ -553,9 +556,8 @@ def pnp_fast(
     ----------
     max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms, pan_spectrum
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
-        :data:`FAST_PAN_TV_STEPS` with the OTD start; the default ``pan_spectrum``,
-        :data:`FAST_PAN_SPECTRUM`, is ``"flat"`` with any other start, which has no first
-        stage; :func:`fast_settings` lists them all).
+        :data:`FAST_PAN_TV_STEPS` with the OTD start; :func:`fast_settings` lists them
+        all).
     sigma_end, rho, nonneg, cycle, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
@@ -576,13 +578,13 @@ def pnp_fast(
 
 def fast_settings(**options) -> dict:
     """The :func:`pnp_gap` options that :func:`pnp_fast` runs with: its defaults, updated by
-    ``options`` (any of its own), with its start's choices resolved as it resolves them
-    (``pan_tv_steps="auto"`` → :data:`FAST_PAN_TV_STEPS` and, with a start other than OTD,
-    the default ``pan_spectrum`` → ``"flat"``).  ``pnp_gap(system, g, denoiser=d,
-    **fast_settings())`` is :func:`pnp_fast` with the denoiser ``d``.
+    ``options`` (any of its own), with its start's TV steps resolved as it resolves them
+    (``pan_tv_steps="auto"`` with the OTD start → :data:`FAST_PAN_TV_STEPS`).
+    ``pnp_gap(system, g, denoiser=d, **fast_settings())`` is :func:`pnp_fast` with the
+    denoiser ``d``.
 
-    >>> fast_settings()["pan_tv_steps"], fast_settings(warm="gap_tv")["pan_spectrum"]
-    (5, 'flat')
+    >>> fast_settings()["pan_tv_steps"], fast_settings(warm="gap_tv")["pan_tv_steps"]
+    (5, 'auto')
     """
     import inspect
 
@@ -596,11 +598,9 @@ def fast_settings(**options) -> dict:
         if p.default is not inspect.Parameter.empty and k != "progress"
     }  # fmt: skip
     out.update(options)
-    if out["warm"] == "otd":
-        if isinstance(out["pan_tv_steps"], str) and out["pan_tv_steps"] == "auto":
-            out["pan_tv_steps"] = FAST_PAN_TV_STEPS
-    elif "pan_spectrum" not in options:  # other starts have no first stage to gate
-        out["pan_spectrum"] = "flat"
+    auto_steps = isinstance(out["pan_tv_steps"], str) and out["pan_tv_steps"] == "auto"
+    if out["warm"] == "otd" and auto_steps:
+        out["pan_tv_steps"] = FAST_PAN_TV_STEPS
     return out
 
 

@@ -3,6 +3,7 @@
 import importlib.util
 from unittest import mock
 
+import numpy as np
 import pytest
 
 import tensor_cosdi as tc
@@ -121,18 +122,36 @@ def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
 
 def test_fast_settings_resolve_the_start_as_pnp_fast_does():
     """``fast_settings()``: ``pnp_fast``'s own pnp_gap options — its 5 TV steps and gated
-    first stage with the OTD start; with another start the default first-stage weighting is
-    dropped to ``"flat"`` (that start has none), an explicit one is passed on and refused by
-    ``pnp_gap``; an unknown option is named."""
+    first stage with the OTD start; another start keeps ``pan_tv_steps="auto"`` and takes
+    ``"gated"`` as a gate that stays shut (it has no first stage), while ``"fitted"`` is
+    refused there; an unknown option is named."""
     assert M.fast_settings()["pan_tv_steps"] == M.FAST_PAN_TV_STEPS
     assert M.fast_settings()["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
     other = M.fast_settings(warm="gap_tv")
-    assert other["pan_spectrum"] == "flat" and other["pan_tv_steps"] == "auto"
-    assert M.fast_settings(warm="gap_tv", pan_spectrum="gated")["pan_spectrum"] == "gated"
+    assert other["pan_spectrum"] == "gated" and other["pan_tv_steps"] == "auto"
     with pytest.raises(ValueError, match=r"\['denoiser'\] are not options of pnp_fast"):
         M.fast_settings(denoiser="tv")
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    run = {**other, "precision": "float32", "max_iter": 1, "warm_iter": 2}
+    gated = tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **run)
+    flat = tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv",
+                          **{**run, "pan_spectrum": "flat"})  # fmt: skip
+    np.testing.assert_array_equal(gated.cube, flat.cube)
     with pytest.raises(ValueError, match="pan_spectrum sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv",
-                       **{**M.fast_settings(warm="gap_tv", pan_spectrum="gated"),
-                          "precision": "float32", "max_iter": 1})  # fmt: skip
+                       **{**run, "pan_spectrum": "fitted"})  # fmt: skip
+
+
+def test_gated_first_stage_is_the_plain_one_where_no_gate_can_be_read():
+    """A system with two panchromatic axes (CASSDI-DFA) or few bands has no gate to read:
+    ``pan_spectrum="gated"`` runs the plain stage there (``"fitted"`` refuses two axes)."""
+    from tensor_cosdi.solvers.panchromatic import panchromatic_estimate
+
+    for name, bands in (("cassdi_dfa", 8), ("sd_cassi", 8)):
+        p = tc.studies.make_problem(name, "chelsea", shape=(32, 32), n_bands=bands)
+        gated = panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="gated")
+        flat = panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="flat")
+        np.testing.assert_array_equal(gated[0], flat[0])
+    with pytest.raises(ValueError, match="needs one panchromatic axis"):
+        p = tc.studies.make_problem("cassdi_dfa", "chelsea", shape=(32, 32), n_bands=28)
+        panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="fitted")

@@ -157,29 +157,31 @@ def subspace_gap_tv(
     shape = system.cube_shape
     keep = {m: pan_atoms_for(shape[m], n_atoms, name="n_atoms") for m in modes}
     weights = _check_weights(spectral_weights, system)
-    mats = []
-    for m in modes:
-        atoms = dct(shape[m])
-        if names[m] in weights:  # the span of the weighted atoms, orthonormal
-            atoms = np.linalg.qr(weights[names[m]][:, None] * atoms)[0]
-        mats.append(B.tensor_like(atoms[:, : keep[m]], g))
+    if refit_at is not None:  # checked before any work
+        refit_at = _check_int("refit_at", refit_at, 1)
+        if len(modes) != 1 or weights:
+            raise ValueError("refit_at needs one panchromatic axis and no spectral_weights")
 
+    def span(m, w=None):
+        """The first atoms spanning mode ``m``: DCT, or the span of the DCT atoms weighted by
+        ``w``, orthonormal."""
+        atoms = dct(shape[m]) if w is None else np.linalg.qr(w[:, None] * dct(shape[m]))[0]
+        return B.tensor_like(atoms[:, : keep[m]], g)
+
+    mats = [span(m, weights.get(names[m])) for m in modes]
     denoise = tv if tv_steps is None else WarmTV(_check_int("tv_steps", tv_steps, 1))
 
     def subspace_tv(v, weight):
         return subspace_denoise(v, mats, modes, denoise, weight)
 
-    prior = TV(tv_weight, denoise=subspace_tv)
-    if refit_at is not None:  # checked here, before any iteration
-        refit_at = _check_int("refit_at", refit_at, 1)
-        if len(modes) != 1 or weights:
-            raise ValueError("refit_at needs one panchromatic axis and no spectral_weights")
+    if refit_at is None:
+        prior = TV(tv_weight, denoise=subspace_tv)
+    else:
 
         def refit(x):
             w, rough = gate_spectrum(system, g, x, names[modes[0]])
             if rough > ROUGH_SPECTRUM:
-                atoms = np.linalg.qr(w[:, None] * dct(shape[modes[0]]))[0]
-                mats[0] = B.tensor_like(atoms[:, : keep[modes[0]]], g)
+                mats[0] = span(modes[0], w)
 
         prior = _RefitTV(tv_weight, denoise=subspace_tv, at=refit_at, refit=refit)
     x, _, _ = engine.gap(

@@ -384,6 +384,14 @@ def fit_tv_table(name, weights) -> list[str]:
     return lines
 
 
+def summary_cell(readings, true_snr) -> str:
+    """``"min / median / max (k of n)"`` of SNR readings in dB, ``k`` those ``ok``: a noiseless
+    truth read at ≥ the clean threshold, a noisy one within 3 dB."""
+    v = np.asarray(readings)
+    ok = int((v >= CLEAN).sum()) if true_snr is None else int((abs(v - true_snr) < 3).sum())
+    return f"{v.min():.1f} / {np.median(v):.1f} / {v.max():.1f} ({ok} of {len(v)})"
+
+
 def sweep_table(iters, weights) -> list[str]:
     """The subspace fit's residual reading for every iterations × weight pair, at the protocol
     on every tuning scene, both codes: min / median / max over the scenes, and how many read a
@@ -414,13 +422,7 @@ def sweep_table(iters, weights) -> list[str]:
                         system, B.as_tensor(gu, "float32"), max_iter=it, tv_weight=w, tv_steps=5
                     )
                     read[(it, w)].append(residual_reading_db(system, gu, x))
-            cells = []
-            for p in pairs:
-                v = np.asarray(read[p])
-                ok = int((v >= CLEAN).sum()) if snr is None else int((abs(v - snr) < 3).sum())
-                cells.append(
-                    f"{v.min():.1f} / {np.median(v):.1f} / {v.max():.1f} ({ok} of {len(v)})"
-                )
+            cells = [summary_cell(read[p], snr) for p in pairs]
             lines.append(
                 f"| {mask} | {'noiseless' if snr is None else f'{snr} dB'} | "
                 + " | ".join(cells)
@@ -461,13 +463,7 @@ def refit_table(refits, lights) -> list[str]:
                         system, _, g = problem(scene, snr, code, illuminant=light)
                         snr_module.SUBSPACE_FIT_REFIT = r
                         read[r].append(estimate_snr(system, g).snr_db)
-                cells = []
-                for r in refits:
-                    v = np.asarray(read[r])
-                    ok = int((v >= CLEAN).sum()) if snr is None else int((abs(v - snr) < 3).sum())
-                    cells.append(
-                        f"{v.min():.1f} / {np.median(v):.1f} / {v.max():.1f} ({ok} of {len(v)})"
-                    )
+                cells = [summary_cell(read[r], snr) for r in refits]
                 lines.append(
                     f"| {light or 'none'} | {'noiseless' if snr is None else f'{snr} dB'} | "
                     + " | ".join(cells) + " |"

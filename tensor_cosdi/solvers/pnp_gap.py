@@ -583,6 +583,19 @@ def fast_settings(**options) -> dict:
     ``pnp_gap(system, g, denoiser=d, **fast_settings())`` is :func:`pnp_fast` with the
     denoiser ``d``.
 
+    Parameters
+    ----------
+    **options
+        Options of :func:`pnp_fast` (not ``system``, ``measurement``); any other name is a
+        ``ValueError``.
+
+    Returns
+    -------
+    dict
+        Keyword arguments of :func:`pnp_gap`.
+
+    Examples
+    --------
     >>> fast_settings()["pan_tv_steps"], fast_settings(warm="gap_tv")["pan_tv_steps"]
     (5, 'auto')
     """

@@ -209,6 +209,20 @@ def spectral_roughness(w, n_smooth: int = SMOOTH_ATOMS) -> float:
     """How far a spectrum ``w`` lies from its projection onto its first ``n_smooth`` DCT atoms,
     relative to its norm: about 0 for a smooth spectrum, large for a light's sharp lines.
 
+    Parameters
+    ----------
+    w : array_like of shape (Nλ,)
+        A spectrum: at least 2 finite values, not all 0 (its scale does not matter).
+    n_smooth : int
+        The DCT atoms that count as smooth (default :data:`SMOOTH_ATOMS`).
+
+    Returns
+    -------
+    float
+        ``‖w − P w‖ / ‖w‖`` with ``P`` the projection onto those atoms.
+
+    Examples
+    --------
     >>> round(spectral_roughness([1.0, 1.0, 1.0, 1.0]), 6)
     0.0
     >>> spectral_roughness([0.0, 0.0, 1.0, 0.0], 2) > 0.5
@@ -232,7 +246,19 @@ def spectral_roughness(w, n_smooth: int = SMOOTH_ATOMS) -> float:
 def gate_spectrum(system, measurement, cube, axis: str):
     """``(w, roughness)``: the mean spectrum fitted from ``cube`` (:func:`fitted_mean_spectrum`)
     and its :func:`spectral_roughness`, the reading that ``refit_at`` of
-    :func:`subspace_gap_tv` compares with :data:`ROUGH_SPECTRUM`."""
+    :func:`subspace_gap_tv` compares with :data:`ROUGH_SPECTRUM`.
+
+    Parameters
+    ----------
+    system, measurement, cube, axis
+        As in :func:`fitted_mean_spectrum`.
+
+    Returns
+    -------
+    w : ndarray of the axis' length
+        The fitted spectrum, peak 1.
+    roughness : float
+    """
     w = fitted_mean_spectrum(system, measurement, cube, axis)
     return w, spectral_roughness(w)
 

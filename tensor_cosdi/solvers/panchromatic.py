@@ -10,6 +10,7 @@ from .subspace import (  # noqa: F401  (the subspace fit and its atom counts, re
     MANY_BANDS,
     PAN_ATOMS,
     PAN_ATOMS_MANY,
+    ROUGH_SPECTRUM,
     fitted_mean_spectrum,
     has_many_bands,
     pan_atoms_for,
@@ -22,6 +23,7 @@ __all__ = [
     "has_many_bands", "PAN_WEIGHTS",
     "PAN_WEIGHTS_MANY",
     "PAN_ATOMS", "PAN_ATOMS_MANY", "MANY_BANDS", "PAN_SPECTRA", "FITTED_SPECTRUM_ABOVE_DB",
+    "GATE_FRACTION", "GATE_ABOVE_CLEAN", "GATE_ABOVE_NOISY", "GATE_NOISY_FROM_DB", "gate_above",
 ]  # fmt: skip
 
 _check_int = engine.check_int
@@ -46,6 +48,22 @@ FITTED_SPECTRUM_ABOVE_DB = 38.0
 #: 34.72 / 34.64 dB under FL2, 33.27 / 33.27 dB under LED-B3 at 0.4 / 0.55 (plain atoms
 #: under FL2: 33.78; both stages in full, ``"auto"``: 34.91 at 1.4 s more a cube).
 GATE_FRACTION = 0.4
+#: ``pan_spectrum="gated"``: the gate's roughness threshold on a clean measurement (estimated
+#: SNR from :data:`FITTED_SPECTRUM_ABOVE_DB`), :data:`GATE_ABOVE_NOISY` on a noisy one down to
+#: an estimated :data:`GATE_NOISY_FROM_DB`, shut below.  All three and the weights' floor
+#: (:data:`~tensor_cosdi.solvers.subspace.GATE_FLOOR`) chosen together by 4-fold
+#: cross-validation for ``pnp_fast`` over 8 tuning scenes as they are and lit by A, LED-B3 and
+#: FL11, noiseless, 30 and 20 dB, TSA, 150 candidates (``benchmarks/results/light_gate.md``):
+#: held out 35.44 → 35.91 dB against the gate shut on noisy data with a floor of 1e-3, every
+#: fold; noiseless +0.15, 30 dB +1.49 (FL11 views up to +7.5, no view lower), 20 dB unchanged
+#: (the gate open there lost up to 1.9 dB a view).  A white LED's peak (readings 0.07-0.25)
+#: opens it on clean data only: at 30 dB its fitted spectrum weighted the atoms into losses of
+#: up to 6 dB (clay~LED-B3).
+GATE_ABOVE_CLEAN = ROUGH_SPECTRUM
+#: See :data:`GATE_ABOVE_CLEAN`.
+GATE_ABOVE_NOISY = 0.3
+#: See :data:`GATE_ABOVE_CLEAN`.
+GATE_NOISY_FROM_DB = 25.0
 
 #: ``pan_weight="auto"``: the subspace GAP-TV weight against the measurement's estimated SNR
 #: (:func:`tensor_cosdi.noise.snr_schedule`), for panchromatic axes shorter than
@@ -141,8 +159,13 @@ def panchromatic_estimate(
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     axes = list(system.panchromatic_axes)
-    if pan_spectrum in ("auto", "gated") and not _clean(system, measurement):
-        pan_spectrum = "flat"  # no gate to read: the plain stage
+    above = None
+    if pan_spectrum == "gated":
+        above = gate_above(system, measurement)
+        if above is None:
+            pan_spectrum = "flat"  # no gate to read: the plain stage
+    elif pan_spectrum == "auto" and not _clean(system, measurement):
+        pan_spectrum = "flat"
     if pan_spectrum != "flat" and len(axes) != 1:
         raise ValueError(
             f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"
@@ -156,7 +179,7 @@ def panchromatic_estimate(
     )
     if pan_spectrum == "gated":  # one stage, its atoms weighted part-way where the light is sharp
         at = max(1, round(pan_iter * GATE_FRACTION))
-        x = subspace_gap_tv(system, measurement, refit_at=at, **common)
+        x = subspace_gap_tv(system, measurement, refit_at=at, refit_above=above, **common)
         return system.decimation.forward(x), x
     x = subspace_gap_tv(system, measurement, **common)
     if pan_spectrum != "flat":
@@ -175,11 +198,43 @@ def _clean(system, measurement) -> bool:
     """Whether the fitted spectrum is worth weighing: one panchromatic axis of
     :data:`MANY_BANDS` samples or more, and an estimated SNR from
     :data:`FITTED_SPECTRUM_ABOVE_DB`."""
-    if not (len(system.panchromatic_axes) == 1 and has_many_bands(system)):
-        return False
+    return _one_long_axis(system) and _snr_db(system, measurement) >= FITTED_SPECTRUM_ABOVE_DB
+
+
+def _one_long_axis(system) -> bool:
+    return len(system.panchromatic_axes) == 1 and has_many_bands(system)
+
+
+def _snr_db(system, measurement) -> float:
     from .snr import estimate_snr
 
-    return estimate_snr(system, measurement).snr_db >= FITTED_SPECTRUM_ABOVE_DB
+    return estimate_snr(system, measurement).snr_db
+
+
+def gate_above(system, measurement) -> float | None:
+    """The roughness above which ``pan_spectrum="gated"`` weights the first stage's atoms for
+    this measurement: :data:`GATE_ABOVE_CLEAN` from an estimated SNR of
+    :data:`FITTED_SPECTRUM_ABOVE_DB`, :data:`GATE_ABOVE_NOISY` below it down to
+    :data:`GATE_NOISY_FROM_DB`, ``inf`` (shut) below that; ``None`` where no gate can be read
+    (several panchromatic axes, or fewer than :data:`MANY_BANDS` bands).
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+    measurement : tensor of ``system.measurement_shape``
+
+    Returns
+    -------
+    float or None
+        Compared with :func:`~tensor_cosdi.solvers.subspace.spectral_roughness` of the fitted
+        mean spectrum (``inf``: the gate stays shut).
+    """
+    if not _one_long_axis(system):
+        return None
+    snr_db = _snr_db(system, measurement)
+    if snr_db >= FITTED_SPECTRUM_ABOVE_DB:
+        return float(GATE_ABOVE_CLEAN)
+    return float(GATE_ABOVE_NOISY if snr_db >= GATE_NOISY_FROM_DB else float("inf"))
 
 
 def _misfit(system, x, g) -> float:

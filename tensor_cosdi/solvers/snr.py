@@ -77,7 +77,7 @@ from .subspace import has_many_bands, subspace_gap_tv
 __all__ = [
     "SNREstimate", "estimate_snr", "residual_reading_db", "grouped_reading_db", "FITS", "FIT_ITER",
     "FIT_TV",
-    "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV", "SUBSPACE_FIT_REFIT",
+    "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV", "SUBSPACE_FIT_REFIT", "SUBSPACE_FIT_FLOOR",
 ]  # fmt: skip
 
 #: Plain GAP-TV iterations of the fit (5 Chambolle steps each).
@@ -106,6 +106,10 @@ SUBSPACE_FIT_TV = 0.3
 #: FL11 readings ok (noiseless 25 / 25 / 15 of 28 clean, 30 dB 28 / 28 / 26 within 3 dB,
 #: 20 dB 23 / 24 / 28); unlit, A and LED-B3 views read as without it.
 SUBSPACE_FIT_REFIT = 8
+#: The floor of the gate's weights in the subspace fit (relative to the fitted spectrum's peak),
+#: as measured there; the first stage's own floor is
+#: :data:`~tensor_cosdi.solvers.subspace.GATE_FLOOR`.
+SUBSPACE_FIT_FLOOR = 1e-3
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 4
 
@@ -259,6 +263,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
         x = subspace_gap_tv(
             system, g32, max_iter=SUBSPACE_FIT_ITER, tv_weight=SUBSPACE_FIT_TV, tv_steps=5,
             refit_at=SUBSPACE_FIT_REFIT if gated else None,
+            refit_floor=SUBSPACE_FIT_FLOOR if gated else None,
         )  # fmt: skip
     else:
         from .gap_tv import gap_tv

@@ -505,8 +505,9 @@ def test_light_gate_weights_the_atoms_only_under_a_sharp_light():
     """``subspace_gap_tv(refit_at=k)``: on the unlit chart (a smooth mean spectrum) the run is
     the plain one, bit for bit; under a fluorescent lamp (CIE FL2) the gate opens after ``k``
     iterations and the estimate is closer to the cube than the plain atoms' (0.286 against
-    0.336 relative error here, 40 iterations).  ``pan_spectrum="gated"`` uses it on a clean
-    measurement only: at 30 dB it is the plain stage."""
+    0.336 relative error here, 40 iterations).  ``pan_spectrum="gated"`` on a noisy
+    measurement opens it only above ``GATE_ABOVE_NOISY``: at 30 dB FL2's lines read below that
+    and the stage is the plain one."""
     from tensor_cosdi.colour import radiance
     from tensor_cosdi.scenes import colorchecker
     from tensor_cosdi.solvers.panchromatic import GATE_FRACTION, panchromatic_estimate
@@ -545,3 +546,59 @@ def test_refit_at_is_checked():
         subspace_gap_tv(sd, g, max_iter=4, refit_at=0)
     with pytest.raises(ValueError, match="refit_at needs one panchromatic axis and no"):
         subspace_gap_tv(sd, g, max_iter=4, refit_at=2, spectral_weights={"λ": np.ones(8)})
+
+
+def test_light_gate_threshold_and_floor():
+    """``refit_above`` decides when the gate opens (``inf``: never, the plain run bit for bit;
+    0: always) and ``refit_floor`` raises the fitted spectrum's weights, which moves the
+    estimate under a lamp whose spectrum dips below it between its lines (CIE FL11)."""
+    from tensor_cosdi.colour import radiance
+    from tensor_cosdi.scenes import colorchecker
+    from tensor_cosdi.solvers.subspace import subspace_gap_tv
+
+    wl = np.linspace(453.3, 648.1, 28)
+    sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
+    chart = colorchecker((32, 32), wl)
+    kw = dict(max_iter=12, tv_weight=0.3, tv_steps=5)
+    g = sd.forward(radiance(chart, wl, "FL11"))
+    plain = subspace_gap_tv(sd, g, **kw)
+    np.testing.assert_array_equal(
+        subspace_gap_tv(sd, g, refit_at=4, refit_above=float("inf"), **kw), plain
+    )
+    low, high = (subspace_gap_tv(sd, g, refit_at=4, refit_floor=f, **kw) for f in (1e-3, 0.1))
+    assert np.linalg.norm(low - plain) > 0.1 * np.linalg.norm(plain)
+    assert np.linalg.norm(high - low) > 1e-3 * np.linalg.norm(low)  # FL11 dips below 0.1
+    g = sd.forward(chart)  # a smooth spectrum: shut at the default threshold, open at 0
+    np.testing.assert_array_equal(subspace_gap_tv(sd, g, refit_at=4, **kw),
+                                  subspace_gap_tv(sd, g, **kw))  # fmt: skip
+    assert not np.array_equal(subspace_gap_tv(sd, g, refit_at=4, refit_above=0.0, **kw),
+                              subspace_gap_tv(sd, g, **kw))  # fmt: skip
+    for bad, match in (
+        (dict(refit_above=-0.1), "refit_above must be a number >= 0"),
+        (dict(refit_above="high"), "refit_above must be a number >= 0"),
+        (dict(refit_above=float("nan")), "refit_above must be a number >= 0"),
+        (dict(refit_floor=0.0), r"refit_floor must be a number in \(0, 1\]"),
+        (dict(refit_floor=1.5), r"refit_floor must be a number in \(0, 1\]"),
+        (dict(refit_floor=True), r"refit_floor must be a number in \(0, 1\]"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            subspace_gap_tv(sd, g, refit_at=4, **kw, **bad)
+
+
+def test_gate_above_follows_the_snr_estimate():
+    """``gate_above``: the clean threshold on a noise-free measurement, the noisy one at 30 dB,
+    ``inf`` (shut) at 15 dB, and ``None`` where no gate can be read (16 bands; CASSDI-DFA's two
+    panchromatic axes)."""
+    from tensor_cosdi.scenes import colorchecker
+    from tensor_cosdi.solvers import panchromatic as pm
+
+    wl = np.linspace(453.3, 648.1, 28)
+    sd = SDCASSI(tc.codes.random_binary((48, 48), rng=0), n_bands=28, wavelengths=wl)
+    chart = colorchecker((48, 48), wl)
+    assert pm.gate_above(sd, sd.forward(chart)) == pm.GATE_ABOVE_CLEAN
+    assert pm.gate_above(sd, sd.simulate(chart, snr_db=30, rng=0)) == pm.GATE_ABOVE_NOISY
+    assert pm.gate_above(sd, sd.simulate(chart, snr_db=15, rng=0)) == float("inf")
+    sd16 = SDCASSI(tc.codes.random_binary((24, 24), rng=0), n_bands=16)
+    assert pm.gate_above(sd16, sd16.forward(np.ones(sd16.cube_shape))) is None
+    dfa = CASSDIDFA.example((4, 5, 3, 2))
+    assert pm.gate_above(dfa, dfa.forward(np.ones(dfa.cube_shape))) is None

@@ -118,6 +118,10 @@ def main(argv=None) -> None:
     ap.add_argument(
         "--noisy-from", default="0,25", help="estimated SNRs (dB) the noisy threshold starts at"
     )
+    ap.add_argument(
+        "--keep", default="0.001,0.1,inf,0",
+        help="the default in use, which wins ties: floor,clean,noisy,from_db or 'shut'",
+    )
     ap.add_argument("--scenes-per-fold", type=int, default=2)
     ap.add_argument("--mask", default="tsa", choices=("tsa", "random"))
     ap.add_argument("--tie-db", type=float, default=0.02)
@@ -133,6 +137,14 @@ def main(argv=None) -> None:
     if not aboves or not all(a >= 0 for a in aboves) or not np.isfinite(aboves).any():
         raise SystemExit(f"--above: numbers >= 0 (inf: shut), one finite, got {args.above!r}")
     lights = [s for s in args.lights.split(",") if s]
+    cands = [(f, c, n, d) for f in floors for c in aboves for n in aboves for d in noisy_from]
+    shut = (floors[0], INF, INF, noisy_from[0])
+    try:
+        default = shut if args.keep == "shut" else tuple(float(v) for v in args.keep.split(","))
+    except ValueError:
+        default = None
+    if default not in cands:
+        raise SystemExit(f"--keep {args.keep!r} must be 'shut' or one of the candidates")
     options = {} if args.method == "pnp_fast" else {"pan_spectrum": "gated"}
     folds = tuple(
         views(f[: args.scenes_per_fold], None, lights) for f in datasets.tune_folds(4)
@@ -169,12 +181,6 @@ def main(argv=None) -> None:
         above = a_clean if est >= clean_db else (a_noisy if est >= from_db else INF)
         return r["open"][repr(f)] if r["reading"] > above else r["shut"]
 
-    cands = [(f, c, n, d) for f in floors for c in aboves for n in aboves for d in noisy_from]
-    # the gate as it was: shut on noisy data
-    default = (1e-3, subspace.ROUGH_SPECTRUM, INF, noisy_from[0])
-    if default not in cands:
-        raise SystemExit(f"the default {default} must be among the candidates")
-    shut = (floors[0], INF, INF, noisy_from[0])
 
     def rows_of(cand, vs):
         return [psnr(cand, v, s) for v in vs for s in snrs]
@@ -200,7 +206,8 @@ def main(argv=None) -> None:
         f"floor × clean threshold (estimated SNR from {clean_db:g} dB) × noisy threshold × "
         f"the estimated SNR from which it applies (shut below) over {floors} × {aboves} × "
         f"{aboves} × {noisy_from} "
-        f"({len(cands)}); the default in use before: {name(default)}.  Ties within "
+        f"({len(cands)}); the default in use before: "
+        f"{'the gate shut' if default == shut else name(default)}.  Ties within "
         f"{args.tie_db:g} dB go to it.",
         "",
         "| fold | chosen on the other three | held-out PSNR dB | default | gate shut |",

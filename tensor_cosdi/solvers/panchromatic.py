@@ -139,12 +139,14 @@ def panchromatic_estimate(
     whichever of the two fits the measurement better (the smaller ``‖A x − g‖``), and
     is ``"flat"`` otherwise; ``"gated"`` runs one stage, fits the mean spectrum after
     :data:`GATE_FRACTION` of its iterations and, only when that spectrum has sharp lines
-    (:func:`~tensor_cosdi.solvers.subspace.spectral_roughness` above
-    :data:`~tensor_cosdi.solvers.subspace.ROUGH_SPECTRUM`), weights the atoms of the
-    remaining iterations by it — the plain stage, at its cost, under a smooth light, and
-    wherever ``"auto"`` would be ``"flat"`` (noisy data, fewer bands, several panchromatic
-    axes).  Weighted atoms need one panchromatic axis (``"fitted"`` and ``"fitted_z"``
-    refuse more).
+    (:func:`~tensor_cosdi.solvers.subspace.spectral_roughness` above :func:`gate_above`:
+    :data:`GATE_ABOVE_CLEAN` on clean data, the higher :data:`GATE_ABOVE_NOISY` on noisy
+    data, shut below an estimated :data:`GATE_NOISY_FROM_DB`), weights the atoms of the
+    remaining iterations by it (floored at
+    :data:`~tensor_cosdi.solvers.subspace.GATE_FLOOR` of its peak) — the plain stage, at its
+    cost, under a smooth light, and wherever no gate can be read (fewer bands, several
+    panchromatic axes).  Weighted atoms need one panchromatic axis (``"fitted"`` and
+    ``"fitted_z"`` refuse more).
 
     Returns
     -------

@@ -29,7 +29,7 @@ __all__ = [
 _check_int = engine.check_int
 
 #: ``pan_spectrum``: how the first stage's atoms span the bands (:func:`panchromatic_estimate`).
-PAN_SPECTRA = ("flat", "fitted", "fitted_z", "auto", "gated")
+PAN_SPECTRA = ("flat", "fitted", "fitted_z", "auto", "gated", "gated_clean")
 #: ``pan_spectrum="auto"`` weighs the fitted spectrum only from this estimated SNR (dB) on.  On
 #: noisy data the misfit rule fails: the fitted spectrum is noisy and the weighted atoms fit
 #: the noise (clay, 96×96×28, TSA, 20 dB: OTD at lam 0.1 29.36 → 22.74 dB).  At 30 dB the
@@ -145,7 +145,9 @@ def panchromatic_estimate(
     remaining iterations by it (floored at
     :data:`~tensor_cosdi.solvers.subspace.GATE_FLOOR` of its peak) — the plain stage, at its
     cost, under a smooth light, and wherever no gate can be read (fewer bands, several
-    panchromatic axes).  Weighted atoms need one panchromatic axis (``"fitted"`` and
+    panchromatic axes); ``"gated_clean"`` is ``"gated"`` on a clean measurement and the plain
+    stage on a noisy one (a long run after the start does better from plain atoms there).
+    Weighted atoms need one panchromatic axis (``"fitted"`` and
     ``"fitted_z"`` refuse more).
 
     Returns
@@ -161,13 +163,14 @@ def panchromatic_estimate(
     if system.panchromatic_exact or pan_iter == 0:
         return system.panchromatic(measurement), None
     axes = list(system.panchromatic_axes)
-    above = None
+    gated = pan_spectrum in ("gated", "gated_clean")
+    above = None  # the gate's threshold; None: no gate to read, the plain stage
     if pan_spectrum == "gated":
         above = gate_above(system, measurement)
-        if above is None:
-            pan_spectrum = "flat"  # no gate to read: the plain stage
-    elif pan_spectrum == "auto" and not _clean(system, measurement):
-        pan_spectrum = "flat"
+    elif pan_spectrum == "gated_clean" and _clean(system, measurement):
+        above = GATE_ABOVE_CLEAN
+    if (gated and above is None) or (pan_spectrum == "auto" and not _clean(system, measurement)):
+        pan_spectrum, gated = "flat", False
     if pan_spectrum != "flat" and len(axes) != 1:
         raise ValueError(
             f"pan_spectrum={pan_spectrum!r} needs one panchromatic axis; {system.name} has {axes}"
@@ -179,7 +182,7 @@ def panchromatic_estimate(
         tv_steps=pan_tv_steps,
         progress=progress,
     )
-    if pan_spectrum == "gated":  # one stage, its atoms weighted part-way where the light is sharp
+    if gated:  # one stage, its atoms weighted part-way where the light is sharp
         at = max(1, round(pan_iter * GATE_FRACTION))
         x = subspace_gap_tv(system, measurement, refit_at=at, refit_above=above, **common)
         return system.decimation.forward(x), x

@@ -604,11 +604,12 @@ def test_gate_above_follows_the_snr_estimate():
     assert pm.gate_above(dfa, dfa.forward(np.ones(dfa.cube_shape))) is None
 
 
-def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20():
+def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
     """On a noisy measurement the gate opens only for a lamp's lines (CIE FL11 reads about 0.7):
     at 30 dB the gated first stage lands far closer to the cube than the plain one (0.44
     against 0.73 relative error here); at 20 dB (estimated under ``GATE_NOISY_FROM_DB``) it is
-    the plain stage."""
+    the plain stage.  ``"gated_clean"`` (``pnp_gap``'s start) is the plain stage at 30 dB and
+    ``"gated"`` on a measurement that reads clean."""
     from tensor_cosdi.colour import radiance
     from tensor_cosdi.scenes import colorchecker
     from tensor_cosdi.solvers import panchromatic as pm
@@ -624,6 +625,19 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20():
         for ps in ("flat", "gated")
     }
     assert err["gated"] < 0.75 * err["flat"], err
+    np.testing.assert_array_equal(
+        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated_clean")[1],
+        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1],
+    )
+    g = sd.forward(cube)  # a lamp reads about 30 dB noise-free at this size: count it clean
+    monkeypatch.setattr(pm, "FITTED_SPECTRUM_ABOVE_DB", 25.0)
+    opened = pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated_clean")[1]
+    np.testing.assert_array_equal(
+        opened, pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated")[1]
+    )
+    assert not np.array_equal(
+        opened, pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1]
+    )
     g = sd.simulate(cube, snr_db=20, rng=0)
     np.testing.assert_array_equal(
         pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated")[1],

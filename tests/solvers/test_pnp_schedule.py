@@ -144,14 +144,16 @@ def test_fast_settings_resolve_the_start_as_pnp_fast_does():
 
 def test_gated_first_stage_is_the_plain_one_where_no_gate_can_be_read():
     """A system with two panchromatic axes (CASSDI-DFA) or few bands has no gate to read:
-    ``pan_spectrum="gated"`` runs the plain stage there (``"fitted"`` refuses two axes)."""
+    ``pan_spectrum="gated"`` and ``"gated_clean"`` run the plain stage there (``"fitted"``
+    refuses two axes)."""
     from tensor_cosdi.solvers.panchromatic import panchromatic_estimate
 
     for name, bands in (("cassdi_dfa", 8), ("sd_cassi", 8)):
         p = tc.studies.make_problem(name, "chelsea", shape=(32, 32), n_bands=bands)
-        gated = panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="gated")
         flat = panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="flat")
-        np.testing.assert_array_equal(gated[0], flat[0])
+        for value in ("gated", "gated_clean"):
+            gated = panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum=value)
+            np.testing.assert_array_equal(gated[0], flat[0])
     with pytest.raises(ValueError, match="needs one panchromatic axis"):
         p = tc.studies.make_problem("cassdi_dfa", "chelsea", shape=(32, 32), n_bands=28)
         panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="fitted")

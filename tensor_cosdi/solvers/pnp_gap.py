@@ -157,8 +157,8 @@ GUARD = 2.0
 #: +1.23 dB, FL11 views up to +8.7; 30 dB: open on FL11 views it lost 1.0 dB on average).
 PAN_SPECTRUM = "gated_clean"
 #: :func:`pnp_fast`'s ``pan_spectrum``: ``"gated"``, one first stage whose atoms are weighted
-#: by the fitted mean spectrum part-way through where a clean measurement's spectrum has sharp
-#: lines (:func:`~tensor_cosdi.solvers.panchromatic.panchromatic_estimate`), at no extra cost.
+#: by the fitted mean spectrum part-way through where the measurement's spectrum has sharp
+#: lines (:func:`~tensor_cosdi.solvers.panchromatic.gate_above`), at no extra cost.
 #: 8 tuning scenes as they are and lit by A, LED-B3 and FL11, 4 folds, TSA
 #: (``benchmarks/results/cv_pnp_fast_gated.md``): noiseless 34.87 → 37.48 dB over the 32
 #: views, every fold chose it (FL11 +7.1 to +14.4 dB a view; an unlit scene whose spectrum

@@ -169,6 +169,8 @@ def subspace_gap_tv(
             raise ValueError("refit_at needs one panchromatic axis and no spectral_weights")
         refit_above = _check_above(refit_above)
         refit_floor = _check_floor(refit_floor)
+    elif refit_above is not None or refit_floor is not None:
+        raise ValueError("refit_above and refit_floor set the gate of refit_at, which is None")
 
     def span(m, w=None):
         """The first atoms spanning mode ``m``: DCT, or the span of the DCT atoms weighted by

@@ -583,6 +583,9 @@ def test_light_gate_threshold_and_floor():
     ):
         with pytest.raises(ValueError, match=match):
             subspace_gap_tv(sd, g, refit_at=4, **kw, **bad)
+    for alone in (dict(refit_above=0.2), dict(refit_floor=0.1)):
+        with pytest.raises(ValueError, match="set the gate of refit_at, which is None"):
+            subspace_gap_tv(sd, g, **kw, **alone)
 
 
 def test_gate_above_follows_the_snr_estimate():

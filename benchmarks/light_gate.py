@@ -18,7 +18,8 @@ exceeds the threshold of the view's estimated SNR, else with the shut run — ex
 method would return.  The candidates are chosen by 4-fold cross-validation over the scenes
 (:func:`_protocol.cross_validate`; the mean over every view and SNR, candidates within
 ``--tie-db`` of the best are a tie won by the default in use).  The report scenes are not read.
-Runs are cached in ``--cache`` (a resumed run skips what it has).
+Runs are cached in ``--cache`` (a resumed run skips what it has; delete the file after a change
+to the method).
 
     python benchmarks/light_gate.py [--method pnp_fast] [--snr none,30,20]
                                     [--lights A,LED-B3,FL11] [--floors 0.001,0.1,0.3]
@@ -91,7 +92,9 @@ def measure(view, snr, mask, method, options, floors, lowest) -> dict:
     readings: list = []
     with gate(INF, subspace.GATE_FLOOR, readings):
         est, sec = run(method, system, g, options)
-    if not readings:  # (a first call's untimed warm-up reads it too, before the run)
+    # the last reading is the first stage's: the SNR estimate's fit (and a first call's untimed
+    # warm-up) read theirs before it
+    if not readings:
         raise SystemExit(f"{view}: the gate was not read; {method} does not use it here")
     row = {
         "reading": readings[-1],
@@ -160,12 +163,6 @@ def main(argv=None) -> None:
                 k = json.dumps([args.method, args.mask, view, snr_label(snr), floors, lowest])
                 if k not in cache:
                     cache[k] = measure(view, snr, mask, args.method, options, floors, lowest)
-                    cache_path.write_text(json.dumps(cache, indent=1))
-                if "snr_db" not in cache[k]:  # rows cached before the estimate was kept
-                    name_, zoom, light = scene_view(view)
-                    system, _, g = problem(name_, snr, mask, zoom=zoom, illuminant=light)
-                    cache[k]["snr_db"] = float(estimate_snr(system, g).snr_db)
-                    cache[k].pop("clean", None)
                     cache_path.write_text(json.dumps(cache, indent=1))
                 rows[view, snr] = cache[k]
                 r = cache[k]

@@ -4,13 +4,16 @@
 fits the scene's mean spectrum part-way through the first stage
 (:data:`~tensor_cosdi.solvers.panchromatic.GATE_FRACTION` of its iterations) and weights
 the remaining iterations' spectral atoms by it only when the spectrum reads rough
-(:func:`~tensor_cosdi.solvers.subspace.spectral_roughness` above
-:data:`~tensor_cosdi.solvers.subspace.ROUGH_SPECTRUM`): a light with sharp lines.  This
+(:func:`~tensor_cosdi.solvers.subspace.spectral_roughness` above a threshold: on a clean
+measurement :data:`~tensor_cosdi.solvers.subspace.ROUGH_SPECTRUM`, on a noisy one the higher
+:data:`~tensor_cosdi.solvers.panchromatic.GATE_ABOVE_NOISY`, see
+:func:`~tensor_cosdi.solvers.panchromatic.gate_above` and ``light_gate.py``): a light with
+sharp lines.  This
 script reads that roughness exactly as the gate does (the first stage's iterates up to the
 gate do not depend on it) on every tuning scene, as it is and lit by each ``--lights``
 illuminant, noiseless, at 30 and at 20 dB (the real-spectra protocol: SD-CASSI,
-256×256×28, 2 px per band, ``--mask``), and counts the views the gate would send to the
-weighted atoms.  The report scenes are not read.
+256×256×28, 2 px per band, ``--mask``), and counts the views above the clean threshold.
+The report scenes are not read.
 
     python benchmarks/spectral_roughness.py [--lights A,D65,LED-B3,FL11,FL2] [--mask tsa]
                                             [--tv-steps 5]

@@ -37,7 +37,7 @@ from . import engine
 from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
 from .panchromatic import PAN_SPECTRA
-from .priors import Denoiser
+from .priors import LEVEL_SCALES, Denoiser
 
 __all__ = ["pnp_gap", "pnp_fast", "fast_settings"]
 
@@ -169,6 +169,9 @@ PAN_SPECTRUM = "gated_clean"
 #: together (:data:`~tensor_cosdi.solvers.panchromatic.GATE_ABOVE_CLEAN`,
 #: ``benchmarks/results/light_gate.md``): 30 dB +1.49 dB over the same kind of 32 views.
 FAST_PAN_SPECTRUM = "gated"
+#: ``sigma_scale="auto"``: what the denoiser's level is relative to, by splitting (see
+#: :class:`~tensor_cosdi.solvers.priors.Denoiser`).
+SIGMA_SCALE = {"gap": "peak", "admm": "peak"}
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 1
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
@@ -230,6 +233,7 @@ def pnp_gap(
     ensemble="auto",
     cycle: bool = True,
     precision: str = "float32",
+    sigma_scale="auto",
     progress: bool = False,
 ):
     """Plug-and-play GAP / ADMM (see the module).  Registered as ``"pnp_gap"``.
@@ -328,6 +332,12 @@ def pnp_gap(
         native bfloat16 instructions, ``"auto"`` uses it only there.  The
         float32 default gives the same cube on every machine and in any
         measurement units.  Only for ``denoiser="spectral_net"``.
+    sigma_scale : {"auto", "peak", "rms"}
+        What ``sigma`` and ``sigma_end`` are relative to
+        (:class:`~tensor_cosdi.solvers.priors.Denoiser`'s ``scale``): the start's
+        robust peak, or :data:`~tensor_cosdi.solvers.priors.PEAK_PER_RMS` times its
+        RMS, a level that follows the scene's mean brightness as a measurement's
+        noise does.  ``"auto"``: :data:`SIGMA_SCALE` for the splitting in use.
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` has risen three
         iterations in a row to above ``guard`` times its lowest value, and
@@ -364,6 +374,12 @@ def pnp_gap(
     if splitting == "auto":
         splitting = "gap" if accelerate or chosen else "admm"
     admm = splitting == "admm"
+    if not isinstance(sigma_scale, str) or sigma_scale not in ("auto", *LEVEL_SCALES):
+        raise ValueError(
+            f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
+        )
+    if sigma_scale == "auto":
+        sigma_scale = SIGMA_SCALE["admm" if admm else "gap"]
     if admm:
         rho = RHO if isinstance(rho, str) and rho == "auto" else rho
         rho = check_positive("rho", rho)
@@ -413,7 +429,9 @@ def pnp_gap(
             )
         ensemble = ENSEMBLE
     den = self_ensemble(den, ensemble, cycle=cycle)  # checks cycle
-    prior = Denoiser(den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg)
+    prior = Denoiser(
+        den, sigma=sigma, sigma_end=sigma_end, n_steps=max_iter, nonneg=nonneg, scale=sigma_scale
+    )
     return warm_started_gap(
         system,
         measurement,
@@ -537,7 +555,7 @@ def pnp_fast(
     system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
     warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", pan_atoms="auto",
     pan_spectrum=FAST_PAN_SPECTRUM, sigma_end="auto", rho="auto", nonneg: bool = True,
-    cycle: bool = True, progress: bool = False,
+    cycle: bool = True, sigma_scale="auto", progress: bool = False,
 ):  # fmt: skip
     """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
     ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
@@ -566,7 +584,7 @@ def pnp_fast(
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start; :func:`fast_settings` lists them
         all).
-    sigma_end, rho, nonneg, cycle, progress
+    sigma_end, rho, nonneg, cycle, sigma_scale, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
 
@@ -580,6 +598,7 @@ def pnp_fast(
             max_iter=max_iter, ensemble=ensemble, precision=precision, warm=warm,
             warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
             pan_spectrum=pan_spectrum, sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle,
+            sigma_scale=sigma_scale,
         ), progress=progress,
     )  # fmt: skip
 

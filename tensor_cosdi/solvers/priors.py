@@ -122,6 +122,14 @@ def robust_peak(x) -> float:
 
 _peak = robust_peak
 
+#: :class:`Denoiser`'s ``scale``: what its relative levels are relative to.
+LEVEL_SCALES = ("peak", "rms")
+#: ``Denoiser(scale="rms")``: the level's reference is this many times the start's RMS, the
+#: median ratio of robust peak to RMS over the 28 tuning scenes (4.74; 3.25 to 7.80 from the
+#: 10th to the 90th percentile; ``benchmarks/results/level_scale.md``), so that a relative
+#: level means the same on a typical scene under either scale.
+PEAK_PER_RMS = 4.74
+
 
 def annealed(start: float, end: float, step: int, n_steps: int) -> float:
     """Geometric annealing: ``start`` at step 0, ``end`` at step ``n_steps − 1`` and after."""
@@ -327,8 +335,12 @@ class Denoiser(Prior):
     """A plug-and-play denoiser (any of :func:`~tensor_cosdi.solvers.denoisers.denoisers` or a
     callable).
 
-    ``sigma`` is relative: the denoiser runs at ``σ = sigma · P₉₉.₉|start|``,
-    whatever the engine's step (the plug-and-play convention).  With
+    ``sigma`` is relative: the denoiser runs at ``σ = sigma · P₉₉.₉|start|``
+    (``scale="peak"``, :func:`robust_peak`), whatever the engine's step (the
+    plug-and-play convention), or at ``σ = sigma · PEAK_PER_RMS · RMS(start)``
+    (``scale="rms"``, :data:`PEAK_PER_RMS`): a level that follows the scene's
+    mean brightness, as the noise of a measurement at a given SNR does, instead
+    of its brightest voxels.  With
     ``sigma_end`` the level anneals geometrically from ``sigma`` to
     ``sigma_end`` over ``n_steps`` calls and then stays there.  ``nonneg``
     projects each output onto ``x ≥ 0`` (cubes of light are non-negative; a
@@ -340,8 +352,12 @@ class Denoiser(Prior):
     name = "denoiser"
 
     def __init__(
-        self, denoiser="tv", *, sigma: float, sigma_end=None, n_steps: int = 1, nonneg=False
-    ):
+        self, denoiser="tv", *, sigma: float, sigma_end=None, n_steps: int = 1, nonneg=False,
+        scale: str = "peak",
+    ):  # fmt: skip
+        if not isinstance(scale, str) or scale not in LEVEL_SCALES:
+            raise ValueError(f"scale must be one of {LEVEL_SCALES}, got {scale!r}")
+        self.scale = scale
         self._denoise = resolve(denoiser)
         self.sigma = float(sigma)
         self.sigma_end = self.sigma if sigma_end is None else float(sigma_end)
@@ -351,13 +367,13 @@ class Denoiser(Prior):
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
         super().setup(start, penalty=penalty, gain=gain)
-        self.peak = _peak(start)
-        self.strength = self.sigma * self.peak
+        self.reference = _peak(start) if self.scale == "peak" else PEAK_PER_RMS * rms(start)
+        self.strength = self.sigma * self.reference
         self.calls = 0
 
     def current_sigma(self) -> float:
         """The level of the next call, in cube units."""
-        return self.peak * annealed(self.sigma, self.sigma_end, self.calls, self.n_steps)
+        return self.reference * annealed(self.sigma, self.sigma_end, self.calls, self.n_steps)
 
     def prox(self, v):
         self.strength = self.current_sigma()

@@ -157,3 +157,56 @@ def test_gated_first_stage_is_the_plain_one_where_no_gate_can_be_read():
     with pytest.raises(ValueError, match="needs one panchromatic axis"):
         p = tc.studies.make_problem("cassdi_dfa", "chelsea", shape=(32, 32), n_bands=28)
         panchromatic_estimate(p.system, p.measurement, pan_iter=5, pan_spectrum="fitted")
+
+
+def test_denoiser_level_follows_the_peak_or_the_mean_brightness():
+    """``scale="peak"``: the level is relative to the start's robust peak, whatever its mean;
+    ``scale="rms"``: to PEAK_PER_RMS times its RMS, so a darker scene with the same highlights
+    gets a lower level (as the noise of a measurement at a given SNR is lower)."""
+    from tensor_cosdi.solvers import priors
+
+    rng = np.random.default_rng(0)
+    bright = rng.uniform(0.4, 0.6, (32, 32, 8))
+    bright[:4, :4] = 1.0  # the highlights: above the 99.9th percentile either way
+    dark = bright.copy()
+    dark[4:] *= 0.25
+    levels = {}
+    for scale in priors.LEVEL_SCALES:
+        for name, start in (("bright", bright), ("dark", dark)):
+            d = priors.Denoiser("tv", sigma=0.1, scale=scale)
+            d.setup(start, penalty=1.0, gain=1.0)
+            levels[scale, name] = d.current_sigma()
+    assert levels["peak", "bright"] == pytest.approx(0.1 * priors.robust_peak(bright))
+    assert levels["peak", "dark"] == pytest.approx(levels["peak", "bright"])
+    for name, start in (("bright", bright), ("dark", dark)):
+        assert levels["rms", name] == pytest.approx(0.1 * priors.PEAK_PER_RMS * priors.rms(start))
+    ratio = priors.rms(dark) / priors.rms(bright)
+    assert ratio < 0.5
+    assert levels["rms", "dark"] / levels["rms", "bright"] == pytest.approx(ratio)
+
+
+@pytest.mark.parametrize("bad", ["max", "RMS", None, 1.0])
+def test_a_level_scale_that_is_not_one_of_the_two_is_refused(bad):
+    from tensor_cosdi.solvers import priors
+
+    with pytest.raises(ValueError, match="scale must be one of"):
+        priors.Denoiser("tv", sigma=0.1, scale=bad)
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+    with pytest.raises(ValueError, match="sigma_scale must be 'auto' or one of"):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", sigma_scale=bad)
+
+
+def test_sigma_scale_auto_follows_the_splitting():
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    seen = {}
+    for splitting in ("gap", "admm"):
+        for scale in ("auto", "peak", "rms"):
+            with mock.patch.object(M, "Denoiser", side_effect=M.Denoiser) as spy:
+                tc.reconstruct(
+                    p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=3,
+                    splitting=splitting, sigma_scale=scale,
+                )  # fmt: skip
+            seen[splitting, scale] = spy.call_args.kwargs["scale"]
+    for splitting in ("gap", "admm"):
+        assert seen[splitting, "auto"] == M.SIGMA_SCALE[splitting]
+        assert seen[splitting, "peak"] == "peak" and seen[splitting, "rms"] == "rms"

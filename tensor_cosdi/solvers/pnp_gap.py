@@ -8,7 +8,8 @@ system's closed-form ``solve_normal``, ``z ← max(D_σₜ(x + u), 0)``,
 ``u ← u + x − z`` (:func:`tensor_cosdi.solvers.engine.admm`).  Both use a
 :class:`~tensor_cosdi.solvers.priors.Denoiser` prior whose ``σ`` falls
 geometrically from ``sigma`` to ``sigma_end`` (relative to the start's
-robust peak) over the iterations, started from OTD.  The splitting,
+robust peak on clean data, to its mean brightness on noisy data:
+:data:`SIGMA_SCALE`) over the iterations, started from OTD.  The splitting,
 acceleration, ``ε``, ``ρ``, ``sigma_end`` and the iteration count follow
 the measurement's estimated SNR unless given.
 
@@ -82,7 +83,14 @@ SIGMA_END_SHORT = {40.0: 0.05, 30.0: 0.05, 20.0: 0.08}
 #: At 30 dB with ADMM, 0.07, cross-validated on 8 tuning scenes as they are and magnified 4×
 #: (``benchmarks/results/pnp_fast_sigma_30db_zoom4.md``: 0.05 / 0.07 / 0.1 → 31.37 / 31.43 /
 #: 31.20 dB, three folds of four).
-SIGMA_END_ADMM_SHORT = {28.5: 0.07, 19.5: 0.2}
+#: Both anchors are on :data:`SIGMA_SCALE`'s RMS scale since it was cross-validated: 0.04 at
+#: 30 dB (``benchmarks/results/cv_pnp_fast_sigma_scale.md``), 0.2 at 20 dB
+#: (``cv_pnp_fast_sigma_scale_20db.md``).
+SIGMA_END_ADMM_SHORT = {28.5: 0.04, 19.5: 0.2}
+#: :data:`SIGMA_END_ADMM_SHORT` where the level is relative to the robust peak
+#: (``sigma_scale="peak"``, and a cube of more than three axes): the anchors chosen on that
+#: scale (0.07 at 30 dB, above).
+SIGMA_END_ADMM_SHORT_PEAK = {28.5: 0.07, 19.5: 0.2}
 #: ``max_iter="auto"``: iterations with and without acceleration.  Accelerated (clean data)
 #: keeps gaining to 100 (see :data:`SIGMA_END`); plain GAP at 30 dB does not (balloons 27.25 dB
 #: at 40, 27.30 at 80; cd 27.08, 26.88) and, from OTD's faster start, 20 do what 40 did
@@ -130,7 +138,15 @@ ADMM_ITER = {28.5: 160, 19.5: 80}
 #: 31.48 → 31.72 dB (as they are 29.96 → 29.88, magnified 33.00 → 33.57).  Checked again
 #: with the fine-tuned network (``benchmarks/results/cv_pnp_gap_sigma_30db_ft128.md``, the same
 #: 16 views): σ_end 0.05 / 0.06 / 0.07 → 32.00 / 32.18 / 32.22 dB, a tie within 0.05 dB.
-SIGMA_END_ADMM = {28.5: 0.06, 19.5: 0.2}
+#: All of these were relative to the start's robust peak.  Relative to its RMS
+#: (:data:`SIGMA_SCALE`), the anchors are 0.05 at 30 dB and 0.2 at 20 dB, cross-validated on
+#: the same 16 views (``benchmarks/results/cv_pnp_gap_sigma_scale.md``,
+#: ``cv_pnp_gap_sigma_scale_20db.md``, bfloat16).
+SIGMA_END_ADMM = {28.5: 0.05, 19.5: 0.2}
+#: :data:`SIGMA_END_ADMM` where the level is relative to the robust peak
+#: (``sigma_scale="peak"``, and a cube of more than three axes): the anchors chosen on that
+#: scale (0.06 at 30 dB, above).
+SIGMA_END_ADMM_PEAK = {28.5: 0.06, 19.5: 0.2}
 #: ``guard``: accelerated GAP stops when its residual has risen three iterations in a row to
 #: above this many times its lowest (see :func:`pnp_gap`).  At 1.3 it stopped a converging run
 #: on a scene lit by a fluorescent lamp (balloons~FL2, noiseless, TSA: 35.37 dB after 6.7 s,
@@ -170,8 +186,22 @@ PAN_SPECTRUM = "gated_clean"
 #: ``benchmarks/results/light_gate.md``): 30 dB +1.49 dB over the same kind of 32 views.
 FAST_PAN_SPECTRUM = "gated"
 #: ``sigma_scale="auto"``: what the denoiser's level is relative to, by splitting (see
-#: :class:`~tensor_cosdi.solvers.priors.Denoiser`).
-SIGMA_SCALE = {"gap": "peak", "admm": "peak"}
+#: :class:`~tensor_cosdi.solvers.priors.Denoiser`).  On noisy data (ADMM) the level follows
+#: the noise, and a measurement's noise at a given SNR scales with the scene's mean
+#: brightness, not with its highlights: relative to the robust peak, a bright, flat scene was
+#: under-regularised (balloons magnified 4× at 20 dB: 20.24 dB, 34.29 with the RMS scale) and
+#: a dark one with highlights over-smoothed.  8 tuning scenes as they are and magnified 4×,
+#: 4 folds, TSA, every fold chose the RMS scale: ``pnp_gap`` (bfloat16) tuning means
+#: 32.18 → 32.54 dB at 30 dB (``benchmarks/results/cv_pnp_gap_sigma_scale.md``) and
+#: 28.26 → 29.49 dB at 20 dB (``cv_pnp_gap_sigma_scale_20db.md``); ``pnp_fast``
+#: 31.97 → 32.08 and 28.94 → 29.67 (``cv_pnp_fast_sigma_scale.md``,
+#: ``cv_pnp_fast_sigma_scale_20db.md``).  On clean data (accelerated GAP) the level
+#: regularises the code's ill-posedness, not noise, and the best one there does not follow
+#: the ratio of peak to RMS (``pnp_gap_sigma_clean_zoom4.md``): it keeps the peak.  Only a
+#: cube of three axes (x, y, λ) takes this table; one with more (CASSDI-DFA's depth planes,
+#: CS2LI's and Mu-CoSDI's phase steps) keeps the peak: its RMS is diluted by the planes a
+#: pixel does not occupy, and the RMS scale was cross-validated on spectral cubes only.
+SIGMA_SCALE = {"gap": "peak", "admm": "rms"}
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 1
 #: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
@@ -245,13 +275,14 @@ def pnp_gap(
         or a callable ``(x, sigma) -> x``.
     sigma, sigma_end : float
         Denoiser level of the first and the last iteration, relative to the
-        start's robust peak.  ``sigma_end="auto"`` follows the measurement's
-        estimated SNR (:data:`SIGMA_END` for GAP, :data:`SIGMA_END_ADMM` for
-        ADMM; :func:`tensor_cosdi.noise.snr_schedule`) and the run's length
+        start's robust peak or to its RMS (``sigma_scale``).
+        ``sigma_end="auto"`` follows the measurement's estimated SNR
+        (:data:`SIGMA_END` for GAP, :data:`SIGMA_END_ADMM` for ADMM;
+        :func:`tensor_cosdi.noise.snr_schedule`) and the run's length
         (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT` up to
-        :data:`SHORT_RUN` iterations): the noisier the data or the shorter the
-        run, the higher the floor, and the first level is then ``max(sigma,
-        sigma_end)``.
+        :data:`SHORT_RUN` iterations): the noisier the data, the higher the
+        floor (a short accelerated run's too), and the first level is then
+        ``max(sigma, sigma_end)``.
     warm : ``"gap_tv"``, ``"otd"``, ``"dcosnet"`` or ``"none"``
         Start from ``warm_iter`` iterations of :func:`~.gap_tv.gap_tv` at its
         defaults (``"auto"``: 80), from OTD with ``warm_iter`` iterations of
@@ -337,7 +368,9 @@ def pnp_gap(
         (:class:`~tensor_cosdi.solvers.priors.Denoiser`'s ``scale``): the start's
         robust peak, or :data:`~tensor_cosdi.solvers.priors.PEAK_PER_RMS` times its
         RMS, a level that follows the scene's mean brightness as a measurement's
-        noise does.  ``"auto"``: :data:`SIGMA_SCALE` for the splitting in use.
+        noise does.  ``"auto"``: :data:`SIGMA_SCALE` for the splitting in use (the
+        RMS on noisy data) on a cube of three axes ``(x, y, λ)``, the peak on a
+        cube with more.
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` has risen three
         iterations in a row to above ``guard`` times its lowest value, and
@@ -379,7 +412,8 @@ def pnp_gap(
             f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
         )
     if sigma_scale == "auto":
-        sigma_scale = SIGMA_SCALE["admm" if admm else "gap"]
+        three_way = len(tuple(getattr(system, "cube_shape", ()))) == 3
+        sigma_scale = SIGMA_SCALE["admm" if admm else "gap"] if three_way else "peak"
     if admm:
         rho = RHO if isinstance(rho, str) and rho == "auto" else rho
         rho = check_positive("rho", rho)
@@ -393,11 +427,12 @@ def pnp_gap(
     if sigma_end == "auto":
         # plain (unaccelerated) GAP's own 20-iteration default was tuned with SIGMA_END
         short = max_iter <= SHORT_RUN and (admm or accelerate)
-        table = (
-            (SIGMA_END_ADMM_SHORT if short else SIGMA_END_ADMM)
-            if admm
-            else (SIGMA_END_SHORT if short else SIGMA_END)
-        )
+        if admm and sigma_scale == "peak":
+            table = SIGMA_END_ADMM_SHORT_PEAK if short else SIGMA_END_ADMM_PEAK
+        elif admm:
+            table = SIGMA_END_ADMM_SHORT if short else SIGMA_END_ADMM
+        else:
+            table = SIGMA_END_SHORT if short else SIGMA_END
         sigma_end = snr_schedule(snr, table)
         sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)

@@ -34,7 +34,7 @@ def levels():
     return seen, estimate_snr(p.system, p.measurement).snr_db
 
 
-def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels):
+def test_short_and_long_runs_and_plain_gap_keep_their_tables(levels):
     seen, snr = levels
     assert seen["admm, 40"] == (snr_schedule(snr, M.SIGMA_END_ADMM_SHORT), 40)
     assert seen["admm, auto"] == (
@@ -46,8 +46,10 @@ def test_short_runs_end_higher_long_runs_and_plain_gap_keep_their_tables(levels)
     # plain GAP's default (20 iterations of two calls, now 40 of one) was tuned with the long
     # table
     assert seen["plain gap, 40"] == (snr_schedule(snr, M.SIGMA_END), 40)
-    assert seen["admm, 40"][0] > seen["admm, auto"][0]
+    # a short accelerated run ends higher; pnp_fast's short ADMM run at 30 dB was chosen on
+    # the RMS scale with a level just under the long run's (cv_pnp_fast_sigma_scale.md)
     assert seen["accelerated, 40"][0] > seen["accelerated, 200"][0]
+    assert seen["admm, 40"][0] != seen["admm, auto"][0]
 
 
 def test_admm_runs_half_as_long_at_20_db_even_when_nothing_else_needs_the_estimate():
@@ -210,3 +212,29 @@ def test_sigma_scale_auto_follows_the_splitting():
     for splitting in ("gap", "admm"):
         assert seen[splitting, "auto"] == M.SIGMA_SCALE[splitting]
         assert seen[splitting, "peak"] == "peak" and seen[splitting, "rms"] == "rms"
+
+
+def test_a_cube_with_more_axes_keeps_the_peak_and_its_own_tables():
+    """The RMS scale is for spectral cubes (x, y, λ); CASSDI-DFA's depth planes dilute the RMS
+    by the planes a pixel does not occupy, so such a cube keeps the peak and the levels chosen
+    on it; a forced ``sigma_scale="peak"`` takes those levels on a spectral cube too."""
+    seen = {}
+    for name in ("sd_cassi", "cassdi_dfa"):
+        p = tc.studies.make_problem(name, "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+        snr = estimate_snr(p.system, p.measurement).snr_db
+        for scale in ("auto", "peak"):
+            with mock.patch.object(M, "Denoiser", side_effect=M.Denoiser) as spy:
+                tc.reconstruct(
+                    p.system, p.measurement, "pnp_gap", denoiser="tv", max_iter=3,
+                    splitting="admm", sigma_scale=scale,
+                )  # fmt: skip
+            kw = spy.call_args.kwargs
+            seen[name, scale] = (kw["scale"], kw["sigma_end"], snr)
+    s3 = seen["sd_cassi", "auto"][2]
+    s4 = seen["cassdi_dfa", "auto"][2]
+    assert seen["sd_cassi", "auto"][:2] == ("rms", snr_schedule(s3, M.SIGMA_END_ADMM_SHORT))
+    assert seen["sd_cassi", "peak"][:2] == ("peak", snr_schedule(s3, M.SIGMA_END_ADMM_SHORT_PEAK))
+    for scale in ("auto", "peak"):
+        assert seen["cassdi_dfa", scale][:2] == (
+            "peak", snr_schedule(s4, M.SIGMA_END_ADMM_SHORT_PEAK)
+        )

@@ -368,9 +368,10 @@ def pnp_gap(
         (:class:`~tensor_cosdi.solvers.priors.Denoiser`'s ``scale``): the start's
         robust peak, or :data:`~tensor_cosdi.solvers.priors.PEAK_PER_RMS` times its
         RMS, a level that follows the scene's mean brightness as a measurement's
-        noise does.  ``"auto"``: :data:`SIGMA_SCALE` for the splitting in use (the
-        RMS on noisy data) on a cube of three axes ``(x, y, λ)``, the peak on a
-        cube with more.
+        noise does (a least-norm start, ``warm="none"``, carries the noise that its
+        small code sums amplify into that RMS).  ``"auto"``: :data:`SIGMA_SCALE`
+        for the splitting in use (the RMS on noisy data) on a cube of three axes
+        ``(x, y, λ)``, the peak on a cube with more.
     guard : float or None
         Accelerated GAP stops when the residual ``‖A x − g‖`` has risen three
         iterations in a row to above ``guard`` times its lowest value, and
@@ -600,8 +601,8 @@ def pnp_fast(
     (:data:`FAST_WARM_ITER` ADMM iterations after OTD's first stage, whose TV takes
     :data:`FAST_PAN_TV_STEPS` steps an iteration and whose spectral atoms follow a light with
     sharp lines, :data:`FAST_PAN_SPECTRUM`); being a short run, its denoiser level ends
-    higher (:data:`SIGMA_END_SHORT`, :data:`SIGMA_END_ADMM_SHORT`).  Registered as
-    ``"pnp_fast"``.
+    where a short run's was cross-validated (:data:`SIGMA_END_SHORT`: higher on clean data;
+    :data:`SIGMA_END_ADMM_SHORT`).  Registered as ``"pnp_fast"``.
 
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
     and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  A 30-iteration OTD start adds

@@ -90,7 +90,24 @@ def _l1(x, block: int = 1 << 18) -> float:
 
 
 def rms(x) -> float:
-    """Root mean square of a tensor (never 0: the smallest positive float instead)."""
+    """Root mean square of a tensor: the scale of ``Denoiser(scale="rms")``.
+
+    Parameters
+    ----------
+    x : tensor
+        Any tensor of the active backend (or array).
+
+    Returns
+    -------
+    float
+        ``‖x‖ / √size``, never 0 (the smallest positive float instead).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rms(np.array([3.0, -3.0, 3.0, -3.0]))
+    3.0
+    """
     n = float(np.prod(tl.shape(x)))
     return float(max(float(tl.norm(x)) / np.sqrt(n), np.finfo(float).tiny))
 

@@ -241,13 +241,13 @@ def candidates(grid: dict) -> list[dict]:
     return [dict(zip(names, vals)) for vals in itertools.product(*(grid[n] for n in names))]
 
 
-def pnp_fast_settings() -> dict:
-    """``pnp_fast``'s own settings as ``pnp_gap`` options, less ``precision``
-    (:func:`tensor_cosdi.solvers.pnp_gap.fast_settings`): ``pnp_gap`` with these and another
-    denoiser is ``pnp_fast`` with it."""
+def pnp_fast_settings(system, g) -> dict:
+    """``pnp_fast``'s own settings on the measurement ``g`` as ``pnp_gap`` options, less
+    ``precision`` (:func:`tensor_cosdi.solvers.pnp_gap.fast_settings`): ``pnp_gap`` with these
+    and another denoiser is ``pnp_fast`` with it."""
     from tensor_cosdi.solvers.pnp_gap import fast_settings
 
-    out = fast_settings()
+    out = fast_settings(system, g)
     del out["precision"]
     return out
 

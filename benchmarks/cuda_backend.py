@@ -76,7 +76,7 @@ def protocol_problem():
     return system, cube, g, what
 
 
-def cpu_options(method):
+def cpu_options(method, system, g):
     """``(method, options)`` that keep the network on the CPU (its default would be the GPU);
     ``pnp_fast`` runs as ``pnp_gap`` with its settings and a CPU denoiser."""
     if method == "dcosnet":
@@ -85,7 +85,7 @@ def cpu_options(method):
 
     if method == "pnp_fast":
         den = SpectralDenoiser(device="cpu", precision="auto")
-        return "pnp_gap", {"denoiser": den, **pnp_fast_settings()}
+        return "pnp_gap", {"denoiser": den, **pnp_fast_settings(system, g)}
     return method, {"denoiser": SpectralDenoiser(device="cpu")}
 
 
@@ -101,7 +101,7 @@ def timed(torch, system, g, method, device, repeats, dev):
             sync()
             cube = cube.cpu().numpy()
         else:  # NumPy arrays, and the network on the CPU (its default would be the GPU)
-            name, options = cpu_options(method)
+            name, options = cpu_options(method, system, g)
             cube = tc.reconstruct(system, g, name, **options).cube
         secs.append(time.perf_counter() - t0)
     return float(np.median(secs)), np.asarray(cube)

@@ -52,7 +52,7 @@ def _in_pnp_gap(system, g, den):
 
 def _in_pnp_fast(system, g, den):
     """``pnp_fast`` with another denoiser: ``pnp_gap`` with ``pnp_fast``'s own settings."""
-    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **pnp_fast_settings()).cube
+    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **pnp_fast_settings(system, g)).cube
 
 
 def main(argv=None):

@@ -27,11 +27,12 @@ estimate's mode-n unfolding (Eq. 97, Alg. 5 steps 16-18).  **WDCT**
 from __future__ import annotations
 
 import numpy as np
+import tensorly as tl
 
 from ..bases import DCT, Dense, Wavelet, block_hosvd, block_sizes, tucker_bases
-from ..validate import integer, number
+from ..validate import flag, integer, number
 from . import engine
-from ._base import check_positive, register_method
+from ._base import History, check_positive, register_method
 from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
     PAN_WEIGHTS,
     has_many_bands,
@@ -360,7 +361,9 @@ def online_tucker_admm(
     work; an integer ``max_iter`` also caps the first stage's ``pan_iter``);
     ``admm_iter``: the ADMM stage's iterations alone, leaving the first stage
     as it is (``"auto"``: ``max_iter``'s; never more than an integer
-    ``max_iter``); ``pan_*``: see :func:`panchromatic_estimate`;
+    ``max_iter``; 0: no ADMM stage, the first stage's cube itself, which only a
+    system without an exact panchromatic image and ``pan_iter ≥ 1`` has);
+    ``pan_*``: see :func:`panchromatic_estimate`;
     ``spatial_block``: see :func:`initial_bases`; ``nonneg``: see
     :func:`tucker_admm` (on by default: a cube of light is non-negative).  For C3SLFI, "OTD-3D" is
     this method on a 3-D system and "OTD-5D" on ``system.as_5d()``.
@@ -397,11 +400,22 @@ def online_tucker_admm(
     """
     if isinstance(max_iter, str) and max_iter != "auto":  # checked before the first stage runs
         raise ValueError(f"max_iter must be an integer ≥ 1 or 'auto', got {max_iter!r}")
-    if isinstance(admm_iter, str) and admm_iter != "auto":
-        raise ValueError(f"admm_iter must be an integer ≥ 1 or 'auto', got {admm_iter!r}")
+    if isinstance(admm_iter, str):
+        if admm_iter != "auto":
+            raise ValueError(f"admm_iter must be an integer ≥ 0 or 'auto', got {admm_iter!r}")
+    else:
+        admm_iter = integer("admm_iter", admm_iter, low=0)
     if max_iter != "auto":  # a given cap bounds the first stage too
         max_iter = integer("max_iter", max_iter, low=1)
         pan_iter = min(integer("pan_iter", pan_iter, low=0), max_iter)
+    if admm_iter == 0 and (system.panchromatic_exact or integer("pan_iter", pan_iter, low=0) == 0):
+        why = "pan_iter=0" if not system.panchromatic_exact else (
+            f"{type(system).__name__}'s panchromatic image is exact"
+        )  # fmt: skip
+        raise ValueError(
+            f"admm_iter=0 returns the first stage's cube, and there is none here ({why}); "
+            "use admm_iter ≥ 1"
+        )
     bases, start = initial_bases(
         system,
         measurement,
@@ -414,10 +428,12 @@ def online_tucker_admm(
         spatial_block=spatial_block,
         progress=bool(progress),
     )
+    if admm_iter == 0:  # the first stage's cube, no ADMM stage (projected as ADMM's would be)
+        return (tl.clip(start, 0, None) if flag("nonneg", nonneg) else start), History(), False
     if max_iter == "auto":
         max_iter = OTD_MAX_ITER[start is not None]
-    if not (isinstance(admm_iter, str) and admm_iter == "auto"):
-        max_iter = min(max_iter, integer("admm_iter", admm_iter, low=1))
+    if not isinstance(admm_iter, str):
+        max_iter = min(max_iter, admm_iter)
     update = tuple(m for m in range(0 if update_spatial else 2, len(system.cube_shape)))
     start = [start] if start is not None else None  # handed over: ADMM frees it after iteration 1
     return tucker_admm(

@@ -40,7 +40,7 @@ from .denoisers import resolve, self_ensemble, spectral_net
 from .panchromatic import PAN_SPECTRA
 from .priors import LEVEL_SCALES, Denoiser
 
-__all__ = ["pnp_gap", "pnp_fast", "fast_settings"]
+__all__ = ["pnp_gap", "pnp_fast", "fast_settings", "fast_budget"]
 
 WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 #: ``warm="gap_tv"`` with ``warm_iter="auto"``: GAP-TV iterations of the start.
@@ -62,6 +62,17 @@ FAST_PAN_TV_STEPS = 5
 #: tuning scenes, 4 folds (``benchmarks/results/cv_pnp_fast_budget.md``; every fold chose 46) for
 #: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps.
 FAST_ITER = 46
+#: :func:`pnp_fast` on a clean measurement (accelerated GAP) from OTD's first stage
+#: (:func:`fast_budget`): that stage's cube alone (``warm_iter=0``), 76 iterations and the
+#: level ending at 0.04.  On clean data the start's 20 ADMM iterations bought 0.05 dB for
+#: 0.8 s; 30 more denoiser iterations cost about as much and buy 0.9 dB.  Cross-validated
+#: over ``warm_iter`` 0 / 20 × ``max_iter`` 46 / 66 / 76 × ``sigma_end`` 0.04 / 0.05 on 8
+#: tuning scenes as they are and magnified 4×, 4 folds, noiseless, TSA mask
+#: (``benchmarks/results/cv_pnp_fast_first_stage.md``): every fold chose this; tuning mean
+#: 34.46 → 35.33 dB, median 4.63 → 4.91 s a cube (66 iterations: 35.14 dB in 4.52 s).
+FAST_WARM_ITER_CLEAN = 0
+FAST_ITER_CLEAN = 76
+FAST_SIGMA_END_CLEAN = 0.04
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
@@ -286,7 +297,8 @@ def pnp_gap(
     warm : ``"gap_tv"``, ``"otd"``, ``"dcosnet"`` or ``"none"``
         Start from ``warm_iter`` iterations of :func:`~.gap_tv.gap_tv` at its
         defaults (``"auto"``: 80), from OTD with ``warm_iter`` iterations of
-        its ADMM stage (``"auto"``: OTD's default; the first stage is OTD's
+        its ADMM stage (``"auto"``: OTD's default; 0: the first stage's cube
+        alone, where the system has a first stage; the first stage is OTD's
         either way), from one pass of the shipped
         D-CoSNet (:func:`~.dcosnet.dcosnet`; SD-CASSI, 28 bands, 2 px per
         band), or from the least-norm solution.
@@ -437,7 +449,7 @@ def pnp_gap(
         sigma_end = snr_schedule(snr, table)
         sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)
-    warm_iter = _check_warm_iter(warm_iter)
+    warm_iter = _check_warm_iter(warm_iter, warm)
     pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
     pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
     pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
@@ -504,7 +516,12 @@ def warm_started_gap(
     converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
-    warm_iter = _check_warm_iter(warm_iter)
+    warm_iter = _check_warm_iter(warm_iter, warm)
+    if warm == "otd" and warm_iter == 0 and system.panchromatic_exact:
+        raise ValueError(
+            f"warm_iter=0 starts from OTD's first stage, and {type(system).__name__} has none "
+            "(its panchromatic image is exact); use warm_iter ≥ 1"
+        )
     pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
     pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
     pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")
@@ -542,12 +559,19 @@ def warm_started_gap(
     return x, _joined(hist, h2), conv
 
 
-def _check_warm_iter(warm_iter):
+def _check_warm_iter(warm_iter, warm):
+    """``"auto"`` or an integer ≥ 1; 0 too with the OTD start (its first stage alone)."""
     if isinstance(warm_iter, str):
         if warm_iter != "auto":
-            raise ValueError(f"warm_iter must be 'auto' or an integer ≥ 1, got {warm_iter!r}")
+            raise ValueError(f"warm_iter must be 'auto' or an integer ≥ 0, got {warm_iter!r}")
         return warm_iter
-    return engine.check_int("warm_iter", warm_iter, 1)
+    warm_iter = engine.check_int("warm_iter", warm_iter, 0)
+    if warm_iter == 0 and warm == "gap_tv":
+        raise ValueError(
+            "warm_iter=0 is for warm='otd' (its first stage alone); warm='gap_tv' needs "
+            "warm_iter ≥ 1 (warm='none' starts from the least-norm solution)"
+        )
+    return warm_iter
 
 
 def _check_first_stage(value, warm, name):
@@ -588,25 +612,27 @@ def _joined(first, second):
 
 
 def pnp_fast(
-    system, measurement, *, max_iter: int = FAST_ITER, ensemble: int = 1, precision: str = "auto",
-    warm: str = "otd", warm_iter=FAST_WARM_ITER, pan_tv_steps="auto", pan_atoms="auto",
+    system, measurement, *, max_iter="auto", ensemble: int = 1, precision: str = "auto",
+    warm: str = "otd", warm_iter="auto", pan_tv_steps="auto", pan_atoms="auto",
     pan_spectrum=FAST_PAN_SPECTRUM, sigma_end="auto", rho="auto", nonneg: bool = True,
     cycle: bool = True, sigma_scale="auto", progress: bool = False,
 ):  # fmt: skip
-    """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` with
-    ``max_iter`` :data:`FAST_ITER` (accelerated GAP on clean data, ADMM on noisy data, as
-    there), one denoiser call per iteration (``ensemble=1``), each in the next of the eight
-    symmetries of the image plane (``cycle=True``, as in :func:`pnp_gap`), the network in
-    bfloat16 where the CPU runs it natively (``precision="auto"``) and a shorter OTD start
-    (:data:`FAST_WARM_ITER` ADMM iterations after OTD's first stage, whose TV takes
+    """The learned path with fewer and cheaper denoiser calls: :func:`pnp_gap` (accelerated
+    GAP on clean data, ADMM on noisy data, as there) with one denoiser call per iteration
+    (``ensemble=1``), each in the next of the eight symmetries of the image plane
+    (``cycle=True``, as in :func:`pnp_gap`), the network in bfloat16 where the CPU runs it
+    natively (``precision="auto"``), a short OTD start whose first stage's TV takes
     :data:`FAST_PAN_TV_STEPS` steps an iteration and whose spectral atoms follow a light with
-    sharp lines, :data:`FAST_PAN_SPECTRUM`); being a short run, its denoiser level ends
-    where a short run's was cross-validated (:data:`SIGMA_END_SHORT`: higher on clean data;
-    :data:`SIGMA_END_ADMM_SHORT`).  Registered as ``"pnp_fast"``.
+    sharp lines (:data:`FAST_PAN_SPECTRUM`), and a budget by the data
+    (:func:`fast_budget`): on noisy data :data:`FAST_WARM_ITER` ADMM iterations of the start
+    and :data:`FAST_ITER` iterations, the level ending where a short run's was
+    cross-validated (:data:`SIGMA_END_ADMM_SHORT`); on clean data the first stage's cube
+    alone and :data:`FAST_ITER_CLEAN` iterations ending at :data:`FAST_SIGMA_END_CLEAN`.
+    Registered as ``"pnp_fast"``.
 
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
-    and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  A 30-iteration OTD start adds
-    0.03 dB clean and 0.02 dB at 30 dB on the tuning scenes
+    and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  On noisy data a 30-iteration
+    OTD start adds 0.02 dB at 30 dB on the tuning scenes
     (``benchmarks/results/cv_pnp_fast_budget.md``) for about 0.4 s more:
     ``pnp_fast(warm_iter=30)``.  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
@@ -616,11 +642,14 @@ def pnp_fast(
 
     Parameters
     ----------
-    max_iter, ensemble, precision, warm, warm_iter, pan_tv_steps, pan_atoms, pan_spectrum
+    max_iter, warm_iter, sigma_end
+        As in :func:`pnp_gap`; ``"auto"`` (default): :func:`fast_budget` (a given value is
+        kept, the others still follow the data).
+    ensemble, precision, warm, pan_tv_steps, pan_atoms, pan_spectrum
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start; :func:`fast_settings` lists them
         all).
-    sigma_end, rho, nonneg, cycle, sigma_scale, progress
+    rho, nonneg, cycle, sigma_scale, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
 
@@ -631,26 +660,27 @@ def pnp_fast(
     """
     return pnp_gap(
         system, measurement, **fast_settings(
-            max_iter=max_iter, ensemble=ensemble, precision=precision, warm=warm,
-            warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
+            system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
+            warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
             pan_spectrum=pan_spectrum, sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle,
             sigma_scale=sigma_scale,
         ), progress=progress,
     )  # fmt: skip
 
 
-def fast_settings(**options) -> dict:
-    """The :func:`pnp_gap` options that :func:`pnp_fast` runs with: its defaults, updated by
-    ``options`` (any of its own), with its start's TV steps resolved as it resolves them
-    (``pan_tv_steps="auto"`` with the OTD start → :data:`FAST_PAN_TV_STEPS`).
-    ``pnp_gap(system, g, denoiser=d, **fast_settings())`` is :func:`pnp_fast` with the
-    denoiser ``d``.
+def fast_settings(system, measurement, **options) -> dict:
+    """The :func:`pnp_gap` options that :func:`pnp_fast` runs with on ``measurement``: its
+    defaults, updated by ``options`` (any of its own), with the ``"auto"`` ones resolved as it
+    resolves them: its start's TV steps (:data:`FAST_PAN_TV_STEPS` with the OTD start) and its
+    budget (:func:`fast_budget`).  ``pnp_gap(system, g, denoiser=d, **fast_settings(system,
+    g))`` is :func:`pnp_fast` with the denoiser ``d``.
 
     Parameters
     ----------
+    system : tensor_cosdi.systems.System
+    measurement : tensor of ``system.measurement_shape``
     **options
-        Options of :func:`pnp_fast` (not ``system``, ``measurement``); any other name is a
-        ``ValueError``.
+        Options of :func:`pnp_fast`; any other name is a ``ValueError``.
 
     Returns
     -------
@@ -659,8 +689,13 @@ def fast_settings(**options) -> dict:
 
     Examples
     --------
-    >>> fast_settings()["pan_tv_steps"], fast_settings(warm="gap_tv")["pan_tv_steps"]
-    (5, 'auto')
+    >>> import tensor_cosdi as tc
+    >>> p = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
+    >>> s = fast_settings(p.system, p.measurement)
+    >>> s["pan_tv_steps"], s["warm_iter"], s["max_iter"], s["sigma_end"]
+    (5, 0, 76, 0.04)
+    >>> fast_settings(p.system, p.measurement, warm="gap_tv")["pan_tv_steps"]
+    'auto'
     """
     import inspect
 
@@ -677,14 +712,63 @@ def fast_settings(**options) -> dict:
     auto_steps = isinstance(out["pan_tv_steps"], str) and out["pan_tv_steps"] == "auto"
     if out["warm"] == "otd" and auto_steps:
         out["pan_tv_steps"] = FAST_PAN_TV_STEPS
+    auto = [k for k in BUDGET if isinstance(out[k], str) and out[k] == "auto"]
+    if auto:
+        budget = fast_budget(system, measurement, out["warm"])
+        out.update({k: budget[k] for k in auto})
     return out
+
+
+#: The options :func:`fast_budget` resolves.
+BUDGET = ("warm_iter", "max_iter", "sigma_end")
+
+
+def fast_budget(system, measurement, warm: str = "otd") -> dict:
+    """:func:`pnp_fast`'s ``warm_iter``, ``max_iter`` and ``sigma_end`` for ``measurement``.
+
+    On a clean one (accelerated GAP: an estimated SNR of :data:`ACCELERATE_ABOVE_DB` or more)
+    started from OTD's first stage (a system without an exact panchromatic image): that
+    stage's cube alone (:data:`FAST_WARM_ITER_CLEAN`), :data:`FAST_ITER_CLEAN` iterations,
+    the level ending at :data:`FAST_SIGMA_END_CLEAN`.  Otherwise :data:`FAST_WARM_ITER` ADMM
+    iterations of the start, :data:`FAST_ITER` iterations and :func:`pnp_gap`'s own
+    ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT` on noisy data).
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+    measurement : tensor of ``system.measurement_shape``
+    warm : str
+        :func:`pnp_fast`'s start (:data:`WARM_STARTS`).
+
+    Returns
+    -------
+    dict
+        ``{"warm_iter": int, "max_iter": int, "sigma_end": float or "auto"}``.
+
+    Examples
+    --------
+    >>> import tensor_cosdi as tc
+    >>> clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
+    >>> fast_budget(clean.system, clean.measurement)
+    {'warm_iter': 0, 'max_iter': 76, 'sigma_end': 0.04}
+    >>> noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
+    >>> fast_budget(noisy.system, noisy.measurement)
+    {'warm_iter': 20, 'max_iter': 46, 'sigma_end': 'auto'}
+    """
+    if warm not in WARM_STARTS:
+        raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
+    first_stage = warm == "otd" and not system.panchromatic_exact
+    if first_stage and gap_settings(system, measurement, "auto", "auto")[0]:
+        return {"warm_iter": FAST_WARM_ITER_CLEAN, "max_iter": FAST_ITER_CLEAN,
+                "sigma_end": FAST_SIGMA_END_CLEAN}  # fmt: skip
+    return {"warm_iter": FAST_WARM_ITER, "max_iter": FAST_ITER, "sigma_end": "auto"}
 
 
 register_method(
     "pnp_fast",
     pnp_fast,
-    summary="the learned plug-and-play path with 46 single denoiser calls, in bfloat16 where "
-    "the CPU runs it natively (torch)",
+    summary="the learned plug-and-play path with 46 (noisy data) or 76 (clean) single "
+    "denoiser calls, in bfloat16 where the CPU runs it natively (torch)",
     requires=("torch",),
 )
 

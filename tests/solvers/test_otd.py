@@ -233,6 +233,10 @@ def test_progress_bar_on_request(capsys):
         ({"colour": 1}, r"unknown option\(s\) \['colour'\] for method 'otd'"),
         ({"nonneg": 1}, "option nonneg must be True or False"),
         ({"pan_spectrum": "led"}, r"pan_spectrum must be one of \('flat', 'fitted', 'fitted_z'"),
+        ({"admm_iter": -1}, "admm_iter must be an integer ≥ 0, got -1"),
+        ({"admm_iter": "none"}, "admm_iter must be an integer ≥ 0 or 'auto', got 'none'"),
+        ({"admm_iter": 0, "pan_iter": 0}, r"admm_iter=0 returns the first stage's cube, and "
+         r"there is none here \(pan_iter=0\)"),
     ],
 )
 def test_bad_options_are_clear_errors(options, message):
@@ -310,6 +314,31 @@ def test_an_integer_max_iter_caps_the_first_stage_too(monkeypatch):
     res = tc.reconstruct(p.system, p.measurement, "otd", max_iter=3)
     tc.reconstruct(p.system, p.measurement, "otd")
     assert seen == [3, 90] and len(res.history["residual"]) <= 3
+
+
+def test_admm_iter_0_returns_the_first_stage_cube_projected_as_admm_would(monkeypatch):
+    """``admm_iter=0``: no ADMM stage, the first stage's cube itself (non-negative by default,
+    signed with ``nonneg=False``), an empty history; refused before any work on a system whose
+    panchromatic image is exact (it has no first stage)."""
+    from tensor_cosdi.solvers import otd
+
+    p = studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4, snr_db=30)
+    _, start = initial_bases(p.system, p.measurement, pan_iter=90, pan_tv_steps=10)
+    start = np.asarray(start)
+    assert start.min() < 0  # the first stage's own cube is signed here: the projection shows
+    res = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, pan_spectrum="flat")
+    np.testing.assert_allclose(np.asarray(res.cube), np.maximum(start, 0), rtol=1e-6, atol=1e-7)
+    assert res.history["residual"] == [] and not res.converged
+    signed = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, nonneg=False,
+                            pan_spectrum="flat")  # fmt: skip
+    np.testing.assert_allclose(np.asarray(signed.cube), start, rtol=1e-6, atol=1e-7)
+    ran = []
+    monkeypatch.setattr(otd, "initial_bases", lambda *a, **k: ran.append(1))
+    dual = DualCameraCASSI.example((4, 5, 3))
+    g = dual.simulate(np.ones(dual.cube_shape))
+    with pytest.raises(ValueError, match="DualCameraCASSI's panchromatic image is exact"):
+        tc.reconstruct(dual, g, "otd", admm_iter=0)
+    assert ran == []
 
 
 def test_the_subspace_denoiser_keeps_a_fortran_iterate_and_its_values():

@@ -123,17 +123,18 @@ def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
 
 
 def test_fast_settings_resolve_the_start_as_pnp_fast_does():
-    """``fast_settings()``: ``pnp_fast``'s own pnp_gap options — its 5 TV steps and gated
-    first stage with the OTD start; another start keeps ``pan_tv_steps="auto"`` and takes
+    """``fast_settings(system, g)``: ``pnp_fast``'s own pnp_gap options — its 5 TV steps and
+    gated first stage with the OTD start; another start keeps ``pan_tv_steps="auto"`` and takes
     ``"gated"`` as a gate that stays shut (it has no first stage), while ``"fitted"`` is
     refused there; an unknown option is named."""
-    assert M.fast_settings()["pan_tv_steps"] == M.FAST_PAN_TV_STEPS
-    assert M.fast_settings()["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
-    other = M.fast_settings(warm="gap_tv")
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+    own = M.fast_settings(p.system, p.measurement)
+    assert own["pan_tv_steps"] == M.FAST_PAN_TV_STEPS
+    assert own["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
+    other = M.fast_settings(p.system, p.measurement, warm="gap_tv")
     assert other["pan_spectrum"] == "gated" and other["pan_tv_steps"] == "auto"
     with pytest.raises(ValueError, match=r"\['denoiser'\] are not options of pnp_fast"):
-        M.fast_settings(denoiser="tv")
-    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
+        M.fast_settings(p.system, p.measurement, denoiser="tv")
     run = {**other, "precision": "float32", "max_iter": 1, "warm_iter": 2}
     gated = tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **run)
     flat = tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv",
@@ -142,6 +143,72 @@ def test_fast_settings_resolve_the_start_as_pnp_fast_does():
     with pytest.raises(ValueError, match="pan_spectrum sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv",
                        **{**run, "pan_spectrum": "fitted"})  # fmt: skip
+
+
+def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
+    """``pnp_fast``'s budget: on a clean measurement from OTD's first stage, that stage's cube
+    alone and :data:`FAST_ITER_CLEAN` iterations; on a noisy one, without a first stage
+    (an exact panchromatic image) or from another start, 20 ADMM iterations of the start and
+    46; given values are kept; a bad start is named."""
+    clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)  # reads 41.5 dB
+    noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
+    assert estimate_snr(clean.system, clean.measurement).snr_db > M.ACCELERATE_ABOVE_DB
+    fast, slow = (M.FAST_WARM_ITER_CLEAN, M.FAST_ITER_CLEAN), (M.FAST_WARM_ITER, M.FAST_ITER)
+    assert fast == (0, M.FAST_ITER_CLEAN) and slow == (20, 46) and M.FAST_ITER_CLEAN > 46
+
+    def budget(p, **kw):
+        s = M.fast_settings(p.system, p.measurement, **kw)
+        return s["warm_iter"], s["max_iter"], s["sigma_end"]
+
+    assert budget(clean) == (*fast, M.FAST_SIGMA_END_CLEAN) and budget(noisy) == (*slow, "auto")
+    assert budget(clean, warm="gap_tv") == (*slow, "auto")
+    assert budget(clean, max_iter=10) == (0, 10, 0.04)
+    assert budget(clean, warm_iter=3, sigma_end=0.1) == (3, fast[1], 0.1)
+    dual = tc.systems.DualCameraCASSI.example((8, 8, 4))
+    g = dual.simulate(np.random.default_rng(0).random(dual.cube_shape))
+    assert M.fast_budget(dual, g) == {"warm_iter": 20, "max_iter": 46, "sigma_end": "auto"}
+    with pytest.raises(ValueError, match="warm must be one of"):
+        M.fast_budget(clean.system, clean.measurement, warm="tv")
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"warm": "gap_tv", "warm_iter": 0}, "warm='gap_tv' needs warm_iter ≥ 1"),
+        ({"warm_iter": -1}, "warm_iter must be an integer ≥ 0, got -1"),
+        ({"warm_iter": "short"}, "warm_iter must be 'auto' or an integer ≥ 0, got 'short'"),
+    ],
+)
+def test_bad_warm_iter_is_named(options, message):
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+    with pytest.raises(ValueError, match=message):
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **options)
+
+
+def test_warm_iter_0_starts_from_the_first_stage_alone(monkeypatch):
+    """``warm="otd", warm_iter=0``: the denoiser's iterations start from OTD's first-stage cube
+    (what ``otd(admm_iter=0)`` returns); refused, naming the system, where there is no first
+    stage."""
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
+    first = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, pan_spectrum="flat")
+    starts, real = [], M.engine.gap
+
+    def gap(operator, g, prior, *, start=None, **kwargs):
+        if not isinstance(prior, M.Denoiser):  # the first stage's own GAP
+            return real(operator, g, prior, start=start, **kwargs)
+        starts.append(np.asarray(start))
+        return start, {k: [] for k in ("objective", "residual", "change", "seconds")}, False
+
+    monkeypatch.setattr(M.engine, "gap", gap)
+    tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm_iter=0,
+                   pan_spectrum="flat", max_iter=1, splitting="gap")  # fmt: skip
+    assert len(starts) == 1  # the methods see the measurement scaled to a peak of 1
+    peak = float(np.abs(np.asarray(p.measurement)).max())
+    np.testing.assert_allclose(starts[0] * peak, np.asarray(first.cube), rtol=1e-6, atol=1e-9)
+    dual = tc.systems.DualCameraCASSI.example((8, 8, 4))
+    g = dual.simulate(np.random.default_rng(0).random(dual.cube_shape))
+    with pytest.raises(ValueError, match="DualCameraCASSI has none"):
+        tc.reconstruct(dual, g, "pnp_gap", denoiser="tv", warm_iter=0)
 
 
 def test_gated_first_stage_is_the_plain_one_where_no_gate_can_be_read():

@@ -332,14 +332,23 @@ def snr_label(snr) -> str:
     return "noiseless" if snr is None else f"{snr:g} dB"
 
 
-def pick(means, seconds=None, tie_db: float = 0.0, keep: int | None = None) -> int:
+def pick(
+    means, seconds=None, tie_db: float = 0.0, keep: int | None = None, no_slower: bool = False
+) -> int:
     """Index of the best mean PSNR.  With ``tie_db > 0`` the candidates within ``tie_db`` of
     the best are a tie: won by ``keep`` (the default in use: a change must gain more than
-    ``tie_db``) when it is among them, else by the fastest (``seconds``)."""
-    best = int(np.argmax(means))
+    ``tie_db``) when it is among them, else by the fastest (``seconds``).  ``no_slower``
+    (with ``keep`` and ``seconds``): only candidates whose median seconds are at most
+    ``keep``'s compete (a time budget the default in use already meets)."""
+    allowed = range(len(means))
+    if no_slower:
+        if keep is None or seconds is None:
+            raise ValueError("no_slower needs the candidate in use (keep) and the seconds")
+        allowed = [i for i in allowed if seconds[i] <= seconds[keep]]
+    best = max(allowed, key=lambda i: means[i])
     if tie_db <= 0:
         return best
-    near = [i for i, m in enumerate(means) if m >= means[best] - tie_db]
+    near = [i for i in allowed if means[i] >= means[best] - tie_db]
     if keep is not None and keep in near:
         return keep
     if seconds is None:
@@ -347,12 +356,17 @@ def pick(means, seconds=None, tie_db: float = 0.0, keep: int | None = None) -> i
     return min(near, key=lambda i: (seconds[i], -means[i]))
 
 
-def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.0, keep=None):
+def cross_validate(
+    rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.0, keep=None,
+    no_slower: bool = False,
+):  # fmt: skip
     """Fold-wise choice: ``rows_of(candidate, scenes) -> [PSNR]``.
 
     With ``tie_db > 0``, candidates within ``tie_db`` dB of the best mean are a tie, won by
     ``keep`` (a candidate of ``cands``, the default in use) when it is one of them, else by
     the smallest median of ``seconds_of(candidate, scenes) -> [seconds]`` (:func:`pick`).
+    ``no_slower``: only candidates no slower (median seconds) than ``keep`` on the same
+    scenes are chosen.
 
     Returns ``{"folds": [{"chosen", "held_out_psnr", "train_psnr"}], "mean", "spread",
     "chosen_on_all", "all_means", "all_seconds"}`` where ``spread`` is the standard deviation
@@ -369,7 +383,7 @@ def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.
     for k, fold in enumerate(folds):
         rest = [s for j, f in enumerate(folds) if j != k for s in f]
         means = [float(np.mean(rows_of(c, rest))) for c in cands]
-        best = pick(means, secs(rest), tie_db, k_keep)
+        best = pick(means, secs(rest), tie_db, k_keep, no_slower)
         out.append(
             {
                 "fold": k,
@@ -386,7 +400,7 @@ def cross_validate(rows_of, cands, folds, *, seconds_of=None, tie_db: float = 0.
         "folds": out,
         "mean": float(np.mean(held)),
         "spread": float(np.std(held)),
-        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db, k_keep)],
+        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db, k_keep, no_slower)],
         "all_means": all_means,
         "all_seconds": all_seconds,
     }

@@ -184,8 +184,9 @@ def cv(args, store, cache):
             return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes]
 
         res = cross_validate(
-            psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db, keep=args.keep
-        )
+            psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db, keep=args.keep,
+            no_slower=args.no_slower,
+        )  # fmt: skip
         chosen = res["chosen_on_all"]
         rep, rep_zoom = {}, {}
         magnified = views(datasets.REPORT_SCENES, args.zoom)[len(datasets.REPORT_SCENES) :]
@@ -210,11 +211,13 @@ def cv(args, store, cache):
             res["gap_tv_tune_mean"] = float(np.mean(base))
         res["report"] = rep
         results[f"{mk}/{snr_label(snr)}"] = res
-    results["joint"] = _joint(method, cands, folds, conds, store, cache, args.tie_db, args.keep)
+    results["joint"] = _joint(
+        method, cands, folds, conds, store, cache, args.tie_db, args.keep, args.no_slower
+    )
     return _cv_markdown(method, grid, folds, results, args), results
 
 
-def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None):
+def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None, no_slower=False):
     """One setting for every code and noise level, cross-validated the same way: on each fold
     the candidate with the best mean over the conditions on the other three folds; then the
     choice on all folds, its loss against each condition's own best, and its report PSNR."""
@@ -229,8 +232,9 @@ def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None):
         return [store.get(s, snr, mk, method, c)["seconds"] for s in scenes for snr, mk in conds]
 
     res = cross_validate(
-        mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db, keep=keep
-    )
+        mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db, keep=keep,
+        no_slower=no_slower,
+    )  # fmt: skip
     chosen = res["chosen_on_all"]
     tune = [s for f in folds for s in f]
     res["loss"], res["report"] = {}, {}
@@ -276,6 +280,12 @@ def _cv_markdown(method, grid, folds, results, args):
             + "the smallest median time)."
             if args.tie_db > 0
             else "."
+        )
+        + (
+            f"  Only candidates no slower than {fmt(args.keep)} (median seconds a cube on the "
+            "scenes chosen on) are chosen: a time budget the default in use meets."
+            if args.no_slower
+            else ""
         ),
         "",
         f"| code | SNR | chosen per fold | held-out PSNR dB, mean ± spread | chosen on all {n} |"
@@ -369,6 +379,10 @@ def main(argv=None):
         "--keep", default=None, metavar="JSON",
         help="--cv with --tie-db: the candidate in use as a default; it wins the ties it is in",
     )  # fmt: skip
+    ap.add_argument(
+        "--no-slower", action="store_true",
+        help="--cv with --keep: only candidates no slower (median seconds) than --keep compete",
+    )  # fmt: skip
     ap.add_argument("--name", default=None, help="results file stem")
     ap.add_argument(
         "--fresh", default="", metavar="METHODS",
@@ -385,6 +399,8 @@ def main(argv=None):
             raise SystemExit(f"--keep must be a JSON object of options: {exc}") from None
         if args.keep not in candidates(json.loads(args.grid)):
             raise SystemExit(f"--keep {json.dumps(args.keep)} is not a candidate of --grid")
+    if args.no_slower and args.keep is None:
+        raise SystemExit("--no-slower needs --keep (the default in use whose time is the budget)")
     if not args.tie_db >= 0:
         raise SystemExit(f"--tie-db must be a number ≥ 0, got {args.tie_db:g}")
     if args.zoom is not None and not args.zoom >= 1:

@@ -26,6 +26,30 @@ def test_pick_takes_the_best_unless_a_tie_goes_to_the_default_or_the_fastest(pro
     assert protocol.pick(means, None, tie_db=0.05) == 1  # no times: the best
 
 
+def test_pick_no_slower_than_the_default_in_use(protocol):
+    """``no_slower``: a candidate slower than the one in use never wins, however good."""
+    means, secs = [30.00, 30.80, 30.40, 29.00], [5.0, 5.5, 4.9, 1.0]
+    assert protocol.pick(means, secs, keep=0) == 1
+    assert protocol.pick(means, secs, keep=0, no_slower=True) == 2
+    assert protocol.pick(means, secs, tie_db=0.3, keep=0, no_slower=True) == 2  # 30.00: no tie
+    assert protocol.pick(means, secs, tie_db=0.5, keep=0, no_slower=True) == 0  # a tie: kept
+    assert protocol.pick([30.0, 29.0], [5.0, 9.0], keep=0, no_slower=True) == 0
+    with pytest.raises(ValueError, match="no_slower needs the candidate in use"):
+        protocol.pick(means, None, keep=0, no_slower=True)
+    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 31.0, "s2": 32.0}}
+    times = {"a": 5.0, "b": 6.0}
+    cands = [{"w": "a"}, {"w": "b"}]
+    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
+    secs_of = lambda c, scenes: [times[c["w"]] for _ in scenes]  # noqa: E731
+    folds = (("s1",), ("s2",))
+    res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, keep={"w": "a"},
+                                  tie_db=0.05, no_slower=True)  # fmt: skip
+    assert res["chosen_on_all"] == {"w": "a"}
+    res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, keep={"w": "a"},
+                                  tie_db=0.05)  # fmt: skip
+    assert res["chosen_on_all"] == {"w": "b"}
+
+
 def test_cross_validate_keeps_the_default_in_a_tie(protocol):
     scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 30.02, "s2": 31.02}}
     cands = [{"w": "a"}, {"w": "b"}]

@@ -389,7 +389,7 @@ def test_pnp_fast_is_pnp_gap_with_fewer_cheaper_calls_and_still_beats_gap_tv():
     wide = tc.systems.SDCASSI(np.tile(code, (2, 2)), n_bands=28, shifts=2)
     clean = wide.simulate(face.astype(np.float64))
     budget = pnp_gap_module.fast_budget(wide, clean)
-    assert budget == {"warm_iter": 0, "max_iter": 76, "sigma_end": 0.04}, budget
+    assert budget == {"warm_iter": 0, "max_iter": 66, "sigma_end": 0.04}, budget
     fast_clean = tc.reconstruct(wide, clean, "pnp_fast", precision="float32", max_iter=3)
     same_clean = tc.reconstruct(wide, clean, "pnp_gap", max_iter=3, ensemble=1, warm_iter=0,
                                 pan_tv_steps=5, sigma_end=0.04, pan_spectrum="gated")  # fmt: skip

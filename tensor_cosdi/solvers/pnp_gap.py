@@ -64,15 +64,14 @@ FAST_PAN_TV_STEPS = 5
 FAST_ITER = 46
 #: :func:`pnp_fast` on a clean measurement (accelerated GAP) from OTD's first stage
 #: (:func:`fast_budget`): that stage's cube alone (``warm_iter=0``), 66 iterations and the
-#: level ending at 0.04.  On clean data the start's 20 ADMM iterations bought 0.02-0.05 dB
+#: level ending at 0.04.  On clean data the start's 20 ADMM iterations bought 0.01-0.05 dB
 #: for about 0.8 s; 20 more denoiser iterations cost about as much and buy 0.7 dB.
 #: Cross-validated over ``warm_iter`` 0 / 20 × ``max_iter`` 46 / 66 / 76 × ``sigma_end``
 #: 0.04 / 0.05 on 8 tuning scenes as they are and magnified 4×, 4 folds, noiseless, TSA mask,
 #: among the candidates no slower than the budget in use
 #: (``benchmarks/results/cv_pnp_fast_first_stage_budget.md``; every fold chose this): tuning
 #: mean 34.46 dB at the earlier budget (20 / 46 / 0.05, median 4.63 s a cube) → 35.14 dB
-#: (4.52 s).  76 iterations gave 35.33 dB at a median of 4.91 s, and 5.09 s a cube on the
-#: report scenes, past :func:`pnp_fast`'s 5-s budget.
+#: (4.52 s).  76 iterations gave 35.33 dB at a median of 4.91 s, past the budget.
 FAST_WARM_ITER_CLEAN = 0
 FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04

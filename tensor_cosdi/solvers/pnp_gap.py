@@ -729,16 +729,15 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     """:func:`pnp_fast`'s ``warm_iter``, ``max_iter`` and ``sigma_end`` for ``measurement``.
 
     On a clean one (accelerated GAP: an estimated SNR of :data:`ACCELERATE_ABOVE_DB` or more)
-    of a cube of three axes ``(x, y, λ)`` started from OTD's first stage (a system without an
-    exact panchromatic image): that stage's cube alone (:data:`FAST_WARM_ITER_CLEAN`),
-    :data:`FAST_ITER_CLEAN` iterations, the level ending at :data:`FAST_SIGMA_END_CLEAN`.
-    Otherwise :data:`FAST_WARM_ITER` ADMM iterations of the start, :data:`FAST_ITER`
-    iterations and :func:`pnp_gap`'s own ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT`
-    on noisy data).  A cube of more axes (CS2LI's and Mu-CoSDI's phase steps, CASSDI-DFA's
-    depth planes) keeps that budget: the denoiser runs once per slice there, so 20 more
-    iterations cost more than the start's ADMM iterations they replace (CS2LI and Mu-CoSDI
-    at 64×64×16×4, clean: 1.3-1.5× the time), and the trade was cross-validated on
-    spectral cubes only.
+    started from OTD's first stage (a system without an exact panchromatic image): that
+    stage's cube alone (:data:`FAST_WARM_ITER_CLEAN`), :data:`FAST_ITER_CLEAN` iterations,
+    the level ending at :data:`FAST_SIGMA_END_CLEAN`.  Otherwise :data:`FAST_WARM_ITER` ADMM
+    iterations of the start, :data:`FAST_ITER` iterations and :func:`pnp_gap`'s own
+    ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT` on noisy data).  The trade is
+    time-neutral at 256×256×28 (the cross-validation of :data:`FAST_ITER_CLEAN`); on small
+    cubes, where the first stage is cheap beside the denoiser, it costs more time
+    (``benchmarks/results/fast_budget_systems.md``: every imager with a first stage at
+    64×64×16, 1.1-1.3× the seconds, +0.02 to +0.73 dB).
 
     Parameters
     ----------
@@ -765,8 +764,7 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     first_stage = warm == "otd" and not system.panchromatic_exact
-    three_way = len(tuple(system.cube_shape)) == 3
-    if first_stage and three_way and gap_settings(system, measurement, "auto", "auto")[0]:
+    if first_stage and gap_settings(system, measurement, "auto", "auto")[0]:
         return {"warm_iter": FAST_WARM_ITER_CLEAN, "max_iter": FAST_ITER_CLEAN,
                 "sigma_end": FAST_SIGMA_END_CLEAN}  # fmt: skip
     return {"warm_iter": FAST_WARM_ITER, "max_iter": FAST_ITER, "sigma_end": "auto"}

@@ -146,10 +146,10 @@ def test_fast_settings_resolve_the_start_as_pnp_fast_does():
 
 
 def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
-    """``pnp_fast``'s budget: on a clean measurement of a spectral cube from OTD's first stage,
-    that stage's cube alone and :data:`FAST_ITER_CLEAN` iterations; on a noisy one, without a
-    first stage (an exact panchromatic image), from another start or on a cube of more axes,
-    20 ADMM iterations of the start and 46; given values are kept; a bad start is named."""
+    """``pnp_fast``'s budget: on a clean measurement from OTD's first stage (any number of
+    axes), that stage's cube alone and :data:`FAST_ITER_CLEAN` iterations; on a noisy one,
+    without a first stage (an exact panchromatic image) or from another start, 20 ADMM
+    iterations of the start and 46; given values are kept; a bad start is named."""
     clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)  # reads 41.5 dB
     noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
     assert estimate_snr(clean.system, clean.measurement).snr_db > M.ACCELERATE_ABOVE_DB
@@ -169,7 +169,7 @@ def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
     assert M.fast_budget(dual, g) == {"warm_iter": 20, "max_iter": 46, "sigma_end": "auto"}
     phases = tc.studies.make_problem("cs2li", "colorchecker", snr_db=None)  # four axes
     assert estimate_snr(phases.system, phases.measurement).snr_db > M.ACCELERATE_ABOVE_DB
-    assert M.fast_budget(phases.system, phases.measurement)["max_iter"] == 46
+    assert M.fast_budget(phases.system, phases.measurement)["max_iter"] == M.FAST_ITER_CLEAN
     with pytest.raises(ValueError, match="warm must be one of"):
         M.fast_budget(clean.system, clean.measurement, warm="tv")
 

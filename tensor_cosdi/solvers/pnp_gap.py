@@ -735,9 +735,9 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     iterations of the start, :data:`FAST_ITER` iterations and :func:`pnp_gap`'s own
     ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT` on noisy data).  The trade is
     time-neutral at 256×256×28 (the cross-validation of :data:`FAST_ITER_CLEAN`); on small
-    cubes, where the first stage is cheap beside the denoiser, it costs more time
+    cubes, where the first stage is cheap beside the denoiser, it mostly costs more time
     (``benchmarks/results/fast_budget_systems.md``: every imager with a first stage at
-    64×64×16, 1.1-1.3× the seconds, +0.02 to +0.73 dB).
+    64×64×16, 0.82-1.35× the seconds, −0.02 to +0.73 dB).
 
     Parameters
     ----------

@@ -45,6 +45,13 @@ __all__ = ["pnp_gap", "pnp_fast", "fast_settings", "fast_budget"]
 WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 #: ``warm="gap_tv"`` with ``warm_iter="auto"``: GAP-TV iterations of the start.
 GAP_TV_WARM_ITER = 80
+#: ``warm="otd"`` with ``warm_iter="auto"`` on a clean measurement (accelerated GAP): OTD's
+#: first stage alone, no ADMM stage (elsewhere OTD's own 45 iterations).  200 accelerated
+#: iterations wash the start's ADMM stage out: 8 tuning scenes as they are and magnified 4×,
+#: 4 folds, noiseless, TSA, bfloat16 (``benchmarks/results/cv_pnp_gap_first_stage.md``):
+#: tuning mean 36.26 dB after OTD's ADMM stage, 36.28 without it, every fold chose it; median
+#: 13.34 → 10.85 s a cube.
+WARM_ITER_CLEAN = 0
 #: :func:`pnp_fast`'s ``warm_iter``: OTD's ADMM stage cut from 45 iterations to 20.  Four
 #: tuning scenes (cloth, balloons, clay, feathers; TSA mask, 256×256×28): 30.47 → 30.36 dB
 #: noiseless, 29.14 → 29.07 dB at 30 dB; with the start's ADMM stage dropped altogether 29.89
@@ -299,9 +306,11 @@ def pnp_gap(
     warm : ``"gap_tv"``, ``"otd"``, ``"dcosnet"`` or ``"none"``
         Start from ``warm_iter`` iterations of :func:`~.gap_tv.gap_tv` at its
         defaults (``"auto"``: 80), from OTD with ``warm_iter`` iterations of
-        its ADMM stage (``"auto"``: OTD's default; 0: the first stage's cube
-        alone, where the system has a first stage; the first stage is OTD's
-        either way), from one pass of the shipped
+        its ADMM stage (``"auto"``: :data:`WARM_ITER_CLEAN` on a clean
+        measurement with accelerated GAP, where the system has a first stage,
+        else OTD's default; 0: the first stage's cube alone, where the system
+        has a first stage; the first stage is OTD's either way), from one pass
+        of the shipped
         D-CoSNet (:func:`~.dcosnet.dcosnet`; SD-CASSI, 28 bands, 2 px per
         band), or from the least-norm solution.
         The denoiser refines a good start; from the least-norm one it climbs
@@ -452,6 +461,9 @@ def pnp_gap(
         sigma = max(sigma, sigma_end)  # the level never starts below its floor
     sigma_end = check_positive("sigma_end", sigma_end)
     warm_iter = _check_warm_iter(warm_iter, warm)
+    clean_start = warm == "otd" and accelerate and not admm and not system.panchromatic_exact
+    if clean_start and warm_iter == "auto":  # the ADMM stage's work is washed out here
+        warm_iter = WARM_ITER_CLEAN
     pan_iter = _check_first_stage(pan_iter, warm, "pan_iter")
     pan_tv_steps = _check_first_stage(pan_tv_steps, warm, "pan_tv_steps")
     pan_atoms = _check_first_stage(pan_atoms, warm, "pan_atoms")

@@ -188,6 +188,28 @@ def test_bad_warm_iter_is_named(options, message):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", **options)
 
 
+def test_warm_iter_auto_is_the_first_stage_alone_on_clean_data_only(monkeypatch):
+    """``pnp_gap(warm_iter="auto")``: OTD's first stage alone (``admm_iter=0``) on a clean
+    measurement run with accelerated GAP; OTD's own ADMM stage on noisy data, with plain GAP,
+    or where a value is given."""
+    from tensor_cosdi.solvers import otd
+
+    seen, real = [], otd.online_tucker_admm
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["admm_iter"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(otd, "online_tucker_admm", spy)
+    clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)  # reads 41.5 dB
+    noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
+    run = {"denoiser": "tv", "max_iter": 1}
+    for p, extra in ((clean, {}), (noisy, {}), (clean, {"accelerate": False}),
+                     (clean, {"warm_iter": 3})):  # fmt: skip
+        tc.reconstruct(p.system, p.measurement, "pnp_gap", **run, **extra)
+    assert seen == [M.WARM_ITER_CLEAN, "auto", "auto", 3] and M.WARM_ITER_CLEAN == 0
+
+
 def test_warm_iter_0_starts_from_the_first_stage_alone(monkeypatch):
     """``warm="otd", warm_iter=0``: the denoiser's iterations start from OTD's first-stage cube
     (what ``otd(admm_iter=0)`` returns); refused, naming the system, where there is no first

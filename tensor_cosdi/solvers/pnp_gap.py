@@ -55,9 +55,11 @@ WARM_ITER_CLEAN = 0
 #: :func:`pnp_fast`'s ``warm_iter``: OTD's ADMM stage cut from 45 iterations to 20.  Four
 #: tuning scenes (cloth, balloons, clay, feathers; TSA mask, 256×256×28): 30.47 → 30.36 dB
 #: noiseless, 29.14 → 29.07 dB at 30 dB; with the start's ADMM stage dropped altogether 29.89
-#: and 25.42 dB.  Its first stage keeps OTD's 90 iterations (``pan_iter``): 12 tuning scenes,
-#: 4 folds (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at
-#: 30 dB, 20 lose 2.9 and 1.2 dB.
+#: and 25.42 dB (an earlier network and schedule; today the stage buys little on clean data,
+#: :data:`FAST_ITER_CLEAN`, and this count is the noisy path's).  Its first stage keeps OTD's
+#: 90 iterations (``pan_iter``): 12 tuning scenes, 4 folds
+#: (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at 30 dB,
+#: 20 lose 2.9 and 1.2 dB.
 FAST_WARM_ITER = 20
 #: :func:`pnp_fast`'s ``pan_tv_steps``: 5 warm-started Chambolle steps per iteration of its start's
 #: first stage instead of OTD's 10, the fastest setting within 0.02 dB of the best at both noise
@@ -574,7 +576,8 @@ def warm_started_gap(
 
 
 def _check_warm_iter(warm_iter, warm):
-    """``"auto"`` or an integer ≥ 1; 0 too with the OTD start (its first stage alone)."""
+    """``"auto"`` or an integer ≥ 0 (0: OTD's first stage alone; refused with the GAP-TV
+    start, which is its iterations)."""
     if isinstance(warm_iter, str):
         if warm_iter != "auto":
             raise ValueError(f"warm_iter must be 'auto' or an integer ≥ 0, got {warm_iter!r}")

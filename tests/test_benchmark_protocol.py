@@ -92,6 +92,10 @@ def test_scene_views(protocol):
             ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--keep", '{"lam": 3}'],
             "is not a candidate",
         ),
+        (
+            ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--no-slower"],
+            "--no-slower needs --keep",
+        ),
     ],
 )
 def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_path):

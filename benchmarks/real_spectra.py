@@ -44,6 +44,13 @@ and scaled to a peak of 1, the kind of scene a radiance database holds (``name@Z
 both).  ``--light A,LED-B3`` adds every tuning scene's ``~A`` and ``~LED-B3`` views to the
 cross-validation, in its scene's fold.
 
+``--tie-db DB`` makes candidates within ``DB`` of the best mean a tie, won by the
+fastest (or by ``--keep JSON``, the default in use, where it ties); ``--no-slower``
+lets only candidates no slower than ``--keep`` compete, and ``--budget-s SECONDS``
+only those whose median time a cube is at most ``SECONDS`` (a method's stated
+budget, such as ``pnp_fast``'s 5 s).  Each timed run starts with no SNR estimate
+cached, as a user's single call does.
+
 Never asserts anything; read the numbers.
 """
 
@@ -185,7 +192,7 @@ def cv(args, store, cache):
 
         res = cross_validate(
             psnrs, cands, folds, seconds_of=seconds, tie_db=args.tie_db, keep=args.keep,
-            no_slower=args.no_slower,
+            no_slower=args.no_slower, budget_s=args.budget_s,
         )  # fmt: skip
         chosen = res["chosen_on_all"]
         rep, rep_zoom = {}, {}
@@ -212,12 +219,16 @@ def cv(args, store, cache):
         res["report"] = rep
         results[f"{mk}/{snr_label(snr)}"] = res
     results["joint"] = _joint(
-        method, cands, folds, conds, store, cache, args.tie_db, args.keep, args.no_slower
+        method, cands, folds, conds, store, cache, args.tie_db, args.keep, args.no_slower,
+        args.budget_s,
     )
     return _cv_markdown(method, grid, folds, results, args), results
 
 
-def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None, no_slower=False):
+def _joint(
+    method, cands, folds, conds, store, cache, tie_db=0.0, keep=None, no_slower=False,
+    budget_s=None,
+):  # fmt: skip
     """One setting for every code and noise level, cross-validated the same way: on each fold
     the candidate with the best mean over the conditions on the other three folds; then the
     choice on all folds, its loss against each condition's own best, and its report PSNR."""
@@ -233,7 +244,7 @@ def _joint(method, cands, folds, conds, store, cache, tie_db=0.0, keep=None, no_
 
     res = cross_validate(
         mean_over_conditions, cands, folds, seconds_of=seconds, tie_db=tie_db, keep=keep,
-        no_slower=no_slower,
+        no_slower=no_slower, budget_s=budget_s,
     )  # fmt: skip
     chosen = res["chosen_on_all"]
     tune = [s for f in folds for s in f]
@@ -285,6 +296,13 @@ def _cv_markdown(method, grid, folds, results, args):
             f"  Only candidates no slower than {fmt(args.keep)} (median seconds a cube on the "
             "scenes chosen on) are chosen: a time budget the default in use meets."
             if args.no_slower
+            else ""
+        )
+        + (
+            f"  Only candidates whose median time a cube on the scenes chosen on is at most "
+            f"{args.budget_s:g} s are chosen (the fastest where none is): the method's time "
+            "budget."
+            if args.budget_s is not None
             else ""
         ),
         "",
@@ -383,6 +401,10 @@ def main(argv=None):
         "--no-slower", action="store_true",
         help="--cv with --keep: only candidates no slower (median seconds) than --keep compete",
     )  # fmt: skip
+    ap.add_argument(
+        "--budget-s", type=float, default=None, metavar="SECONDS",
+        help="--cv: only candidates whose median seconds a cube are at most SECONDS compete",
+    )  # fmt: skip
     ap.add_argument("--name", default=None, help="results file stem")
     ap.add_argument(
         "--fresh", default="", metavar="METHODS",
@@ -401,6 +423,10 @@ def main(argv=None):
             raise SystemExit(f"--keep {json.dumps(args.keep)} is not a candidate of --grid")
     if args.no_slower and args.keep is None:
         raise SystemExit("--no-slower needs --keep (the default in use whose time is the budget)")
+    if args.budget_s is not None and not (args.cv and args.budget_s > 0):
+        raise SystemExit(
+            f"--budget-s needs --cv and a number of seconds > 0, got {args.budget_s:g}"
+        )
     if not args.tie_db >= 0:
         raise SystemExit(f"--tie-db must be a number ≥ 0, got {args.tie_db:g}")
     if args.zoom is not None and not args.zoom >= 1:

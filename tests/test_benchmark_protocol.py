@@ -50,6 +50,54 @@ def test_pick_no_slower_than_the_default_in_use(protocol):
     assert res["chosen_on_all"] == {"w": "b"}
 
 
+def test_pick_within_a_time_budget(protocol):
+    """``budget_s``: only candidates whose median seconds fit the budget compete; a tie among
+    them goes to the faster; where none fits, the fastest."""
+    means, secs = [30.00, 30.80, 30.75, 29.00], [4.9, 5.4, 4.6, 1.0]
+    assert protocol.pick(means, secs) == 1
+    assert protocol.pick(means, secs, budget_s=5.0) == 2
+    assert protocol.pick(means, secs, budget_s=5.0, tie_db=1.8) == 3  # 29.00: within 1.8 dB
+    assert protocol.pick(means, secs, budget_s=4.7, tie_db=0.05) == 2
+    assert protocol.pick(means, secs, budget_s=0.5) == 3  # none fits: the fastest
+    for bad in (0, -1.0):
+        with pytest.raises(ValueError, match="budget_s needs"):
+            protocol.pick(means, secs, budget_s=bad)
+    with pytest.raises(ValueError, match="budget_s needs"):
+        protocol.pick(means, None, budget_s=5.0)
+    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 31.0, "s2": 32.0}}
+    times = {"a": 4.5, "b": 5.5}
+    cands = [{"w": "a"}, {"w": "b"}]
+    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
+    secs_of = lambda c, scenes: [times[c["w"]] for _ in scenes]  # noqa: E731
+    folds = (("s1",), ("s2",))
+    res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, budget_s=5.0)
+    assert res["chosen_on_all"] == {"w": "a"}
+    assert [f["chosen"] for f in res["folds"]] == [{"w": "a"}, {"w": "a"}]
+    res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, budget_s=6.0)
+    assert res["chosen_on_all"] == {"w": "b"}
+
+
+def test_run_times_a_single_call_with_no_snr_estimate_cached(protocol, monkeypatch):
+    """Every timed run starts with the SNR cache empty: a method timed after another on the
+    same measurement pays the fit a user's single call pays."""
+    import numpy as np
+
+    import tensor_cosdi as tc
+    from tensor_cosdi.solvers import snr as snr_module
+
+    p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4, snr_db=30)
+    fits = []
+    real = snr_module.subspace_gap_tv
+    monkeypatch.setattr(snr_module, "subspace_gap_tv",
+                        lambda *a, **k: fits.append(1) or real(*a, **k))  # fmt: skip
+    monkeypatch.setattr(protocol, "_warm_up", lambda method, options: None)
+    quick = {"denoiser": "tv", "warm": "gap_tv", "warm_iter": 2, "max_iter": 2}  # reads the SNR
+    for _ in range(2):  # the same measurement twice: the second call would hit the cache
+        cube, secs = protocol.run("pnp_gap", p.system, np.asarray(p.measurement), quick)
+        assert cube.shape == p.system.cube_shape and secs > 0
+    assert len(fits) == 2  # fitted inside each timed call, not read from the cache
+
+
 def test_cross_validate_keeps_the_default_in_a_tie(protocol):
     scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 30.02, "s2": 31.02}}
     cands = [{"w": "a"}, {"w": "b"}]
@@ -96,6 +144,8 @@ def test_scene_views(protocol):
             ["--cv", "otd", "--grid", '{"lam": [0.1]}', "--tie-db", "0.1", "--no-slower"],
             "--no-slower needs --keep",
         ),
+        (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--budget-s", "0"], "--budget-s needs"),
+        (["--methods", "otd", "--budget-s", "5"], "--budget-s needs --cv"),
     ],
 )
 def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_path):

@@ -52,24 +52,34 @@ GAP_TV_WARM_ITER = 80
 #: tuning mean 36.26 dB after OTD's ADMM stage, 36.28 without it, every fold chose it; median
 #: 13.34 → 10.85 s a cube.
 WARM_ITER_CLEAN = 0
-#: :func:`pnp_fast`'s ``warm_iter``: OTD's ADMM stage cut from 45 iterations to 20.  Four
-#: tuning scenes (cloth, balloons, clay, feathers; TSA mask, 256×256×28): 30.47 → 30.36 dB
-#: noiseless, 29.14 → 29.07 dB at 30 dB; with the start's ADMM stage dropped altogether 29.89
-#: and 25.42 dB (an earlier network and schedule; today the stage buys little on clean data,
-#: :data:`FAST_ITER_CLEAN`, and this count is the noisy path's).  Its first stage keeps OTD's
-#: 90 iterations (``pan_iter``): 12 tuning scenes, 4 folds
+#: :func:`pnp_fast`'s ``warm_iter`` on noisy data: OTD's ADMM stage cut from 45 iterations to
+#: 10.  On noisy data the stage does the first denoising (dropped altogether, 30 dB on face:
+#: 34.4 → 30.1 dB), but 10 iterations do what 20 did: 8 tuning scenes as they are and magnified
+#: 4×, 4 folds, 30 and 20 dB, TSA mask and a random code
+#: (``benchmarks/results/cv_pnp_fast_noisy_start.md``): tuning means 32.08 / 29.41 / 35.50 /
+#: 31.67 dB with 20 iterations, 32.08 / 29.39 / 35.49 / 31.68 with 10, median 5.51-5.80 →
+#: 5.11-5.29 s a cube; every fold chose 10 (ties within 0.05 dB won by the faster).  Its first
+#: stage keeps OTD's 90 iterations (``pan_iter``): 12 tuning scenes, 4 folds
 #: (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at 30 dB,
 #: 20 lose 2.9 and 1.2 dB.
-FAST_WARM_ITER = 20
-#: :func:`pnp_fast`'s ``pan_tv_steps``: 5 warm-started Chambolle steps per iteration of its start's
-#: first stage instead of OTD's 10, the fastest setting within 0.02 dB of the best at both noise
-#: levels (8 tuning scenes as they are and magnified 4×, 4 folds, TSA mask;
-#: ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB
-#: noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median 6.8 / 4.9 / 4.4 s on one thread).
-FAST_PAN_TV_STEPS = 5
+FAST_WARM_ITER = 10
+#: :func:`pnp_fast`'s ``pan_tv_steps``: 3 warm-started Chambolle steps per iteration of its
+#: start's first stage instead of OTD's 10.  First measured against 10 and 5 (8 tuning scenes as
+#: they are and magnified 4×, 4 folds, TSA mask; ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``:
+#: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median
+#: 6.8 / 4.9 / 4.4 s on one thread), then cross-validated against 5 with each budget, timed as a
+#: user's single call (the SNR fit included), TSA mask and a random code: noisy data (30 and
+#: 20 dB, ``benchmarks/results/cv_pnp_fast_noisy_tv.md``) within 0.01 dB, median 5.11-5.29 →
+#: 4.47-4.55 s a cube; clean data (``benchmarks/results/cv_pnp_fast_clean_tv.md``, 66 or 72
+#: iterations, the 5-s budget: only candidates whose median time fits it compete) every fold
+#: chose 3 steps and 66 iterations: 35.14 → 35.06 dB through the TSA mask, 37.69 → 37.68 through
+#: the random code, median 5.16 → 4.67 s (TSA), 5.61 → 5.09 s (random: its 16 views include
+#: clean ones the SNR estimate reads noisy, which take ADMM iterations).
+FAST_PAN_TV_STEPS = 3
 #: :func:`pnp_fast`'s ``max_iter``: 46 against 40 gained 0.20 dB clean and 0.11 dB at 30 dB on 12
 #: tuning scenes, 4 folds (``benchmarks/results/cv_pnp_fast_budget.md``; every fold chose 46) for
-#: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps.
+#: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps (and
+#: still do, timed with the SNR fit, at 3 steps and 10 ADMM iterations of the start).
 FAST_ITER = 46
 #: :func:`pnp_fast` on a clean measurement (accelerated GAP) from OTD's first stage
 #: (:func:`fast_budget`): that stage's cube alone (``warm_iter=0``), 66 iterations and the
@@ -80,7 +90,10 @@ FAST_ITER = 46
 #: among the candidates no slower than the budget in use
 #: (``benchmarks/results/cv_pnp_fast_first_stage_budget.md``; every fold chose this): tuning
 #: mean 34.46 dB at the earlier budget (20 / 46 / 0.05, median 4.63 s a cube) → 35.14 dB
-#: (4.52 s).  76 iterations gave 35.33 dB at a median of 4.91 s, past the budget.
+#: (4.52 s).  76 iterations gave 35.33 dB at a median of 4.91 s, past the budget.  Those
+#: seconds left out the SNR fit (0.4-0.7 s at 256×256×28, cached from an earlier method's call
+#: on the same measurement); timed with it, 66 iterations at 5 TV steps took 5.16 s and at
+#: :data:`FAST_PAN_TV_STEPS` 4.67 s, which is why the start's TV now takes 3.
 FAST_WARM_ITER_CLEAN = 0
 FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04
@@ -648,10 +661,10 @@ def pnp_fast(
     Registered as ``"pnp_fast"``.
 
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
-    and PSNR beside :func:`pnp_gap`'s and the 30-line GAP-TV's.  On noisy data a 30-iteration
-    OTD start adds 0.02 dB at 30 dB on the tuning scenes
-    (``benchmarks/results/cv_pnp_fast_budget.md``) for about 0.4 s more:
-    ``pnp_fast(warm_iter=30)``.  In bfloat16 the result
+    (of a single call, the SNR fit included) and PSNR beside :func:`pnp_gap`'s and the 30-line
+    GAP-TV's.  On noisy data a 20-iteration OTD start ties with the 10-iteration one on the
+    tuning scenes (``benchmarks/results/cv_pnp_fast_noisy_start.md``) for about 0.4 s more:
+    ``pnp_fast(warm_iter=20)``.  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
     ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch
     (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:
@@ -710,7 +723,7 @@ def fast_settings(system, measurement, **options) -> dict:
     >>> p = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
     >>> s = fast_settings(p.system, p.measurement)
     >>> s["pan_tv_steps"], s["warm_iter"], s["max_iter"], s["sigma_end"]
-    (5, 0, 66, 0.04)
+    (3, 0, 66, 0.04)
     >>> fast_settings(p.system, p.measurement, warm="gap_tv")["pan_tv_steps"]
     'auto'
     """
@@ -774,7 +787,7 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     {'warm_iter': 0, 'max_iter': 66, 'sigma_end': 0.04}
     >>> noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
     >>> fast_budget(noisy.system, noisy.measurement)
-    {'warm_iter': 20, 'max_iter': 46, 'sigma_end': 'auto'}
+    {'warm_iter': 10, 'max_iter': 46, 'sigma_end': 'auto'}
     """
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")

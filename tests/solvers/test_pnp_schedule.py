@@ -123,13 +123,13 @@ def test_pan_spectrum_reaches_the_otd_start_and_other_starts_refuse_it():
 
 
 def test_fast_settings_resolve_the_start_as_pnp_fast_does():
-    """``fast_settings(system, g)``: ``pnp_fast``'s own pnp_gap options — its 5 TV steps and
+    """``fast_settings(system, g)``: ``pnp_fast``'s own pnp_gap options — its 3 TV steps and
     gated first stage with the OTD start; another start keeps ``pan_tv_steps="auto"`` and takes
     ``"gated"`` as a gate that stays shut (it has no first stage), while ``"fitted"`` is
     refused there; an unknown option is named."""
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(32, 32), n_bands=8, snr_db=30)
     own = M.fast_settings(p.system, p.measurement)
-    assert own["pan_tv_steps"] == M.FAST_PAN_TV_STEPS
+    assert own["pan_tv_steps"] == M.FAST_PAN_TV_STEPS == 3
     assert own["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
     other = M.fast_settings(p.system, p.measurement, warm="gap_tv")
     assert other["pan_spectrum"] == "gated" and other["pan_tv_steps"] == "auto"
@@ -148,13 +148,13 @@ def test_fast_settings_resolve_the_start_as_pnp_fast_does():
 def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
     """``pnp_fast``'s budget: on a clean measurement from OTD's first stage (any number of
     axes), that stage's cube alone and :data:`FAST_ITER_CLEAN` iterations; on a noisy one,
-    without a first stage (an exact panchromatic image) or from another start, 20 ADMM
+    without a first stage (an exact panchromatic image) or from another start, 10 ADMM
     iterations of the start and 46; given values are kept; a bad start is named."""
     clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)  # reads 41.5 dB
     noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
     assert estimate_snr(clean.system, clean.measurement).snr_db > M.ACCELERATE_ABOVE_DB
     fast, slow = (M.FAST_WARM_ITER_CLEAN, M.FAST_ITER_CLEAN), (M.FAST_WARM_ITER, M.FAST_ITER)
-    assert fast == (0, M.FAST_ITER_CLEAN) and slow == (20, 46) and M.FAST_ITER_CLEAN > 46
+    assert fast == (0, M.FAST_ITER_CLEAN) and slow == (10, 46) and M.FAST_ITER_CLEAN > 46
 
     def budget(p, **kw):
         s = M.fast_settings(p.system, p.measurement, **kw)
@@ -166,7 +166,7 @@ def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
     assert budget(clean, warm_iter=3, sigma_end=0.1) == (3, fast[1], 0.1)
     dual = tc.systems.DualCameraCASSI.example((8, 8, 4))
     g = dual.simulate(np.random.default_rng(0).random(dual.cube_shape))
-    assert M.fast_budget(dual, g) == {"warm_iter": 20, "max_iter": 46, "sigma_end": "auto"}
+    assert M.fast_budget(dual, g) == {"warm_iter": 10, "max_iter": 46, "sigma_end": "auto"}
     phases = tc.studies.make_problem("cs2li", "colorchecker", snr_db=None)  # four axes
     assert estimate_snr(phases.system, phases.measurement).snr_db > M.ACCELERATE_ABOVE_DB
     assert M.fast_budget(phases.system, phases.measurement)["max_iter"] == M.FAST_ITER_CLEAN

@@ -643,7 +643,7 @@ def _joined(first, second):
 
 def pnp_fast(
     system, measurement, *, max_iter="auto", ensemble: int = 1, precision: str = "auto",
-    warm: str = "otd", warm_iter="auto", pan_tv_steps="auto", pan_atoms="auto",
+    warm: str = "otd", warm_iter="auto", pan_iter="auto", pan_tv_steps="auto", pan_atoms="auto",
     pan_spectrum=FAST_PAN_SPECTRUM, sigma_end="auto", rho="auto", nonneg: bool = True,
     cycle: bool = True, sigma_scale="auto", progress: bool = False,
 ):  # fmt: skip
@@ -675,7 +675,7 @@ def pnp_fast(
     max_iter, warm_iter, sigma_end
         As in :func:`pnp_gap`; ``"auto"`` (default): :func:`fast_budget` (a given value is
         kept, the others still follow the data).
-    ensemble, precision, warm, pan_tv_steps, pan_atoms, pan_spectrum
+    ensemble, precision, warm, pan_iter, pan_tv_steps, pan_atoms, pan_spectrum
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start; :func:`fast_settings` lists them
         all).
@@ -691,7 +691,8 @@ def pnp_fast(
     return pnp_gap(
         system, measurement, **fast_settings(
             system, measurement, max_iter=max_iter, ensemble=ensemble, precision=precision,
-            warm=warm, warm_iter=warm_iter, pan_tv_steps=pan_tv_steps, pan_atoms=pan_atoms,
+            warm=warm, warm_iter=warm_iter, pan_iter=pan_iter, pan_tv_steps=pan_tv_steps,
+            pan_atoms=pan_atoms,
             pan_spectrum=pan_spectrum, sigma_end=sigma_end, rho=rho, nonneg=nonneg, cycle=cycle,
             sigma_scale=sigma_scale,
         ), progress=progress,

@@ -766,7 +766,7 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     time-neutral at 256×256×28 (the cross-validation of :data:`FAST_ITER_CLEAN`); on small
     cubes, where the first stage is cheap beside the denoiser, it mostly costs more time
     (``benchmarks/results/fast_budget_systems.md``: every imager with a first stage at
-    64×64×16, 0.82-1.35× the seconds, −0.02 to +0.73 dB).
+    64×64×16, 0.98-1.77× the seconds against 10 ADMM iterations, +0.04 to +1.02 dB).
 
     Parameters
     ----------

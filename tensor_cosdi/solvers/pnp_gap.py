@@ -663,7 +663,8 @@ def pnp_fast(
     ``benchmarks/results/pnp_precision.md`` (report scenes, TSA mask, 2 cores) gives its time
     (of a single call, the SNR fit included) and PSNR beside :func:`pnp_gap`'s and the 30-line
     GAP-TV's.  On noisy data a 20-iteration OTD start ties with the 10-iteration one on the
-    tuning scenes (``benchmarks/results/cv_pnp_fast_noisy_start.md``) for about 0.4 s more:
+    tuning scenes and is up to 0.1 dB better on the report scenes
+    (``benchmarks/results/cv_pnp_fast_noisy_start.md``) for about 0.4 s more:
     ``pnp_fast(warm_iter=20)``.  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
     ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch

@@ -207,13 +207,39 @@ def provenance() -> dict:
         commit = os.environ.get("TENSOR_COSDI_COMMIT", "unknown")
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        "machine": f"{platform.machine()}, {os.cpu_count()} CPUs, {platform.system()}",
+        "machine": machine(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "tensor_cosdi": tc.__version__,
         "commit": commit,
         "command": "python " + shlex.join([Path(sys.argv[0]).as_posix(), *sys.argv[1:]]),
     }
+
+
+def cpu_model() -> str:
+    """The CPU's model name (Linux ``/proc/cpuinfo``; else ``platform.processor()``), or
+    ``"unknown CPU"``."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            for line in f:
+                if line.lower().startswith("model name"):
+                    return " ".join(line.split(":", 1)[1].split()) or "unknown CPU"
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def machine() -> str:
+    """Architecture, CPU model, CPU count and system; where torch is loaded (a run of a learned
+    method), whether the CPU runs bfloat16 natively: ``precision="auto"`` (``pnp_fast``) runs
+    the network in bfloat16 only there, about twice as fast, so a time means little without
+    it."""
+    text = f"{platform.machine()} {cpu_model()}, {os.cpu_count()} CPUs, {platform.system()}"
+    if "torch" in sys.modules:
+        from tensor_cosdi.learn.spectral_net import bfloat16_is_fast
+
+        text += ", bfloat16 native" if bfloat16_is_fast() else ", no native bfloat16"
+    return text
 
 
 def provenance_lines(prov: dict) -> str:

@@ -665,7 +665,10 @@ def pnp_fast(
     GAP-TV's.  On noisy data a 20-iteration OTD start ties with the 10-iteration one on the
     tuning scenes and is up to 0.1 dB better on the report scenes
     (``benchmarks/results/cv_pnp_fast_noisy_start.md``) for about 0.4 s more:
-    ``pnp_fast(warm_iter=20)``.  In bfloat16 the result
+    ``pnp_fast(warm_iter=20)``.  Its time rests on bfloat16: on a CPU without native bfloat16
+    instructions (:func:`~tensor_cosdi.learn.spectral_net.bfloat16_is_fast` false, e.g. AVX2
+    only) the network runs in float32 and a call takes about twice as long
+    (``benchmarks/results/pnp_fast_no_bf16.md``).  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
     ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch
     (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:

@@ -16,6 +16,16 @@ def protocol():
     return mod
 
 
+def _two_candidates(seconds_a, seconds_b):
+    """``(rows, candidates, folds, seconds_of)`` of two candidates on two one-scene folds:
+    ``b`` 1 dB above ``a`` on each scene, at the given seconds a cube."""
+    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 31.0, "s2": 32.0}}
+    times = {"a": seconds_a, "b": seconds_b}
+    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
+    secs_of = lambda c, scenes: [times[c["w"]] for _ in scenes]  # noqa: E731
+    return rows, [{"w": "a"}, {"w": "b"}], (("s1",), ("s2",)), secs_of
+
+
 def test_pick_takes_the_best_unless_a_tie_goes_to_the_default_or_the_fastest(protocol):
     means, secs = [30.00, 30.04, 29.50], [5.0, 9.0, 1.0]
     assert protocol.pick(means) == 1
@@ -36,12 +46,7 @@ def test_pick_no_slower_than_the_default_in_use(protocol):
     assert protocol.pick([30.0, 29.0], [5.0, 9.0], keep=0, no_slower=True) == 0
     with pytest.raises(ValueError, match="no_slower needs the candidate in use"):
         protocol.pick(means, None, keep=0, no_slower=True)
-    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 31.0, "s2": 32.0}}
-    times = {"a": 5.0, "b": 6.0}
-    cands = [{"w": "a"}, {"w": "b"}]
-    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
-    secs_of = lambda c, scenes: [times[c["w"]] for _ in scenes]  # noqa: E731
-    folds = (("s1",), ("s2",))
+    rows, cands, folds, secs_of = _two_candidates(5.0, 6.0)
     res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, keep={"w": "a"},
                                   tie_db=0.05, no_slower=True)  # fmt: skip
     assert res["chosen_on_all"] == {"w": "a"}
@@ -64,12 +69,7 @@ def test_pick_within_a_time_budget(protocol):
             protocol.pick(means, secs, budget_s=bad)
     with pytest.raises(ValueError, match="budget_s needs"):
         protocol.pick(means, None, budget_s=5.0)
-    scores = {"a": {"s1": 30.0, "s2": 31.0}, "b": {"s1": 31.0, "s2": 32.0}}
-    times = {"a": 4.5, "b": 5.5}
-    cands = [{"w": "a"}, {"w": "b"}]
-    rows = lambda c, scenes: [scores[c["w"]][s] for s in scenes]  # noqa: E731
-    secs_of = lambda c, scenes: [times[c["w"]] for _ in scenes]  # noqa: E731
-    folds = (("s1",), ("s2",))
+    rows, cands, folds, secs_of = _two_candidates(4.5, 5.5)
     res = protocol.cross_validate(rows, cands, folds, seconds_of=secs_of, budget_s=5.0)
     assert res["chosen_on_all"] == {"w": "a"}
     assert [f["chosen"] for f in res["folds"]] == [{"w": "a"}, {"w": "a"}]

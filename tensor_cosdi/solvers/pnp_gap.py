@@ -93,7 +93,7 @@ FAST_ITER = 46
 #: (4.52 s).  76 iterations gave 35.33 dB at a median of 4.91 s, past the budget.  Those
 #: seconds left out the SNR fit (0.4-0.7 s at 256×256×28, cached from an earlier method's call
 #: on the same measurement); timed with it, 66 iterations at 5 TV steps took 5.16 s and at
-#: :data:`FAST_PAN_TV_STEPS` 4.67 s, which is why the start's TV now takes 3.
+#: :data:`FAST_PAN_TV_STEPS` 4.67 s, which is why the start's TV takes 3.
 FAST_WARM_ITER_CLEAN = 0
 FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04

@@ -13,9 +13,14 @@ smoother, larger-scale structure of another camera, a proxy for scenes from anot
 spectrum, which the reflectance scenes trained on do not. Each candidate's verdict line is
 computed from the means.
 
+Each run is timed as a user's single call, the SNR fit included (no SNR estimate cached by the
+reference's run on the same measurement).  ``--within-db DB --budget-s S`` asks another
+question of a candidate meant to be faster: is it within ``DB`` of the reference at every
+noise level, and is its median time a cube at most ``S`` seconds?
+
     python benchmarks/denoiser_weights.py CANDIDATE.pt [CANDIDATE2.pt …] [--reference shipped]
         [--scenes balloons,cd,clay,feathers] [--snr none,30] [--mask tsa] [--threads 1]
-        [--method pnp_gap|pnp_fast] [--zoom 1] [--illuminant A]
+        [--method pnp_gap|pnp_fast] [--zoom 1] [--illuminant A] [--within-db DB --budget-s S]
         [--out benchmarks/results/denoiser_weights.md]
 
 Never asserts anything; read the numbers.
@@ -34,6 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _protocol import (  # noqa: E402
     RESULTS,
+    clear_snr_cache,
     load_mask,
     pnp_fast_settings,
     problem,
@@ -68,8 +74,15 @@ def main(argv=None):
     ap.add_argument(
         "--illuminant", default=None, help="light the scenes (a key of colour.SDS_ILLUMINANTS)"
     )
+    ap.add_argument("--within-db", type=float, default=None, help="with --budget-s: see above")
+    ap.add_argument("--budget-s", type=float, default=None, help="with --within-db: see above")
     ap.add_argument("--out", default=str(RESULTS / "denoiser_weights.md"))
     args = ap.parse_args(argv)
+    if (args.within_db is None) != (args.budget_s is None):
+        raise SystemExit("--within-db and --budget-s go together")
+    for flag, v in (("--within-db", args.within_db), ("--budget-s", args.budget_s)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise SystemExit(f"{flag} must be a positive number, got {v}")
     if not args.zoom >= 1:
         raise SystemExit(f"--zoom must be ≥ 1, got {args.zoom}")
     import torch
@@ -82,7 +95,12 @@ def main(argv=None):
     if bad:
         raise SystemExit(f"--scenes must be tuning scenes; not tuning scenes: {bad}")
     snrs = [None if s == "none" else float(s) for s in args.snr.split(",")]
-    ref = default_weights() if args.reference == "shipped" else Path(args.reference)
+    if args.reference == "shipped":
+        ref = default_weights()
+    else:
+        ref = Path(args.reference)
+        if not ref.is_file():
+            raise SystemExit(f"reference weights not found: {ref}")
     files = {"reference": ref}
     names = [Path(c) for c in args.candidate]
     for i, path in enumerate(names):
@@ -107,6 +125,7 @@ def main(argv=None):
                 system, cube, g = problem(
                     scene, snr, mask, zoom=args.zoom, illuminant=args.illuminant
                 )
+                clear_snr_cache()
                 t0 = time.perf_counter()
                 est = run(system, g, den)
                 secs[key].append(time.perf_counter() - t0)
@@ -133,8 +152,18 @@ def main(argv=None):
         diffs = ", ".join(
             f"{snr_label(s)} {c - r:+.2f} dB" for s, c, r in zip(snrs, means[k], means["reference"])
         )
-        verdict = "replaces" if better else "does not replace"
-        lines.append(f"Verdict: the {k} {verdict} the reference ({diffs}).  ")
+        if args.within_db is None:
+            verdict = "replaces" if better else "does not replace"
+            lines.append(f"Verdict: the {k} {verdict} the reference ({diffs}).  ")
+            continue
+        close = all(c >= r - args.within_db for c, r in zip(means[k], means["reference"]))
+        fits = float(np.median(secs[k])) <= args.budget_s
+        lines.append(
+            f"Verdict: the {k} is {'within' if close else 'not within'} {args.within_db:g} dB "
+            f"of the reference at every noise level ({diffs}) and its median time "
+            f"({np.median(secs[k]):.1f} s) {'fits' if fits else 'exceeds'} the "
+            f"{args.budget_s:g}-s budget.  "
+        )
     write_results(args.out, lines)
 
 

@@ -341,7 +341,7 @@ def _cv_markdown(method, grid, folds, results, args):
             f"**{v:.2f}**" if i == best else f"{v:.2f}" for i, v in enumerate(res["all_means"])
         ]
         lines.append(f"| {mk} | {snr} | " + " | ".join(cells) + " |")
-    if args.tie_db > 0:
+    if args.tie_db > 0 or args.no_slower or args.budget_s is not None:  # time decides too
         lines += ["", "Median seconds a cube of every candidate over the tuning scenes:", ""]
         lines.append("| code | SNR | " + " | ".join(fmt(c) for c in cands) + " |")
         lines.append("|---|---|" + "---|" * len(cands))
@@ -366,6 +366,22 @@ def _cv_markdown(method, grid, folds, results, args):
             f"{min(leads):+.2f} to {max(leads):+.2f} dB over plain GAP-TV per condition.",
         ]
     return "\n".join(lines)
+
+
+def _load_torch_if_needed(labels) -> bool:
+    """Import torch where a method of ``labels`` needs it (and is available), even when every
+    run is already stored: the machine line then says whether the CPU runs bfloat16 natively
+    (``_protocol.machine``), as it does after a computed run of a learned method.  Whether it
+    did."""
+    from tensor_cosdi.solvers._base import METHODS
+
+    for label in labels:
+        entry = METHODS.get(_method(label))
+        if entry is not None and "torch" in entry.requires and entry.available:
+            import torch  # noqa: F401
+
+            return True
+    return False
 
 
 def main(argv=None):
@@ -451,6 +467,7 @@ def main(argv=None):
         name = args.name or "real_spectra"
     store = Store(out / f"{name}.json", fresh=[m for m in args.fresh.split(",") if m])
     cache = {}
+    _load_torch_if_needed([args.cv] if args.cv else args.methods.split(","))
     if args.cv:
         text, results = cv(args, store, cache)
         (out / f"{name}.summary.json").write_text(json.dumps(results, indent=1))

@@ -219,3 +219,39 @@ def test_machine_names_the_cpu_and_whether_it_runs_bfloat16_natively(protocol, m
         assert protocol.machine().endswith(said)
     monkeypatch.delitem(sys.modules, "torch")
     assert "bfloat16" not in protocol.machine()  # torch not loaded: nothing said
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--within-db", "1"], "--within-db and --budget-s go together"),
+        (["--budget-s", "5"], "--within-db and --budget-s go together"),
+        (["--within-db", "0", "--budget-s", "5"], "--within-db must be a positive number"),
+        (["--within-db", "1", "--budget-s", "nan"], "--budget-s must be a positive number"),
+        (["--reference", "missing.pt"], "reference weights not found"),
+    ],
+)
+def test_denoiser_weights_refuses_a_bad_budget_question_or_reference(
+    extra, message, monkeypatch, tmp_path
+):
+    pytest.importorskip("torch")
+    mod = _script("denoiser_weights", monkeypatch)
+    weights = tmp_path / "w.pt"
+    weights.write_bytes(b"")
+    if "--reference" in extra:
+        extra = ["--reference", str(tmp_path / extra[1])]
+    with pytest.raises(SystemExit, match=message):
+        mod.main([str(weights), *extra, "--out", str(tmp_path / "dw.md")])
+    assert not (tmp_path / "dw.md").exists()
+
+
+def test_real_spectra_loads_torch_only_for_a_learned_method(monkeypatch):
+    """Stored runs of a learned method still get the machine's bfloat16 line: torch is loaded
+    for it (and only for it) before the results are written."""
+    pytest.importorskip("torch")
+    import sys
+
+    mod = _script("real_spectra", monkeypatch)
+    assert mod._load_torch_if_needed(["plain_gap_tv", "otd", "gap_tv"]) is False
+    assert mod._load_torch_if_needed(["otd", "pnp_fast+bf16"]) is True
+    assert "torch" in sys.modules

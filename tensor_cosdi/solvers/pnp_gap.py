@@ -668,7 +668,9 @@ def pnp_fast(
     ``pnp_fast(warm_iter=20)``.  Its time rests on bfloat16: on a CPU without native bfloat16
     instructions (:func:`~tensor_cosdi.learn.spectral_net.bfloat16_is_fast` false, e.g. AVX2
     only) the network runs in float32 and a call takes about twice as long
-    (``benchmarks/results/pnp_fast_no_bf16.md``).  In bfloat16 the result
+    (``benchmarks/results/pnp_fast_no_bf16.md``); fewer calls or a smaller network measured
+    there did not bring it under 5 s either (``float32_budget_30db.md``,
+    ``float32_budget_clean.md``, ``denoiser_weights_fast_w40b3.md``).  In bfloat16 the result
     depends on the machine and moves by about 1e-3 when the measurement is rescaled; use
     ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It needs torch
     (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:

@@ -148,23 +148,32 @@ def main(argv=None):
         lines.append(f"| {k} | {cells} | {np.median(secs[k]):.1f} |")
     lines.append("")
     for k in list(files)[1:]:
-        better = all(c >= r for c, r in zip(means[k], means["reference"]))
-        diffs = ", ".join(
-            f"{snr_label(s)} {c - r:+.2f} dB" for s, c, r in zip(snrs, means[k], means["reference"])
-        )
-        if args.within_db is None:
-            verdict = "replaces" if better else "does not replace"
-            lines.append(f"Verdict: the {k} {verdict} the reference ({diffs}).  ")
-            continue
-        close = all(c >= r - args.within_db for c, r in zip(means[k], means["reference"]))
-        fits = float(np.median(secs[k])) <= args.budget_s
         lines.append(
-            f"Verdict: the {k} is {'within' if close else 'not within'} {args.within_db:g} dB "
-            f"of the reference at every noise level ({diffs}) and its median time "
-            f"({np.median(secs[k]):.1f} s) {'fits' if fits else 'exceeds'} the "
-            f"{args.budget_s:g}-s budget.  "
+            verdict(k, means[k], means["reference"], snrs, secs[k], args.within_db, args.budget_s)
         )
     write_results(args.out, lines)
+
+
+def verdict(name, means, ref_means, snrs, seconds, within_db=None, budget_s=None) -> str:
+    """The verdict line of candidate ``name`` from its mean PSNR per noise level (``means``,
+    in the order of ``snrs``) against the reference's: without ``within_db``, whether it
+    replaces the reference (at least as good at every level); with ``within_db`` and
+    ``budget_s``, whether it stays within ``within_db`` at every level and whether the median
+    of its ``seconds`` fits the budget."""
+    diffs = ", ".join(f"{snr_label(s)} {c - r:+.2f} dB" for s, c, r in zip(snrs, means, ref_means))
+    if within_db is None:
+        better = all(c >= r for c, r in zip(means, ref_means))
+        return (
+            f"Verdict: the {name} {'replaces' if better else 'does not replace'} the reference "
+            f"({diffs}).  "
+        )
+    close = all(c >= r - within_db for c, r in zip(means, ref_means))
+    median = float(np.median(seconds))
+    return (
+        f"Verdict: the {name} is {'within' if close else 'not within'} {within_db:g} dB of the "
+        f"reference at every noise level ({diffs}) and its median time ({median:.1f} s) "
+        f"{'fits' if median <= budget_s else 'exceeds'} the {budget_s:g}-s budget.  "
+    )
 
 
 if __name__ == "__main__":

@@ -245,6 +245,19 @@ def test_denoiser_weights_refuses_a_bad_budget_question_or_reference(
     assert not (tmp_path / "dw.md").exists()
 
 
+def test_denoiser_weights_verdict_is_computed_from_the_means_and_the_seconds(monkeypatch):
+    mod = _script("denoiser_weights", monkeypatch)
+    snrs = [None, 30.0]
+    assert "candidate replaces the reference (noiseless +0.00 dB, 30 dB +0.10 dB)" in mod.verdict(
+        "candidate", [30.0, 28.1], [30.0, 28.0], snrs, [9.0]
+    )
+    assert "does not replace" in mod.verdict("candidate", [30.0, 27.9], [30.0, 28.0], snrs, [1.0])
+    line = mod.verdict("candidate", [31.21, 29.65], [32.24, 30.28], snrs, [5.0, 6.8, 5.9], 1, 5)
+    assert "is not within 1 dB" in line and "(5.9 s) exceeds the 5-s budget" in line
+    line = mod.verdict("candidate", [31.5, 29.9], [32.24, 30.28], snrs, [4.0, 5.0, 6.0], 1, 5)
+    assert "is within 1 dB" in line and "(5.0 s) fits the 5-s budget" in line
+
+
 def test_real_spectra_loads_torch_only_for_a_learned_method(monkeypatch):
     """Stored runs of a learned method still get the machine's bfloat16 line: torch is loaded
     for it (and only for it) before the results are written."""

@@ -15,7 +15,9 @@ light's peak.  OTD's ``pan_spectrum="auto"`` (its default from 24 bands on a
 clean measurement) also runs that stage with the atoms weighted by the
 scene's mean spectrum, fitted to the measurement
 (:func:`tensor_cosdi.solvers.subspace.fitted_mean_spectrum`), and keeps the
-estimate that fits the measurement better.  Below, a CAVE scene (128×128, the
+estimate that fits the measurement better (on a noisy one it runs a single
+stage whose atoms follow the fitted spectrum only under a lamp's sharp
+lines, ``"gated"``).  Below, a CAVE scene (128×128, the
 28 KAIST bands; research-use data, read through ``tensor_cosdi.datasets``)
 under each light goes through SD-CASSI with a seeded binary code, noiseless,
 and OTD runs with plain atoms (``pan_spectrum="flat"``) and at its default.

@@ -378,17 +378,20 @@ def online_tucker_admm(
     is exact (dual-camera CASSI at 96×96×16, 30 dB) 45 ADMM iterations lost
     0.3-0.4 dB against 60, hence "auto".
 
-    ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also
-    tried with its spectral atoms weighted by the scene's fitted mean spectrum, the better fit
-    kept): 4-fold cross-validation over 8 tuning scenes as they are and lit by CIE LED-B3 and
-    A (``benchmarks/results/cv_otd_pan_spectrum.md``, run with the second stage at both
-    noise levels): noiseless 31.32 → 31.99 dB over the 24 views, every fold chose it; at 30
-    dB a tie (30.28 both); at 20 dB it lost, so noisy data keep the plain atoms
-    (:data:`~.panchromatic.FITTED_SPECTRUM_ABOVE_DB`).  It costs a second first stage, about
-    2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run); ``pan_spectrum="flat"``
-    is the faster, single first stage.  ``"fitted_z"`` (the spatial bases from the weighted
-    atoms' estimate, the start from the plain one's) gained 0.06 dB at 30 dB in the same
-    cross-validation and lost 0.47 at 20 dB (``benchmarks/results/cv_otd_fitted_z.md``).
+    ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also tried with
+    its spectral atoms weighted by the scene's fitted mean spectrum, the better fit kept): 4-fold
+    cross-validation over 8 tuning scenes as they are and lit by CIE LED-B3 and A
+    (``benchmarks/results/cv_otd_pan_spectrum.md``, run with the second stage at both noise levels):
+    noiseless 31.32 → 31.99 dB over the 24 views, every fold chose it; at 30 dB a tie (30.28 both);
+    at 20 dB it lost, so noisy data do not fit the spectrum twice
+    (:data:`~.panchromatic.FITTED_SPECTRUM_ABOVE_DB`).  There ``"auto"`` is ``"gated"``: one stage
+    whose atoms follow the fitted spectrum part-way through only under a lamp's lines, shut below an
+    estimated 25 dB; with tuning views lit by FL11 added, 30 dB 31.94 → 33.95 dB over 32 views,
+    every fold (``benchmarks/results/cv_otd_noisy_gate.md``).  On clean data it costs a second first
+    stage, about 2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run);
+    ``pan_spectrum="flat"`` is the faster, single first stage.  ``"fitted_z"`` (the spatial bases
+    from the weighted atoms' estimate, the start from the plain one's) gained 0.06 dB at 30 dB in
+    the same cross-validation and lost 0.47 at 20 dB (``benchmarks/results/cv_otd_fitted_z.md``).
 
     Examples
     --------

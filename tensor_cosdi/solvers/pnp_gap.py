@@ -347,7 +347,8 @@ def pnp_gap(
         ``pan_spectrum``, :data:`~tensor_cosdi.solvers.panchromatic.PAN_SPECTRA`).
         ``"flat"``: plain DCT atoms, one first stage; ``"auto"`` also tries the atoms
         weighted by the fitted mean spectrum on a clean measurement (OTD's default; a second
-        first stage, about 2.9 s at 256×256×28, which gained 0.01 dB here); ``"gated"``
+        first stage, about 2.9 s at 256×256×28, which gained 0.01 dB here) and is
+        ``"gated"`` on a noisy one; ``"gated"``
         weights one stage's atoms part-way through, only under a light with sharp lines
         (:func:`~tensor_cosdi.solvers.panchromatic.gate_above`; :func:`pnp_fast`'s default,
         :data:`FAST_PAN_SPECTRUM`); ``"gated_clean"`` (default, :data:`PAN_SPECTRUM`) the

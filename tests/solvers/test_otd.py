@@ -641,7 +641,8 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
     at 30 dB the gated first stage lands far closer to the cube than the plain one (0.44
     against 0.73 relative error here); at 20 dB (estimated under ``GATE_NOISY_FROM_DB``) it is
     the plain stage.  ``"gated_clean"`` (``pnp_gap``'s start) is the plain stage at 30 dB and
-    ``"gated"`` on a measurement that reads clean."""
+    ``"gated"`` on a measurement that reads clean; OTD's ``"auto"`` is ``"gated"`` on a noisy
+    one."""
     from tensor_cosdi.colour import radiance
     from tensor_cosdi.scenes import colorchecker
     from tensor_cosdi.solvers import panchromatic as pm
@@ -661,6 +662,10 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
         pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated_clean")[1],
         pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1],
     )
+    np.testing.assert_array_equal(  # OTD's "auto" on a noisy measurement: the gated stage
+        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="auto")[1],
+        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated")[1],
+    )
     g = sd.forward(cube)  # a lamp reads about 30 dB noise-free at this size: count it clean
     monkeypatch.setattr(pm, "FITTED_SPECTRUM_ABOVE_DB", 25.0)
     opened = pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated_clean")[1]
@@ -671,7 +676,8 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
         opened, pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1]
     )
     g = sd.simulate(cube, snr_db=20, rng=0)
-    np.testing.assert_array_equal(
-        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="gated")[1],
-        pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1],
-    )
+    for ps in ("gated", "auto"):
+        np.testing.assert_array_equal(
+            pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum=ps)[1],
+            pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1],
+        )

@@ -1,6 +1,7 @@
 """pnp_gap's automatic last denoiser level follows the noise and the run's length."""
 
 import importlib.util
+import inspect
 from unittest import mock
 
 import numpy as np
@@ -133,6 +134,12 @@ def test_fast_settings_resolve_the_start_as_pnp_fast_does():
     assert own["pan_spectrum"] == M.FAST_PAN_SPECTRUM == "gated"
     other = M.fast_settings(p.system, p.measurement, warm="gap_tv")
     assert other["pan_spectrum"] == "gated" and other["pan_tv_steps"] == "auto"
+    # the first level is pnp_gap's unless given (a given one reaches pnp_gap)
+    assert own["sigma"] == inspect.signature(M.pnp_gap).parameters["sigma"].default == 0.1
+    assert M.fast_settings(p.system, p.measurement, sigma=0.2)["sigma"] == 0.2
+    for bad in (0, -0.1, float("nan")):
+        with pytest.raises(ValueError, match="sigma"):
+            M.pnp_fast(p.system, p.measurement, sigma=bad)
     with pytest.raises(ValueError, match=r"\['denoiser'\] are not options of pnp_fast"):
         M.fast_settings(p.system, p.measurement, denoiser="tv")
     run = {**other, "precision": "float32", "max_iter": 1, "warm_iter": 2}

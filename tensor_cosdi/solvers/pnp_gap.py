@@ -690,7 +690,13 @@ def pnp_fast(
         As in :func:`pnp_gap`, with the defaults above (``pan_tv_steps="auto"``:
         :data:`FAST_PAN_TV_STEPS` with the OTD start; :func:`fast_settings` lists them
         all).
-    sigma, rho, nonneg, cycle, sigma_scale, progress
+    sigma
+        The first level, as in :func:`pnp_gap` (0.1).  Cross-validated against 0.06 and 0.15
+        (8 tuning scenes as they are and magnified 4×, TSA; clean also at 46 iterations):
+        clean 35.08 dB against 34.98 and 35.01 (46 iterations: 34.22 to 34.31), 30 dB 32.08
+        against 32.09 and 31.99 (``benchmarks/results/cv_pnp_fast_first_level_clean.md``,
+        ``cv_pnp_fast_first_level_30db.md``).
+    rho, nonneg, cycle, sigma_scale, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
 

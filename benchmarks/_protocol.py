@@ -283,6 +283,14 @@ def pnp_fast_settings(system, g) -> dict:
     return out
 
 
+def pnp_fast_with(system, g, denoiser):
+    """The cube of ``pnp_fast`` on ``g`` with another ``denoiser`` (``pnp_gap`` with
+    :func:`pnp_fast_settings`)."""
+    return tc.reconstruct(
+        system, g, "pnp_gap", denoiser=denoiser, **pnp_fast_settings(system, g)
+    ).cube
+
+
 def key(scene, snr, mask, method, options) -> str:
     return json.dumps([scene, snr, mask, method, options], sort_keys=True)
 

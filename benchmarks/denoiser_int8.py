@@ -46,7 +46,7 @@ from _protocol import (  # noqa: E402
     RESULTS,
     clear_snr_cache,
     load_mask,
-    pnp_fast_settings,
+    pnp_fast_with,
     problem,
     score,
     snr_label,
@@ -138,11 +138,6 @@ def main(argv=None):
     torch.set_num_threads(args.threads)
     mask = load_mask(args.mask)
 
-    def run(den, system, g):
-        return tc.reconstruct(
-            system, g, "pnp_gap", denoiser=den, **pnp_fast_settings(system, g)
-        ).cube
-
     ref = SpectralDenoiser(precision="float32")
     inputs, calls = [], [0]
 
@@ -155,7 +150,7 @@ def main(argv=None):
     for scene in calib:
         for snr in sorted({None, *snrs}, key=lambda s: -1 if s is None else s):
             system, _, g = problem(scene, snr, mask)
-            run(ref, system, g)
+            pnp_fast_with(system, g, ref)
     hook.remove()
     print(f"calibration: {len(inputs)} network inputs", flush=True)
 
@@ -182,7 +177,7 @@ def main(argv=None):
             for v in VARIANTS:
                 clear_snr_cache()
                 t0 = time.perf_counter()
-                est = run(dens[v], system, g)
+                est = pnp_fast_with(system, g, dens[v])
                 secs[v].append(time.perf_counter() - t0)
                 psnr[v][snr].append(score(cube, est)["psnr"])
                 print(v, scene, snr_label(snr), f"{psnr[v][snr][-1]:.2f}", flush=True)

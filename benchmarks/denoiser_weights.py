@@ -41,7 +41,7 @@ from _protocol import (  # noqa: E402
     RESULTS,
     clear_snr_cache,
     load_mask,
-    pnp_fast_settings,
+    pnp_fast_with,
     problem,
     scene_view,
     score,
@@ -54,11 +54,6 @@ import tensor_cosdi as tc  # noqa: E402
 
 def _in_pnp_gap(system, g, den):
     return tc.reconstruct(system, g, "pnp_gap", denoiser=den).cube
-
-
-def _in_pnp_fast(system, g, den):
-    """``pnp_fast`` with another denoiser: ``pnp_gap`` with ``pnp_fast``'s own settings."""
-    return tc.reconstruct(system, g, "pnp_gap", denoiser=den, **pnp_fast_settings(system, g)).cube
 
 
 def main(argv=None):
@@ -115,7 +110,7 @@ def main(argv=None):
                 f"--illuminant: unknown {args.illuminant!r}; e.g. A, D65, LED-B3"
             ) from None
     mask = load_mask(args.mask)
-    run = _in_pnp_fast if args.method == "pnp_fast" else _in_pnp_gap
+    run = pnp_fast_with if args.method == "pnp_fast" else _in_pnp_gap
     rows = {k: {snr: [] for snr in snrs} for k in files}
     secs = {k: [] for k in files}
     for key, path in files.items():

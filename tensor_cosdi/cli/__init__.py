@@ -414,6 +414,11 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--width", type=_positive_int, default=64, help="convolution channels")
     tr.add_argument("--blocks", type=_positive_int, default=4, help="residual blocks")
     tr.add_argument(
+        "--conv-rank", type=int, default=0, metavar="K",
+        help="each 3x3 convolution in Tucker-2 form through K channels (a faster network; "
+        "with --init, factored from that full network's kernels; default 0: full)",
+    )  # fmt: skip
+    tr.add_argument(
         "--zoom", type=float, default=0.0, metavar="P",
         help="probability that a batch is a magnified view (a smaller crop upsampled to the "
         "patch; default 0)",

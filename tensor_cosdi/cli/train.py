@@ -69,6 +69,7 @@ def run_train_denoiser(args) -> int:
         patch=args.patch,
         width=args.width,
         blocks=args.blocks,
+        conv_rank=args.conv_rank,
         zoom=args.zoom,
         zoom_max=args.zoom_max,
         illumination=args.illumination,

@@ -73,6 +73,10 @@ class TrainConfig:
     r_max: int = 12
     width: int = 64
     blocks: int = 4
+    #: 0: full 3×3 convolutions; ``k > 0``: each in Tucker-2 form through ``k`` channels
+    #: (:func:`~tensor_cosdi.learn.spectral_net.factorise`); with a full network as ``init``,
+    #: its kernels are decomposed to start from
+    conv_rank: int = 0
     seed: int = 0
     checkpoint_every: int = 200
     #: -1: train on every tuning scene; k: leave fold k of ``tune_folds(4)`` out (validation)
@@ -111,6 +115,9 @@ class TrainConfig:
                 + f", got {z!r}"
             )
         training_scenes(self.hold_out)
+        c = self.conv_rank
+        if isinstance(c, bool) or not isinstance(c, int) or c < 0:
+            raise ValueError(f"conv_rank must be an integer ≥ 0 (0: full), got {c!r}")
         if not isinstance(self.init, str):
             raise ValueError(f"init must be '', 'shipped' or a weights file, got {self.init!r}")
         if not 0 < self.sigma_min < self.sigma_max:
@@ -274,24 +281,33 @@ def nullspace_noise(torch, noise, rng, p: int, max_shift: int = 3, density_sprea
 
 
 def _build(torch, cfg: TrainConfig):
-    """The network of ``cfg``: random (seeded), or ``cfg.init``'s weights to fine-tune."""
+    """The network of ``cfg``: random (seeded), or ``cfg.init``'s weights to fine-tune (a
+    full network's kernels decomposed when ``cfg.conv_rank`` asks for a factored one)."""
     from . import load_weights
-    from .spectral_net import _build_net, default_weights
+    from .spectral_net import _build_net, default_weights, factorise
 
-    net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks)
+    net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks, cfg.conv_rank)
     if not cfg.init:
         return net
     path = default_weights() if cfg.init == "shipped" else cfg.init
     ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
-    want = {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks}
-    got = {k: ckpt["config"].get(k) for k in want} if isinstance(ckpt["config"], dict) else None
-    if got != want:
+    arch = ("r_max", "width", "blocks")
+    want = {k: getattr(cfg, k) for k in arch}
+    conf = ckpt["config"] if isinstance(ckpt["config"], dict) else {}
+    got = {k: conf.get(k) for k in arch}
+    rank = conf.get("conv_rank", 0)
+    if got != want or rank not in (0, cfg.conv_rank):
         raise ValueError(
-            f"init weights {path} are a network of {got}, not the {want} being trained; "
-            "pass the same --width/--blocks"
+            f"init weights {path} are a network of {dict(got, conv_rank=rank)}, not the "
+            f"{dict(want, conv_rank=cfg.conv_rank)} being trained; pass the same "
+            "--width/--blocks (and --conv-rank, or 0 in the file to factor it)"
         )
-    net.load_state_dict(ckpt["model"])
-    return net
+    if rank == cfg.conv_rank:
+        net.load_state_dict(ckpt["model"])
+        return net
+    full = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks)
+    full.load_state_dict(ckpt["model"])
+    return factorise(full, cfg.conv_rank)
 
 
 def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
@@ -356,7 +372,10 @@ def train_denoiser(
         prepare=lambda cfg: training_data(folder, cfg.hold_out),
         build=lambda torch, cfg, data: _build(torch, cfg),
         batch_loss=_denoiser_loss,
-        weights_config=lambda cfg: {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks},
+        weights_config=lambda cfg: {
+            "r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks,
+            "conv_rank": cfg.conv_rank,
+        },  # fmt: skip
         resume=resume,
         force=force,
         device=device,

@@ -237,6 +237,74 @@ def test_fine_tuning_starts_from_the_given_weights(tmp_path, capsys):
 
 
 @needs_torch
+def test_factorised_network_is_the_full_one_at_full_rank_and_smaller_below():
+    import torch
+
+    from tensor_cosdi.learn.spectral_net import SubspaceDenoiserNet, factorise, net_config
+
+    torch.manual_seed(0)
+    full = SubspaceDenoiserNet(r_max=2, width=8, blocks=2).eval()
+    with torch.no_grad():  # a trained network's zero-initialised layers are not zero
+        for p in full.parameters():
+            p.normal_(0, 0.2)
+    y, s = torch.randn(2, 2, 12, 10), torch.tensor([0.05, 0.2])
+    with torch.no_grad():
+        ref = full(y, s)
+        # 9 input channels (4·2 + the noise map) and 8 wide: rank 9 keeps every mode whole
+        torch.testing.assert_close(factorise(full, 9).eval()(y, s), ref, rtol=1e-4, atol=1e-5)
+        small = factorise(full, 3).eval()
+        err = [float((factorise(full, k).eval()(y, s) - ref).norm() / ref.norm()) for k in (3, 6)]
+    assert err[0] > err[1] > 1e-3  # truncated: nearer the full network the higher the rank
+    count = lambda net: sum(p.numel() for p in net.parameters())  # noqa: E731
+    assert count(small) < count(full) / 2
+    assert net_config(small) == {"r_max": 2, "width": 8, "blocks": 2, "conv_rank": 3}
+    for bad, msg in ((0, "conv_rank must be a positive integer"), (-2, "positive integer")):
+        with pytest.raises(ValueError, match=msg):
+            factorise(full, bad)
+    with pytest.raises(ValueError, match="already factored"):
+        factorise(small, 2)
+
+
+@needs_torch
+def test_cli_fine_tunes_a_factored_copy_of_a_full_network(tmp_path, capsys):
+    import torch
+
+    from tensor_cosdi import cli
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser, SubspaceDenoiserNet, factorise
+
+    _real()
+    small = ["--steps", "1", "--batch", "2", "--patch", "16", "--quiet", "--device", "cpu",
+             "--width", "8", "--blocks", "1"]  # fmt: skip
+    full = tmp_path / "full.pt"
+    assert cli.main(["train-denoiser", "--out", str(full)] + small) == 0
+    # a learning rate of 1e-12: the fine-tuned file holds the factored start itself
+    out = tmp_path / "k4.pt"
+    assert cli.main(["train-denoiser", "--out", str(out), "--init", str(full), "--conv-rank", "4",
+                     "--lr", "1e-12", "--warmup", "0"] + small) == 0  # fmt: skip
+    got = torch.load(out, weights_only=True)
+    assert got["config"]["conv_rank"] == 4
+    net = SubspaceDenoiserNet(width=8, blocks=1)
+    net.load_state_dict(torch.load(full, weights_only=True)["model"])
+    want = factorise(net, 4).state_dict()
+    assert set(got["model"]) == set(want)
+    for k, v in want.items():
+        torch.testing.assert_close(got["model"][k], v, rtol=0, atol=1e-6)
+    # the factored file is a denoiser, and fine-tunes again at its own rank
+    cube = np.random.default_rng(0).random((16, 16, 5)).astype(np.float32)
+    assert SpectralDenoiser(out)(cube, 0.1).shape == cube.shape
+    again = tmp_path / "again.pt"
+    assert cli.main(["train-denoiser", "--out", str(again), "--init", str(out),
+                     "--conv-rank", "4"] + small) == 0  # fmt: skip
+    for bad, msg in (
+        (["--init", str(out), "--conv-rank", "3"], "conv_rank"),
+        (["--init", str(out)], "conv_rank"),
+        (["--conv-rank", "-1"], "conv_rank must be an integer"),
+    ):
+        assert cli.main(["train-denoiser", "--out", str(tmp_path / "b.pt")] + bad + small) == 2
+        assert msg in capsys.readouterr().err
+
+
+@needs_torch
 def test_nullspace_noise_leaves_nothing_the_operator_sees_for_each_shift_and_density():
     """The training noise ``(I − Aᵀ(AAᵀ)⁻¹A) n``: the drawn SD-CASSI operator maps it to zero
     on every measured pixel, with shifts of 1 to ``max_shift`` and the drawn densities."""

@@ -96,7 +96,9 @@ def _build_net(torch, r_max: int, width: int, blocks: int, conv_rank: int = 0):
             nn.init.zeros_(last(self.b).bias)
 
         def forward(self, x):
-            return x + self.b(torch.relu(self.a(x)))
+            # in place on the fresh outputs (no convolution's gradient needs its own output):
+            # the same values as x + b(relu(a(x))) without two temporaries of the activations
+            return self.b(torch.relu_(self.a(x))).add_(x)
 
     class SubspaceDenoiserNet(nn.Module):
         """Noise of ``r_max`` eigen-images ``(batch, r_max, H, W)`` given ``σ`` ``(batch,)``.
@@ -112,6 +114,7 @@ def _build_net(torch, r_max: int, width: int, blocks: int, conv_rank: int = 0):
             super().__init__()
             self.r_max, self.width, self.blocks = r_max, width, blocks
             self.conv_rank = conv_rank
+            self.channels_last = False  # weights in channels-last order (:func:`_fast_layout`)
             cin, cout = 4 * r_max + 1, 4 * r_max
             self.linear = conv(cin, cout)
             nn.init.zeros_(last(self.linear).weight)
@@ -132,7 +135,10 @@ def _build_net(torch, r_max: int, width: int, blocks: int, conv_rank: int = 0):
             d = self.down(y)
             smap = sigma.reshape(-1, 1, 1, 1).to(d.dtype).expand(-1, 1, *d.shape[-2:])
             d = torch.cat([d, smap], dim=1)
-            noise = self.up(self.linear(d) + self.tail(self.body(self.head(d))))
+            if self.channels_last:  # once here, not once for each of the two layers that read it
+                d = d.contiguous(memory_format=torch.channels_last)
+            lin = self.linear(d)
+            noise = self.up(self.tail(self.body(self.head(d))).add_(lin))
             return noise[..., :h, :w]
 
     return SubspaceDenoiserNet()
@@ -267,6 +273,7 @@ def _fast_layout(torch, net):
     sums."""
     if next(net.parameters()).device.type == "cpu":
         net.to(memory_format=torch.channels_last)
+        net.channels_last = True
     return net
 
 

@@ -302,7 +302,8 @@ def build_network(torch, cfg: DCoSNetConfig, data):
         except RuntimeError as exc:
             raise ValueError(
                 f"{pre.path}: a denoiser of another shape than D-CoSNet's spectral prior "
-                f"(r_max 12, width 64, 4 blocks): {exc}"
+                f"(r_max 12, width 64, 4 blocks, full convolutions): "
+                f"{' '.join(str(exc).split())[:160]}"
             ) from None
     return net
 

@@ -43,6 +43,7 @@ __all__ = [
     "SpectralDenoiser",
     "factorise",
     "net_config",
+    "architecture",
     "subspace",
     "default_weights",
     "PRECISIONS",
@@ -159,6 +160,33 @@ def net_config(net) -> dict:
         "r_max": net.r_max, "width": net.width, "blocks": net.blocks,
         "conv_rank": net.conv_rank,
     }  # fmt: skip
+
+
+#: The largest network a weights file may describe (a hostile file could otherwise ask for
+#: gigabytes): ``r_max``, ``width``, ``blocks``, ``conv_rank``.
+ARCH_LIMITS = {"r_max": 64, "width": 1024, "blocks": 64, "conv_rank": 1024}
+
+
+def architecture(config, path="the weights file") -> dict:
+    """The network a weights file's ``config`` describes, checked: ``{"r_max", "width",
+    "blocks", "conv_rank"}`` as integers in ``[1, limit]`` (``conv_rank`` from 0, its default;
+    :data:`ARCH_LIMITS`).  Anything else is a one-line ``ValueError`` naming the field."""
+    if not isinstance(config, dict):
+        raise ValueError(
+            f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
+            f"(its config is a {type(config).__name__}, not a dict)"
+        )
+    out = {}
+    for name, top in ARCH_LIMITS.items():
+        v = config.get(name, 0 if name == "conv_rank" else None)
+        low = 0 if name == "conv_rank" else 1
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not low <= v <= top:
+            raise ValueError(
+                f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
+                f"(config {name}={v!r}; expected an integer in [{low}, {top}])"
+            )
+        out[name] = int(v)
+    return out
 
 
 def factorise(net, conv_rank: int):
@@ -333,17 +361,15 @@ class SpectralDenoiser:
         torch = require_torch()
         path = Path(weights) if weights is not None else default_weights()
         ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
+        cfg = architecture(ckpt["config"], path)
+        self.net = _build_net(torch, *cfg.values())
         try:
-            cfg = ckpt["config"]
-            self.net = _build_net(
-                torch, int(cfg["r_max"]), int(cfg["width"]), int(cfg["blocks"]),
-                int(cfg.get("conv_rank", 0)),
-            )  # fmt: skip
             self.net.load_state_dict(ckpt["model"])
         except (KeyError, TypeError, RuntimeError) as exc:
+            why = " ".join(str(exc).split())[:160]
             raise ValueError(
                 f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
-                f"({exc})"
+                f"(its weights do not fit the network of {cfg}: {why})"
             ) from None
         self.net.eval()
         self.r_max = int(cfg["r_max"])

@@ -118,6 +118,11 @@ class TrainConfig:
         c = self.conv_rank
         if isinstance(c, bool) or not isinstance(c, int) or c < 0:
             raise ValueError(f"conv_rank must be an integer ≥ 0 (0: full), got {c!r}")
+        from .spectral_net import ARCH_LIMITS
+
+        for name, top in ARCH_LIMITS.items():  # a network its own loader would refuse
+            if getattr(self, name) > top:
+                raise ValueError(f"{name} must be at most {top}, got {getattr(self, name)}")
         if not isinstance(self.init, str):
             raise ValueError(f"init must be '', 'shipped' or a weights file, got {self.init!r}")
         if not 0 < self.sigma_min < self.sigma_max:
@@ -284,30 +289,31 @@ def _build(torch, cfg: TrainConfig):
     """The network of ``cfg``: random (seeded), or ``cfg.init``'s weights to fine-tune (a
     full network's kernels decomposed when ``cfg.conv_rank`` asks for a factored one)."""
     from . import load_weights
-    from .spectral_net import _build_net, default_weights, factorise
+    from .spectral_net import _build_net, architecture, default_weights, factorise
 
     net = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks, cfg.conv_rank)
     if not cfg.init:
         return net
     path = default_weights() if cfg.init == "shipped" else cfg.init
     ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
-    arch = ("r_max", "width", "blocks")
-    want = {k: getattr(cfg, k) for k in arch}
-    conf = ckpt["config"] if isinstance(ckpt["config"], dict) else {}
-    got = {k: conf.get(k) for k in arch}
-    rank = conf.get("conv_rank", 0)
+    got = architecture(ckpt["config"], path)
+    rank = got.pop("conv_rank")
+    want = {"r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks}
     if got != want or rank not in (0, cfg.conv_rank):
         raise ValueError(
             f"init weights {path} are a network of {dict(got, conv_rank=rank)}, not the "
             f"{dict(want, conv_rank=cfg.conv_rank)} being trained; pass the same "
             "--width/--blocks (and --conv-rank, or 0 in the file to factor it)"
         )
-    if rank == cfg.conv_rank:
-        net.load_state_dict(ckpt["model"])
-        return net
-    full = _build_net(torch, cfg.r_max, cfg.width, cfg.blocks)
-    full.load_state_dict(ckpt["model"])
-    return factorise(full, cfg.conv_rank)
+    target = net if rank == cfg.conv_rank else _build_net(torch, cfg.r_max, cfg.width, cfg.blocks)
+    try:
+        target.load_state_dict(ckpt["model"])
+    except (KeyError, TypeError, RuntimeError) as exc:
+        why = " ".join(str(exc).split())[:160]
+        raise ValueError(
+            f"init weights {path} do not fit the network their config describes ({why})"
+        ) from None
+    return target if rank == cfg.conv_rank else factorise(target, cfg.conv_rank)
 
 
 def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):

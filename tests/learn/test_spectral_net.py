@@ -266,6 +266,33 @@ def test_factorised_network_is_the_full_one_at_full_rank_and_smaller_below():
 
 
 @needs_torch
+def test_a_weights_file_describing_a_bad_network_is_a_one_line_error(tmp_path):
+    import torch
+
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser, default_weights
+    from tensor_cosdi.learn.train import TrainConfig
+
+    ckpt = torch.load(default_weights(), weights_only=True)
+    for i, (config, msg) in enumerate((
+        ([12, 64, 4], "its config is a list"),
+        ({"width": 64, "blocks": 4}, "r_max=None"),
+        (dict(ckpt["config"], r_max=12.5), "r_max=12.5"),
+        (dict(ckpt["config"], width=-1), "width=-1"),
+        (dict(ckpt["config"], width=10**7), "width=10000000"),  # no gigabytes on request
+        (dict(ckpt["config"], blocks=True), "blocks=True"),
+        (dict(ckpt["config"], conv_rank="24"), "conv_rank='24'"),
+        (dict(ckpt["config"], conv_rank=24), "do not fit the network"),  # full weights
+    )):  # fmt: skip
+        path = tmp_path / f"bad{i}.pt"
+        torch.save(dict(ckpt, config=config), path)
+        with pytest.raises(ValueError, match="not a spectral-denoiser checkpoint") as err:
+            SpectralDenoiser(path)
+        assert msg in str(err.value) and "\n" not in str(err.value)
+    with pytest.raises(ValueError, match="width must be at most 1024"):
+        TrainConfig(width=2048).check()
+
+
+@needs_torch
 def test_cli_fine_tunes_a_factored_copy_of_a_full_network(tmp_path, capsys):
     import torch
 

@@ -564,15 +564,47 @@ def tile_code(code, shape) -> np.ndarray:
     return np.tile(code, reps)[:rows, :cols]
 
 
+#: The largest D-CoSNet a weights file may describe (a hostile file could otherwise ask for
+#: terabytes): integer fields and their ranges, and the largest side of a recorded code.
+CONFIG_LIMITS = {"channels": (1, 1024), "stages": (1, 64), "width": (1, 1024),
+                 "unet_width": (1, 1024), "code_seed": (0, 2**63 - 1)}  # fmt: skip
+MAX_CODE_SIDE = 8192
+
+
 def _checkpoint(weights):
     path = Path(weights)
     ckpt = load_weights(path, "D-CoSNet", "train-dcosnet")
-    try:
-        dict(ckpt["config"])["channels"]
-    except (KeyError, TypeError, ValueError) as exc:  # another network's weights
+    cfg = ckpt["config"]
+
+    def bad(what):
         raise ValueError(
-            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet (no {exc})"
-        ) from None
+            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({what})"
+        )
+
+    if not isinstance(cfg, dict):
+        bad(f"its config is a {type(cfg).__name__}, not a dict")
+    if "channels" not in cfg:  # another network's weights
+        bad("no 'channels'")
+    for name, (low, top) in CONFIG_LIMITS.items():
+        v = cfg.get(name, low)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not low <= v <= top:
+            bad(f"config {name}={v!r}; expected an integer in [{low}, {top}]")
+    shift = cfg.get("shift", 1)
+    if isinstance(shift, bool) or not isinstance(shift, (int, float)) or not 0 < shift <= 1024:
+        bad(f"config shift={shift!r}; expected a number of pixels in (0, 1024]")
+    if cfg.get("prior", "unet") not in ("unet", "spectral"):
+        bad(f"config prior={cfg.get('prior')!r}; expected 'unet' or 'spectral'")
+    if "code_shape" in cfg:
+        side = cfg["code_shape"]
+        if (
+            not isinstance(side, (list, tuple))
+            or len(side) != 2
+            or not all(
+                isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+                and 1 <= n <= MAX_CODE_SIDE for n in side
+            )
+        ):  # fmt: skip
+            bad(f"config code_shape={side!r}; expected two sides in [1, {MAX_CODE_SIDE}]")
     return path, ckpt
 
 
@@ -669,6 +701,9 @@ class DCoSNet:
     def __init__(self, weights=None, *, device=None):
         self.torch = require_torch()
         self.path = None if weights is None else Path(weights)
+        # a missing, truncated, foreign or hostile file is an error now; its contents are
+        # kept for the first call (the file is read once)
+        self._read = None if self.path is None else _checkpoint(self.path)
         self.device = device
         self._nets = {}
 
@@ -677,7 +712,10 @@ class DCoSNet:
         path = self.path if self.path is not None else default_weights(system_name)
         if path in self._nets:
             return self._nets[path]
-        ckpt = _checkpoint(path)[1]  # a clear error for a missing, truncated or foreign file
+        if self._read is not None and self._read[0] == path:
+            ckpt, self._read = self._read[1], None
+        else:  # a clear error for a missing, truncated or foreign file
+            ckpt = _checkpoint(path)[1]
         try:
             cfg = dict(ckpt["config"])
             learned = cfg.get("code") == "learned"
@@ -690,8 +728,9 @@ class DCoSNet:
             if cfg.get("code") in ("learned", "seeded"):
                 cfg["trained_code"] = training_code(path)
         except (KeyError, TypeError, RuntimeError) as exc:
+            why = " ".join(str(exc).split())[:160]
             raise ValueError(
-                f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({exc})"
+                f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({why})"
             ) from None
         net.eval()
         self._nets[path] = (net, cfg)

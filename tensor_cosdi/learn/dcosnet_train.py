@@ -99,7 +99,17 @@ class DCoSNetConfig:
              "checkpoint_every"),
         )  # fmt: skip
         from ..datasets import training_scenes
+        from .dcosnet import CONFIG_LIMITS, MAX_CODE_SIDE
 
+        for name in ("stages", "width", "unet_width"):  # a network its loader would refuse
+            top = CONFIG_LIMITS[name][1]
+            if getattr(self, name) > top:
+                raise ValueError(f"{name} must be at most {top}, got {getattr(self, name)}")
+        if self.patch + self.margin > MAX_CODE_SIDE:  # the code a file records
+            raise ValueError(
+                f"the code would be {self.patch + self.margin} px wide (patch + shift × "
+                f"(n_bands − 1)); at most {MAX_CODE_SIDE}"
+            )
         training_scenes(self.hold_out)
         if not 2 <= self.n_bands <= 31:
             raise ValueError(f"n_bands must lie in 2..31 (the scenes have 31), got {self.n_bands}")

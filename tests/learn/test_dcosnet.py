@@ -450,6 +450,36 @@ def test_a_weights_file_that_is_not_one_is_a_clear_error(tmp_path, data):
 
 
 @needs_torch
+def test_a_weights_file_describing_a_bad_network_is_a_one_line_error_at_once(tmp_path):
+    """A config a hostile or damaged file could carry (a fractional width, a million stages, a
+    code of a trillion pixels): refused when the file is named, before anything is built."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import DCoSNet, default_weights, training_code
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig
+
+    ckpt = torch.load(default_weights("sd_cassi"), weights_only=True)
+    for i, (change, msg) in enumerate((
+        ({"width": 16.5}, "width=16.5"),
+        ({"stages": 10**6}, "stages=1000000"),
+        ({"channels": "28"}, "channels='28'"),
+        ({"shift": "2"}, "shift='2'"),
+        ({"prior": "resnet"}, "prior='resnet'"),
+        ({"code": "seeded", "code_shape": [10**6, 10**6], "code_seed": 0}, "code_shape="),
+        ({"code": "seeded", "code_shape": [64], "code_seed": 0}, "code_shape=[64]"),
+        ({"code": "seeded", "code_shape": [64, 64], "code_seed": -1}, "code_seed=-1"),
+    )):  # fmt: skip
+        path = tmp_path / f"bad{i}.pt"
+        torch.save(dict(ckpt, config=dict(ckpt["config"], **change)), path)
+        for read in (DCoSNet, training_code):
+            with pytest.raises(ValueError, match="not a D-CoSNet checkpoint") as err:
+                read(path)
+            assert msg in str(err.value) and "\n" not in str(err.value)
+    with pytest.raises(ValueError, match="stages must be at most 64"):
+        DCoSNetConfig(stages=65).check()
+
+
+@needs_torch
 def test_cassi_vsi_sensing_and_its_banded_woodbury_step():
     """CASSI-VSI (A Aᵀ banded along each detector row): the batched training path equals the
     systems' operators (A, Aᵀ, the per-row blocks, the dual solve against a dense solve), and

@@ -207,9 +207,9 @@ def factorise(net, conv_rank: int):
     from tensorly.decomposition import partial_tucker
 
     torch = require_torch()
-    conv_rank = int(conv_rank)
-    if conv_rank < 1:
+    if isinstance(conv_rank, bool) or not isinstance(conv_rank, (int, np.integer)) or conv_rank < 1:
         raise ValueError(f"conv_rank must be a positive integer, got {conv_rank!r}")
+    conv_rank = int(conv_rank)
     if getattr(net, "conv_rank", 0):
         raise ValueError("the network is already factored (conv_rank > 0)")
     small = _build_net(torch, net.r_max, net.width, net.blocks, conv_rank)
@@ -362,7 +362,7 @@ class SpectralDenoiser:
         path = Path(weights) if weights is not None else default_weights()
         ckpt = load_weights(path, "spectral-denoiser", "train-denoiser")
         cfg = architecture(ckpt["config"], path)
-        self.net = _build_net(torch, *cfg.values())
+        self.net = _build_net(torch, **cfg)
         try:
             self.net.load_state_dict(ckpt["model"])
         except (KeyError, TypeError, RuntimeError) as exc:

@@ -258,7 +258,8 @@ def test_factorised_network_is_the_full_one_at_full_rank_and_smaller_below():
     count = lambda net: sum(p.numel() for p in net.parameters())  # noqa: E731
     assert count(small) < count(full) / 2
     assert net_config(small) == {"r_max": 2, "width": 8, "blocks": 2, "conv_rank": 3}
-    for bad, msg in ((0, "conv_rank must be a positive integer"), (-2, "positive integer")):
+    for bad, msg in ((0, "conv_rank must be a positive integer"), (-2, "positive integer"),
+                     (2.5, "got 2.5"), (True, "got True")):  # fmt: skip
         with pytest.raises(ValueError, match=msg):
             factorise(full, bad)
     with pytest.raises(ValueError, match="already factored"):

@@ -590,7 +590,8 @@ def _checkpoint(weights):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not low <= v <= top:
             bad(f"config {name}={v!r}; expected an integer in [{low}, {top}]")
     shift = cfg.get("shift", 1)
-    if isinstance(shift, bool) or not isinstance(shift, (int, float, np.number)) or not 0 < shift <= 1024:
+    number = isinstance(shift, (int, float, np.number)) and not isinstance(shift, bool)
+    if not number or not 0 < shift <= 1024:
         bad(f"config shift={shift!r}; expected a number of pixels in (0, 1024]")
     if cfg.get("prior", "unet") not in ("unet", "spectral"):
         bad(f"config prior={cfg.get('prior')!r}; expected 'unet' or 'spectral'")

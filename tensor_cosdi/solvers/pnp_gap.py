@@ -676,7 +676,8 @@ def pnp_fast(
     (``benchmarks/results/pnp_fast_no_bf16.md``); fewer calls or a smaller network measured
     there did not bring it under 5 s either (``float32_budget_30db.md``,
     ``float32_budget_clean.md``, ``denoiser_weights_fast_w40b3.md``), nor did the network
-    quantized to int8 after training (``denoiser_int8.md``), which also costs PSNR.  In
+    quantized to int8 after training (``denoiser_int8.md``) or with its convolutions in
+    Tucker-2 form (``denoiser_weights_fast_k24.md``), both of which also cost PSNR.  In
     bfloat16 the result depends on the machine and moves by about 1e-3 when the measurement
     is rescaled; use ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It
     needs torch (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:

@@ -47,6 +47,7 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
+from ..validate import integer, number
 from . import load_weights, require_torch
 
 __all__ = [
@@ -577,35 +578,27 @@ def _checkpoint(weights):
     cfg = ckpt["config"]
 
     def bad(what):
-        raise ValueError(
+        return ValueError(
             f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({what})"
         )
 
     if not isinstance(cfg, dict):
-        bad(f"its config is a {type(cfg).__name__}, not a dict")
+        raise bad(f"its config is a {type(cfg).__name__}, not a dict")
     if "channels" not in cfg:  # another network's weights
-        bad("no 'channels'")
-    for name, (low, top) in CONFIG_LIMITS.items():
-        v = cfg.get(name, low)
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not low <= v <= top:
-            bad(f"config {name}={v!r}; expected an integer in [{low}, {top}]")
-    shift = cfg.get("shift", 1)
-    number = isinstance(shift, (int, float, np.number)) and not isinstance(shift, bool)
-    if not number or not 0 < shift <= 1024:
-        bad(f"config shift={shift!r}; expected a number of pixels in (0, 1024]")
-    if cfg.get("prior", "unet") not in ("unet", "spectral"):
-        bad(f"config prior={cfg.get('prior')!r}; expected 'unet' or 'spectral'")
-    if "code_shape" in cfg:
-        side = cfg["code_shape"]
-        if (
-            not isinstance(side, (list, tuple))
-            or len(side) != 2
-            or not all(
-                isinstance(n, (int, np.integer)) and not isinstance(n, bool)
-                and 1 <= n <= MAX_CODE_SIDE for n in side
-            )
-        ):  # fmt: skip
-            bad(f"config code_shape={side!r}; expected two sides in [1, {MAX_CODE_SIDE}]")
+        raise bad("no 'channels'")
+    side = cfg.get("code_shape", (1, 1))
+    if not isinstance(side, (list, tuple)) or len(side) != 2:
+        raise bad(f"config code_shape={side!r}; expected (rows, columns)")
+    try:
+        for name, (low, top) in CONFIG_LIMITS.items():
+            integer(f"config {name}", cfg.get(name, low), low=low, high=top)
+        number("config shift", cfg.get("shift", 1), low=0, low_open=True, high=1024)
+        for n in side:
+            integer("config code_shape's sides", n, low=1, high=MAX_CODE_SIDE)
+    except ValueError as exc:
+        raise bad(exc) from None
+    if cfg.get("prior", "unet") not in PRIORS:
+        raise bad(f"config prior={cfg.get('prior')!r}; expected one of {PRIORS}")
     return path, ckpt
 
 

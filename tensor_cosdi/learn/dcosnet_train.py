@@ -99,12 +99,11 @@ class DCoSNetConfig:
              "checkpoint_every"),
         )  # fmt: skip
         from ..datasets import training_scenes
+        from ..validate import integer
         from .dcosnet import CONFIG_LIMITS, MAX_CODE_SIDE
 
         for name in ("stages", "width", "unet_width"):  # a network its loader would refuse
-            top = CONFIG_LIMITS[name][1]
-            if getattr(self, name) > top:
-                raise ValueError(f"{name} must be at most {top}, got {getattr(self, name)}")
+            integer(name, getattr(self, name), low=1, high=CONFIG_LIMITS[name][1])
         if self.patch + self.margin > MAX_CODE_SIDE:  # the code a file records
             raise ValueError(
                 f"the code would be {self.patch + self.margin} px wide (patch + shift × "

@@ -36,13 +36,13 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
+from ..validate import integer
 from . import load_weights, require_torch
 
 __all__ = [
     "SubspaceDenoiserNet",
     "SpectralDenoiser",
     "factorise",
-    "net_config",
     "architecture",
     "subspace",
     "default_weights",
@@ -154,14 +154,6 @@ def SubspaceDenoiserNet(r_max: int = 12, width: int = 64, blocks: int = 4, conv_
     return _build_net(torch, int(r_max), int(width), int(blocks), int(conv_rank))
 
 
-def net_config(net) -> dict:
-    """The architecture of a :func:`SubspaceDenoiserNet` as a weights file's ``config`` holds it."""
-    return {
-        "r_max": net.r_max, "width": net.width, "blocks": net.blocks,
-        "conv_rank": net.conv_rank,
-    }  # fmt: skip
-
-
 #: The largest network a weights file may describe (a hostile file could otherwise ask for
 #: gigabytes): ``r_max``, ``width``, ``blocks``, ``conv_rank``.
 ARCH_LIMITS = {"r_max": 64, "width": 1024, "blocks": 64, "conv_rank": 1024}
@@ -170,7 +162,8 @@ ARCH_LIMITS = {"r_max": 64, "width": 1024, "blocks": 64, "conv_rank": 1024}
 def architecture(config, path="the weights file") -> dict:
     """The network a weights file's ``config`` describes, checked: ``{"r_max", "width",
     "blocks", "conv_rank"}`` as integers in ``[1, limit]`` (``conv_rank`` from 0, its default;
-    :data:`ARCH_LIMITS`).  Anything else is a one-line ``ValueError`` naming the field."""
+    :data:`ARCH_LIMITS`; :func:`tensor_cosdi.validate.integer`).  Anything else is a one-line
+    ``ValueError`` naming the file and the field."""
     if not isinstance(config, dict):
         raise ValueError(
             f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
@@ -178,14 +171,15 @@ def architecture(config, path="the weights file") -> dict:
         )
     out = {}
     for name, top in ARCH_LIMITS.items():
-        v = config.get(name, 0 if name == "conv_rank" else None)
-        low = 0 if name == "conv_rank" else 1
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not low <= v <= top:
+        low = 0 if name == "conv_rank" else 1  # conv_rank: 0 (full) where a file has none
+        try:
+            v = config.get(name, 0 if name == "conv_rank" else None)
+            out[name] = integer(f"config {name}", v, low=low, high=top)
+        except ValueError as exc:
             raise ValueError(
                 f"{path} is not a spectral-denoiser checkpoint of tensor-cosdi train-denoiser "
-                f"(config {name}={v!r}; expected an integer in [{low}, {top}])"
-            )
-        out[name] = int(v)
+                f"({exc})"
+            ) from None
     return out
 
 
@@ -207,9 +201,7 @@ def factorise(net, conv_rank: int):
     from tensorly.decomposition import partial_tucker
 
     torch = require_torch()
-    if isinstance(conv_rank, bool) or not isinstance(conv_rank, (int, np.integer)) or conv_rank < 1:
-        raise ValueError(f"conv_rank must be a positive integer, got {conv_rank!r}")
-    conv_rank = int(conv_rank)
+    conv_rank = integer("conv_rank", conv_rank, low=1)
     if getattr(net, "conv_rank", 0):
         raise ValueError("the network is already factored (conv_rank > 0)")
     small = _build_net(torch, net.r_max, net.width, net.blocks, conv_rank)

@@ -115,14 +115,11 @@ class TrainConfig:
                 + f", got {z!r}"
             )
         training_scenes(self.hold_out)
-        c = self.conv_rank
-        if isinstance(c, bool) or not isinstance(c, int) or c < 0:
-            raise ValueError(f"conv_rank must be an integer ≥ 0 (0: full), got {c!r}")
+        from ..validate import integer
         from .spectral_net import ARCH_LIMITS
 
         for name, top in ARCH_LIMITS.items():  # a network its own loader would refuse
-            if getattr(self, name) > top:
-                raise ValueError(f"{name} must be at most {top}, got {getattr(self, name)}")
+            integer(name, getattr(self, name), low=0 if name == "conv_rank" else 1, high=top)
         if not isinstance(self.init, str):
             raise ValueError(f"init must be '', 'shipped' or a weights file, got {self.init!r}")
         if not 0 < self.sigma_min < self.sigma_max:

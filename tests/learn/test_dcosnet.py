@@ -460,14 +460,16 @@ def test_a_weights_file_describing_a_bad_network_is_a_one_line_error_at_once(tmp
 
     ckpt = torch.load(default_weights("sd_cassi"), weights_only=True)
     for i, (change, msg) in enumerate((
-        ({"width": 16.5}, "width=16.5"),
-        ({"stages": 10**6}, "stages=1000000"),
-        ({"channels": "28"}, "channels='28'"),
-        ({"shift": "2"}, "shift='2'"),
+        ({"width": 16.5}, "config width must be an integer ≥ 1 and ≤ 1024, got 16.5"),
+        ({"stages": 10**6}, "config stages must be an integer ≥ 1 and ≤ 64"),
+        ({"channels": "28"}, "got '28'"),
+        ({"shift": "2"}, "config shift must be a finite number > 0 and ≤ 1024"),
         ({"prior": "resnet"}, "prior='resnet'"),
-        ({"code": "seeded", "code_shape": [10**6, 10**6], "code_seed": 0}, "code_shape="),
+        ({"code": "seeded", "code_shape": [10**6, 10**6], "code_seed": 0},
+         "code_shape's sides must be an integer ≥ 1 and ≤ 8192"),
         ({"code": "seeded", "code_shape": [64], "code_seed": 0}, "code_shape=[64]"),
-        ({"code": "seeded", "code_shape": [64, 64], "code_seed": -1}, "code_seed=-1"),
+        ({"code": "seeded", "code_shape": [64, 64], "code_seed": -1},
+         "config code_seed must be an integer ≥ 0"),
     )):  # fmt: skip
         path = tmp_path / f"bad{i}.pt"
         torch.save(dict(ckpt, config=dict(ckpt["config"], **change)), path)
@@ -475,7 +477,7 @@ def test_a_weights_file_describing_a_bad_network_is_a_one_line_error_at_once(tmp
             with pytest.raises(ValueError, match="not a D-CoSNet checkpoint") as err:
                 read(path)
             assert msg in str(err.value) and "\n" not in str(err.value)
-    with pytest.raises(ValueError, match="stages must be at most 64"):
+    with pytest.raises(ValueError, match="stages must be an integer ≥ 1 and ≤ 64"):
         DCoSNetConfig(stages=65).check()
 
 

@@ -259,6 +259,29 @@ def subspace(x, r: int, r_max: int):
     return out, u
 
 
+def _eigen_images(xt, r: int, r_max: int, inv_scale: float):
+    """:func:`subspace` of one image's spectra ``xt (C, P)`` (any strides) times ``inv_scale``,
+    without scaling the cube: ``(Y (r_max, P), U (C, min(r, C)))``, the eigen-images ``Uᵀ xt ·
+    inv_scale`` (zero rows beyond ``min(r, C)``, each summing to ≥ 0) written straight into
+    their rows.  The eigenvectors of a scaled cube are its own, so the scale rides on the
+    ``k × C`` factor instead of on two passes over the cube."""
+    torch = require_torch()
+    c, p = xt.shape
+    k = min(int(r), c, int(r_max))
+    gram = torch.zeros(c, c, dtype=torch.float64, device=xt.device)
+    for a in range(0, p, GRAM_BLOCK):
+        block = xt[:, a : a + GRAM_BLOCK]
+        gram += torch.matmul(block, block.T).double()
+    _, vec = torch.linalg.eigh(gram)
+    u = vec.flip(-1)[:, :k]
+    # each eigen-image's sum is the eigenvector against the spectra's sum over the pixels
+    total = torch.matmul(xt, torch.ones(p, 1, dtype=xt.dtype, device=xt.device)).double()
+    u = (u * torch.where(total[:, 0] @ u < 0, -1.0, 1.0).to(u.dtype)).to(xt.dtype)
+    out = torch.zeros(int(r_max), p, dtype=xt.dtype, device=xt.device)
+    torch.matmul(u.T * inv_scale, xt, out=out[:k])
+    return out, u
+
+
 #: :func:`_robust_peak` reads every ``PEAK_STRIDE``-th pixel (all its channels) of an image of at
 #: least 2¹⁵ pixels: 5.7 → 1.0 ms at 256×256×28 on 2 threads, the quantile
 #: of a uniform cube moved by 4e-5 of its value.  The stride is odd and prime, so on an image of
@@ -337,7 +360,7 @@ class SpectralDenoiser:
         float32).  ``"auto"``: bfloat16 on a CPU with native bfloat16
         instructions (:func:`bfloat16_is_fast`), else float32; on CUDA float32.
         ``benchmarks/results/denoiser_speed.md`` (a 2-core AVX512-BF16
-        machine, 256×256×28): one call 0.077 s in bfloat16 against 0.174 s
+        machine, 256×256×28): one call 0.044 s in bfloat16 against 0.073 s
         in float32 on 2 threads, and a denoised real cube loses 0.015 to
         0.022 dB.
         The default is float32: the same results on every machine, and a
@@ -417,12 +440,15 @@ class SpectralDenoiser:
             stacked = np.stack([np.asarray(B.to_numpy(o)) for o in out], axis=-1)
             return B.tensor_like(stacked.reshape(shape), x)
         dev = self._device(x)
+        flips: tuple = ()  # image axes a NumPy view runs backwards along (a flipped view)
         if isinstance(x, torch.Tensor):
             t = x
         else:  # torch takes no negative strides (a flipped view, as the self-ensemble hands
-            # over): a copy then, in the view's own memory order (a C-ordered copy of a
-            # flipped Fortran-ordered cube would transpose it)
+            # over): the view read forwards, and the flip done on the eigen-images instead
+            # (the spectral subspace does not depend on the pixels' order), no copy of the cube
             a = np.asarray(B.to_numpy(x))
+            flips = tuple(ax for ax in (0, 1) if a.strides[ax] < 0)
+            a = np.flip(a, flips) if flips else a
             t = torch.from_numpy(a if all(s >= 0 for s in a.strides) else a.copy(order="K"))
         work_dtype = torch.float32
         t = t.to(device=dev, dtype=work_dtype).reshape(shape[0], shape[1], -1)
@@ -430,40 +456,52 @@ class SpectralDenoiser:
         if scale <= 0 or not np.isfinite(scale):
             return x
         net, net_dtype = self._network(dev)
-        # A Fortran-ordered NumPy cube (the shear kernels' fast layout, which the solvers keep)
-        # is read and returned in that order: its pixels enter the subspace column by column,
-        # and a C-ordered result would slow every later step of the solver that mixes it with
-        # its other iterates (PnP-ADMM at 256×256×28: 10.5 against 2.7 ms per normal solve) or
-        # cost a transposing copy each way (6.7 ms).  The network sees the same images; the
-        # spectral Gram matrix is summed over other blocks of pixels (float rounding).
-        fortran = (
-            not isinstance(x, torch.Tensor)
-            and len(shape) == 3
-            and t.permute(2, 1, 0).is_contiguous()
-            and not t.is_contiguous()
-        )
-        if fortran:  # (bands, columns, rows) in C order: pixels column-major, no copy
-            flat = (t / scale).permute(2, 1, 0).reshape(1, shape[2], -1).transpose(1, 2)
+        # A NumPy cube whose bands are contiguous planes, Fortran-ordered (the shear kernels'
+        # fast layout, which the solvers keep) or band by band in C order (its transpose, as the
+        # self-ensemble hands over), is read and returned in that layout: a C-ordered result
+        # would slow every later step of the solver that mixes it with its other iterates
+        # (PnP-ADMM at 256×256×28: 10.5 against 2.7 ms per normal solve) or cost a transposing
+        # copy each way (6.7 ms).  The network sees the same images; the spectral Gram matrix
+        # is summed over other blocks of pixels (float rounding).
+        layout = "c"
+        if not isinstance(x, torch.Tensor) and len(shape) == 3 and not t.is_contiguous():
+            if t.permute(2, 1, 0).is_contiguous():
+                layout = "f"  # pixels column by column
+            elif t.permute(2, 0, 1).is_contiguous():
+                layout = "bands"  # pixels row by row
+        n_bands = t.shape[-1]
+        if layout == "f":  # the spectra as (bands, pixels), no copy in any layout
+            xt = t.permute(2, 1, 0).reshape(n_bands, -1)
+        elif layout == "bands":
+            xt = t.permute(2, 0, 1).reshape(n_bands, -1)
         else:
-            flat = (t / scale).reshape(1, shape[0] * shape[1], -1)
+            xt = t.reshape(-1, n_bands).T
+        image_dims = tuple(2 + ax for ax in flips)
         with torch.no_grad():
-            y, u = subspace(flat, self.rank, self.r_max)
-            if fortran:
+            y, u = _eigen_images(xt, self.rank, self.r_max, 1.0 / scale)
+            if layout == "f":
                 y = y.reshape(1, self.r_max, shape[1], shape[0]).transpose(2, 3)
             else:
                 y = y.reshape(1, self.r_max, shape[0], shape[1])
+            if flips:  # the images as the caller's view has them
+                y = torch.flip(y, image_dims)
             s = torch.tensor([sigma / scale], dtype=net_dtype, device=dev)
-            clean = y - net(y.to(net_dtype), s).to(work_dtype)
+            clean = y.sub_(net(y.to(net_dtype), s).to(work_dtype))
             k = u.shape[-1]
-            if fortran:  # (bands, columns, rows) in C order is (rows, columns, bands) in F order
-                eig = clean[0, :k].transpose(1, 2).reshape(k, -1)
-                out = torch.matmul(u[0], eig).reshape(shape[::-1]).permute(2, 1, 0)
+            clean = clean[0, :k]
+            if flips:  # back to the order the spectra were read in
+                clean = torch.flip(clean, tuple(d - 1 for d in image_dims))
+            back = u * scale  # (bands, k): the subspace and the scale in one small factor
+            if layout == "f":  # (bands, columns, rows) in C order is (rows, columns, bands) in F
+                eig = clean.transpose(1, 2).reshape(k, -1)
+                out = torch.matmul(back, eig).reshape(shape[::-1]).permute(2, 1, 0)
+            elif layout == "bands":
+                out = torch.matmul(back, clean.reshape(k, -1)).reshape(n_bands, *shape[:2])
+                out = out.permute(1, 2, 0)
             else:
-                out = torch.matmul(
-                    clean[:, :k].reshape(1, k, -1).transpose(1, 2), u.transpose(1, 2)
-                ).reshape(shape)
-            out = out * scale
+                out = torch.matmul(clean.reshape(k, -1).T, back.T).reshape(shape)
         if isinstance(x, torch.Tensor):
             return out.to(device=x.device, dtype=x.dtype)
         a = out.cpu().numpy().astype(np.asarray(x).dtype, copy=False)
-        return B.tensor_like(a, x)
+        a = np.flip(a, flips) if flips else a  # the caller's view, read backwards again
+        return a if isinstance(x, np.ndarray) else B.tensor_like(a, x)

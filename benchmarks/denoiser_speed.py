@@ -152,6 +152,8 @@ def _overhead_table(torch, nets, x, repeats: int) -> list:
     """One call as plug-and-play makes it against the network alone, every thread: per round,
     eight calls through the cycling self-ensemble on a Fortran-ordered cube and eight of the
     network on 12 eigen-images of the cube's size; medians over the rounds of the mean call."""
+    import copy
+
     from tensor_cosdi.solvers.denoisers import self_ensemble
 
     cube = np.asfortranarray(x)
@@ -166,7 +168,9 @@ def _overhead_table(torch, nets, x, repeats: int) -> list:
     ]
     for p, den in nets.items():
         cycled = self_ensemble(den, 1, cycle=True)
-        net, dtype = den._network(torch.device("cpu"))
+        dtype = torch.bfloat16 if p == "bfloat16" else torch.float32
+        # the network as the denoiser runs it on a CPU: channels-last
+        net = copy.deepcopy(den.net).to(dtype).to(memory_format=torch.channels_last)
         y = torch.rand(1, den.r_max, *cube.shape[:2], generator=torch.Generator().manual_seed(0))
         y, s = y.to(dtype), torch.tensor([0.05], dtype=dtype)
 

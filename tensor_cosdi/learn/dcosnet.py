@@ -339,7 +339,7 @@ def _spectral_prior(torch, stages: int, r_max: int = 12, width: int = 64, blocks
     normalised cube), applied as :class:`~tensor_cosdi.learn.spectral_net.SpectralDenoiser`
     does (robust-peak scale, ``r_max`` leading spectral eigen-images, the complement dropped)
     and kept non-negative.  The eigenvectors are held constant under differentiation."""
-    from .spectral_net import _build_net, _robust_peak
+    from .spectral_net import _build_net, _robust_peak, _spectral_basis
 
     nn = torch.nn
 
@@ -356,12 +356,8 @@ def _spectral_prior(torch, stages: int, r_max: int = 12, width: int = 64, blocks
             flat = x.reshape(b, c, h * w).transpose(1, 2)  # (B, P, C)
             scale = torch.stack([torch.tensor(_robust_peak(f)) for f in flat]).to(x)
             flat = flat / _per_sample(scale.clamp_min(1e-12), flat)
-            with torch.no_grad():
-                gram = torch.matmul(flat.transpose(1, 2).double(), flat.double())
-                u = torch.linalg.eigh(gram)[1].flip(-1)[..., : min(r_max, c)].to(x.dtype)
-            y = torch.matmul(flat, u)
-            sign = torch.where(y.sum(dim=1, keepdim=True) < 0, -1.0, 1.0).to(x.dtype)
-            u, y = u * sign, (y * sign).transpose(1, 2)  # y: (B, r, P)
+            u = _spectral_basis(flat, min(r_max, c))  # held constant
+            y = torch.matmul(flat, u).transpose(1, 2)  # (B, r, P)
             r = y.shape[1]
             img = torch.zeros(b, r_max, h * w, dtype=x.dtype, device=x.device)
             img[:, :r] = y

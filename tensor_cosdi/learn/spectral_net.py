@@ -230,53 +230,55 @@ def factorise(net, conv_rank: int):
     return small
 
 
-#: Pixels per block of :func:`subspace`'s Gram matrix.
+#: Pixels per block of ``_spectral_basis``'s Gram matrix.
 GRAM_BLOCK = 4096
 
 
 def subspace(x, r: int, r_max: int):
     """``(Y, U)`` for a torch batch ``x (batch, P, C)``: eigen-images ``Y (batch, r_max, P)``
-    (zero rows beyond ``min(r, C)``) and orthonormal ``U (batch, C, min(r, C))``.
-
-    Signs: each eigen-image sums to ≥ 0.  The Gram matrix is summed in float64 over blocks of
-    :data:`GRAM_BLOCK` pixels, each block's product in the input's precision: 7× faster than a
-    float64 product at 256×256×28 (1.8 against 13.6 ms on 2 threads) and within 6e-8 of it
-    (relative to its largest entry) on a real cube.
-    """
+    (zero rows beyond ``min(r, C)``) and orthonormal ``U (batch, C, min(r, C))``
+    (``_spectral_basis``; each eigen-image sums to ≥ 0)."""
     torch = require_torch()
     k = min(int(r), x.shape[-1], int(r_max))
-    gram = torch.zeros(x.shape[0], x.shape[-1], x.shape[-1], dtype=torch.float64, device=x.device)
+    u = _spectral_basis(x, k)
+    out = torch.zeros(x.shape[0], int(r_max), x.shape[1], dtype=x.dtype, device=x.device)
+    out[:, :k] = torch.matmul(u.transpose(1, 2), x.transpose(1, 2))
+    return out, u
+
+
+def _spectral_basis(x, k: int):
+    """The ``k`` leading eigenvectors ``U (batch, C, k)`` of the spectral Gram matrix of a torch
+    batch ``x (batch, P, C)`` (any strides), in ``x``'s dtype, each signed so that its
+    eigen-image ``x U`` sums to ≥ 0.  No gradient flows through it.
+
+    The Gram matrix is summed in float64 over blocks of :data:`GRAM_BLOCK` pixels, each block's
+    product in the input's precision: 7× faster than a float64 product at 256×256×28 (1.8
+    against 13.6 ms on 2 threads) and within 6e-8 of it (relative to its largest entry) on a
+    real cube.
+    """
+    torch = require_torch()
+    x = x.detach()
+    c = x.shape[-1]
+    gram = torch.zeros(x.shape[0], c, c, dtype=torch.float64, device=x.device)
     for a in range(0, x.shape[1], GRAM_BLOCK):
         block = x[:, a : a + GRAM_BLOCK]
         gram += torch.matmul(block.transpose(1, 2), block).double()
-    _, vec = torch.linalg.eigh(gram)
-    u = vec.flip(-1)[..., :k].to(x.dtype)
-    y = torch.matmul(x, u)  # (batch, P, k)
-    sign = torch.where(y.sum(dim=1, keepdim=True) < 0, -1.0, 1.0).to(x.dtype)
-    u, y = u * sign, y * sign
-    out = torch.zeros(x.shape[0], int(r_max), x.shape[1], dtype=x.dtype, device=x.device)
-    out[:, :k] = y.transpose(1, 2)
-    return out, u
+    u = torch.linalg.eigh(gram)[1].flip(-1)[..., : int(k)]
+    # each eigen-image's sum is the eigenvector against the spectra's sum over the pixels
+    total = torch.matmul(torch.ones(1, x.shape[1], dtype=x.dtype, device=x.device), x)
+    sign = torch.where(torch.matmul(total.double(), u) < 0, -1.0, 1.0)  # (batch, 1, k)
+    return (u * sign).to(x.dtype)
 
 
 def _eigen_images(xt, r: int, r_max: int, inv_scale: float):
     """:func:`subspace` of one image's spectra ``xt (C, P)`` (any strides) times ``inv_scale``,
     without scaling the cube: ``(Y (r_max, P), U (C, min(r, C)))``, the eigen-images ``Uᵀ xt ·
-    inv_scale`` (zero rows beyond ``min(r, C)``, each summing to ≥ 0) written straight into
-    their rows.  The eigenvectors of a scaled cube are its own, so the scale rides on the
-    ``k × C`` factor instead of on two passes over the cube."""
+    inv_scale`` written straight into their rows.  The eigenvectors of a scaled cube are its
+    own, so the scale rides on the ``k × C`` factor instead of on two passes over the cube."""
     torch = require_torch()
     c, p = xt.shape
     k = min(int(r), c, int(r_max))
-    gram = torch.zeros(c, c, dtype=torch.float64, device=xt.device)
-    for a in range(0, p, GRAM_BLOCK):
-        block = xt[:, a : a + GRAM_BLOCK]
-        gram += torch.matmul(block, block.T).double()
-    _, vec = torch.linalg.eigh(gram)
-    u = vec.flip(-1)[:, :k]
-    # each eigen-image's sum is the eigenvector against the spectra's sum over the pixels
-    total = torch.matmul(xt, torch.ones(p, 1, dtype=xt.dtype, device=xt.device)).double()
-    u = (u * torch.where(total[:, 0] @ u < 0, -1.0, 1.0).to(u.dtype)).to(xt.dtype)
+    u = _spectral_basis(xt.T[None], k)[0]
     out = torch.zeros(int(r_max), p, dtype=xt.dtype, device=xt.device)
     torch.matmul(u.T * inv_scale, xt, out=out[:k])
     return out, u

@@ -117,6 +117,7 @@ def admm(
     progress: bool = False,
     desc: str = "ADMM",
     objective: bool = True,
+    relax: float = 1.0,
 ):
     """ADMM for ``min ½‖A x − g‖² + R(x)`` with the split ``z = x``.  Returns ``(z, history,
     converged)``.
@@ -138,7 +139,16 @@ def admm(
     objective : bool
         Record the prior term of the objective (``False``: NaN, for internal
         stages whose history is discarded; TV costs a pass over the cube).
+    relax : float
+        Over-relaxation ``α`` in (0, 2): the z- and u-steps take
+        ``x̂ = α x + (1 − α) z`` in place of ``x`` (Boyd et al. 2011, §3.4.3);
+        1 is plain ADMM.  Above 1 it moves further along each x-step at no
+        extra cost per iteration (one more cube held).
     """
+    numeric = isinstance(relax, (int, float, np.floating)) and not isinstance(relax, bool)
+    if not (numeric and 0 < relax < 2):
+        raise ValueError(f"relax must be a number in (0, 2), got {relax!r}")
+    relax = float(relax)
     r = rho * sensing_gain(op, g)
     solve = normal_solve if normal_solve is not None else (lambda b, x0: op.solve_normal(b, r))
     atg = op.apply_adjoint(g)
@@ -159,18 +169,22 @@ def admm(
             b += atg
         else:
             b = atg + r * (z - u)
+        z_last = z if relax != 1.0 else None
         z = None  # the last z is not needed any more (its memory is reused)
         x_new = solve(b, x)
         del b
         change = relative_change(x_new, x)
         x = x_new
+        xr = x if z_last is None else relax * x + (1.0 - relax) * z_last
+        del z_last
         if inplace:  # the prior may keep or return its input: it gets a fresh array
-            z = prior.prox(x + u)
-            u += x
+            z = prior.prox(xr + u)
+            u += xr
             u -= z
         else:
-            z = prior.prox(x + u)
-            u = u + (x - z)
+            z = prior.prox(xr + u)
+            u = u + (xr - z)
+        del xr
         if loop.record(
             it,
             residual_norm=float(tl.norm(op.apply(z) - g)),

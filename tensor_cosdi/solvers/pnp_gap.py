@@ -153,16 +153,17 @@ RHO = 0.15
 #: against the estimated SNR (keys are the estimator's readings, as for :data:`ADMM_ITER`;
 #: log-linear between them, rounded to 0.01).  8 tuning scenes as they are, magnified 4× and
 #: lit by CIE FL2, 4 folds, 30 dB, TSA (``benchmarks/results/cv_pnp_gap_relax.md``): 1 / 1.9 →
-#: 33.34 / 33.47 dB, every fold 1.9 (the FL2 views +0.33 dB on average, the others a wash:
-#: −0.49 to +1.27 dB a view).  At 20 dB plain ADMM stays (not cross-validated here;
+#: 33.34 / 33.47 dB, every fold 1.9 (the FL2 views +0.32 dB on average, −0.48 to +1.26 a
+#: view; the others +0.03, −0.42 to +0.36).  At 20 dB plain ADMM stays (not cross-validated here;
 #: :func:`pnp_fast`'s 20-dB run chose it, :data:`FAST_RELAX`).
 RELAX = {28.5: 1.9, 19.5: 1.0}
 #: :func:`pnp_fast`'s ``relax="auto"``, as :data:`RELAX`.  Its 46 iterations stop short of
 #: the fixed point at 30 dB, most under a lamp with sharp lines, and over-relaxation moves
 #: further along each x-step at no cost.  8 tuning scenes as they are, magnified 4× and lit by
 #: CIE FL2, 4 folds, TSA (``benchmarks/results/cv_pnp_fast_relax.md``): 1 / 1.5 / 1.8 / 1.9 →
-#: 32.43 / 32.75 / 32.88 / 32.97 dB at 30 dB (every fold 1.9; FL2 views +0.05 to +1.59 dB a
-#: view), 30.33 / 30.07 / 29.94 / 29.93 at 20 dB (every fold 1).
+#: 32.43 / 32.75 / 32.88 / 32.97 dB at 30 dB (every fold 1.9; 1.9 against 1: the FL2 views
+#: +0.92 dB on average, +0.07 to +1.59 a view, the others +0.34, −0.21 to +0.70),
+#: 30.33 / 30.07 / 29.94 / 29.93 at 20 dB (every fold 1).
 FAST_RELAX = {28.5: 1.9, 19.5: 1.0}
 #: ADMM 80 → 160 iterations of one call, cross-validated with cycling
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,
@@ -390,8 +391,8 @@ def pnp_gap(
         ADMM penalty relative to the sensing gain (``"auto"``: :data:`RHO`).
     relax : float in (0, 2) or "auto"
         ADMM's over-relaxation ``α`` (:func:`~tensor_cosdi.solvers.engine.admm`;
-        ``"auto"``: :data:`RELAX` against the estimated SNR); 1 is plain ADMM.
-        Unused by GAP.
+        ``"auto"``: :data:`RELAX` against the estimated SNR, 1 on a system whose
+        ``admm_relax`` is false, such as C3SLFI); 1 is plain ADMM.  Unused by GAP.
     nonneg : bool
         Project the denoiser's output onto ``x ≥ 0`` (default; turn off for
         signed cubes).
@@ -484,7 +485,8 @@ def pnp_gap(
     elif not (isinstance(rho, str) and rho == "auto"):
         check_positive("rho", rho)  # validated, unused by GAP
     if relax == "auto":
-        relax = round(snr_schedule(snr, RELAX), 2) if admm else 1.0
+        over = admm and getattr(system, "admm_relax", True)
+        relax = round(snr_schedule(snr, RELAX), 2) if over else 1.0
     if isinstance(max_iter, str):
         if max_iter != "auto":
             raise ValueError(f"max_iter must be 'auto' or an integer ≥ 1, got {max_iter!r}")
@@ -739,7 +741,8 @@ def pnp_fast(
         ``cv_pnp_fast_first_level_30db.md``).
     relax
         As in :func:`pnp_gap`; ``"auto"`` (default): :data:`FAST_RELAX` against the
-        estimated SNR (1.9 at 30 dB, 1 at 20 dB).
+        estimated SNR (1.9 at 30 dB, 1 at 20 dB; 1 where the system's ``admm_relax`` is
+        false).
     rho, nonneg, cycle, sigma_scale, progress
         As in :func:`pnp_gap`.  Every other option of :func:`pnp_gap` keeps its
         default here (call ``"pnp_gap"`` to change it).
@@ -808,7 +811,9 @@ def fast_settings(system, measurement, **options) -> dict:
     if auto:
         budget = fast_budget(system, measurement, out["warm"])
         out.update({k: budget[k] for k in auto})
-    if _check_relax(out["relax"]) == "auto":
+    if _check_relax(out["relax"]) == "auto" and not getattr(system, "admm_relax", True):
+        out["relax"] = 1.0  # plain ADMM where over-relaxation was measured to cost PSNR
+    elif out["relax"] == "auto":
         from .snr import estimate_snr
 
         out["relax"] = round(snr_schedule(estimate_snr(system, measurement).snr_db, FAST_RELAX), 2)

@@ -114,6 +114,11 @@ class System(SystemRoles):
     #: along a sheared diagonal, which the subspace cannot hold, so the noise stays in the
     #: residual (see :mod:`tensor_cosdi.solvers.snr`).
     snr_fit: str = "gap_tv"
+    #: Whether the plug-and-play methods' ``relax="auto"`` over-relaxes their ADMM
+    #: (:data:`~tensor_cosdi.solvers.pnp_gap.RELAX`, chosen on SD-CASSI): a system where it was
+    #: measured to cost PSNR sets ``False`` and keeps plain ADMM
+    #: (``benchmarks/results/relax_systems.md``).
+    admm_relax: bool = True
     #: The TV weight of the ``"gap_tv"`` fit (the measurement at a peak of 1).  A system whose
     #: pixels each see only a few codes of one spectrum (C3SLFI) sets less: the fit cannot
     #: recover the spectral detail the codes mix, and the heavier weight's spectral error,

@@ -89,6 +89,10 @@ class C3SLFI(System):
     ((8, 6, 5), (8, 6, 2), (4, 3, 5, 2, 2))
     """
 
+    #: Over-relaxed ADMM cost PSNR here on every scene checked (30 dB, 64×64×16:
+    #: ``benchmarks/results/relax_c3slfi.md``), so ``relax="auto"`` keeps plain ADMM.
+    admm_relax = False
+
     def __init__(
         self,
         codes,

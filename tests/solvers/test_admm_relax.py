@@ -83,3 +83,27 @@ def test_the_plug_and_play_methods_hand_their_relaxation_to_admm(monkeypatch):
         with pytest.raises(ValueError, match="relax must be 'auto' or a number in"):
             fast_settings(p.system, p.measurement, relax=bad)
 
+
+
+def test_a_system_that_opts_out_keeps_plain_admm(monkeypatch):
+    """C3SLFI (``admm_relax = False``: over-relaxation cost PSNR there) takes ``relax=1`` under
+    ``"auto"`` in both methods; a value given is still used."""
+    from tensor_cosdi.solvers.pnp_gap import fast_settings
+
+    seen = []
+    real = engine.admm
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("relax"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(engine, "admm", spy)
+    p = tc.studies.make_problem("c3slfi", "colorchecker", shape=(16, 16), n_bands=4, snr_db=25)
+    assert p.system.admm_relax is False
+    assert tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4).admm_relax is True
+    assert fast_settings(p.system, p.measurement)["relax"] == 1.0
+    assert fast_settings(p.system, p.measurement, relax=1.7)["relax"] == 1.7
+    kw = {"denoiser": "tv", "warm": "none", "max_iter": 2, "splitting": "admm"}
+    tc.reconstruct(p.system, p.measurement, "pnp_gap", **kw)
+    tc.reconstruct(p.system, p.measurement, "pnp_gap", relax=1.7, **kw)
+    assert seen == [1.0, 1.7]

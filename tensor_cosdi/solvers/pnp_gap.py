@@ -151,16 +151,16 @@ SPLITTINGS = ("auto", "gap", "admm")
 RHO = 0.15
 #: ``relax="auto"``: ADMM's over-relaxation ``α`` (:func:`~tensor_cosdi.solvers.engine.admm`)
 #: against the estimated SNR (keys are the estimator's readings, as for :data:`ADMM_ITER`;
-#: log-linear between them, rounded to 0.01).  8 tuning scenes as they are, magnified 4× and
-#: lit by CIE FL2, 4 folds, 30 dB, TSA (``benchmarks/results/cv_pnp_gap_relax.md``): 1 / 1.9 →
-#: 33.34 / 33.47 dB, every fold 1.9 (the FL2 views +0.32 dB on average, −0.48 to +1.26 a
-#: view; the others +0.03, −0.42 to +0.36).  At 20 dB plain ADMM stays (not cross-validated here;
-#: :func:`pnp_fast`'s 20-dB run chose it, :data:`FAST_RELAX`).
-RELAX = {28.5: 1.9, 19.5: 1.0}
-#: :func:`pnp_fast`'s ``relax="auto"``, as :data:`RELAX`.  Its 46 iterations stop short of
-#: the fixed point at 30 dB, most under a lamp with sharp lines, and over-relaxation moves
-#: further along each x-step at no cost.  8 tuning scenes as they are, magnified 4× and lit by
-#: CIE FL2, 4 folds, TSA (``benchmarks/results/cv_pnp_fast_relax.md``): 1 / 1.5 / 1.8 / 1.9 →
+#: log-linear between them, rounded to 0.01).  For :func:`pnp_gap` plain ADMM: 8 tuning
+#: scenes as they are, magnified 4× and lit by CIE FL2, 4 folds, 30 dB
+#: (``benchmarks/results/cv_pnp_gap_relax.md``): 1 / 1.9 → 33.34 / 33.47 dB through the TSA
+#: mask (every fold 1.9), 36.47 / 36.39 through a random code (every fold 1); one setting for
+#: both codes: 1, three folds of four.
+RELAX = {28.5: 1.0, 19.5: 1.0}
+#: :func:`pnp_fast`'s ``relax="auto"``, as :data:`RELAX`: over-relaxation moves further along
+#: each x-step at no cost per iteration.  8 tuning scenes as they are, magnified 4× and lit by
+#: CIE FL2, 4 folds, TSA mask only (``benchmarks/results/cv_pnp_fast_relax.md``):
+#: 1 / 1.5 / 1.8 / 1.9 →
 #: 32.43 / 32.75 / 32.88 / 32.97 dB at 30 dB (every fold 1.9; 1.9 against 1: the FL2 views
 #: +0.92 dB on average, +0.07 to +1.59 a view, the others +0.34, −0.21 to +0.70),
 #: 30.33 / 30.07 / 29.94 / 29.93 at 20 dB (every fold 1).

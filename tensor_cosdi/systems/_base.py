@@ -115,9 +115,10 @@ class System(SystemRoles):
     #: residual (see :mod:`tensor_cosdi.solvers.snr`).
     snr_fit: str = "gap_tv"
     #: Whether the plug-and-play methods' ``relax="auto"`` over-relaxes their ADMM
-    #: (:data:`~tensor_cosdi.solvers.pnp_gap.RELAX`, chosen on SD-CASSI): a system where it was
+    #: (:data:`~tensor_cosdi.solvers.pnp_gap.FAST_RELAX`,
+    #: :data:`~tensor_cosdi.solvers.pnp_gap.RELAX`; chosen on SD-CASSI): a system where it was
     #: measured to cost PSNR sets ``False`` and keeps plain ADMM
-    #: (``benchmarks/results/relax_systems.md``).
+    #: (``benchmarks/results/relax_systems.md``, ``relax_c3slfi.md``).
     admm_relax: bool = True
     #: The TV weight of the ``"gap_tv"`` fit (the measurement at a peak of 1).  A system whose
     #: pixels each see only a few codes of one spectrum (C3SLFI) sets less: the fit cannot

@@ -43,6 +43,11 @@ from tensor_cosdi.solvers.snr import clear_cache as clear_snr_cache
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 MASKS = ("tsa", "random")
+#: Every registered imager, in the order the per-imager benchmarks list them.
+IMAGERS = (
+    "sd_cassi", "dd_cassi", "dual_camera_cassi", "cassi_vsi", "lytro_cassi", "c3slfi",
+    "cassdi_dfa", "cs2li", "mu_cosdi",
+)  # fmt: skip
 RANDOM_MASK_SEED = 2024
 
 

@@ -29,15 +29,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import RESULTS, write_results  # noqa: E402
+from _protocol import IMAGERS, RESULTS, write_results  # noqa: E402
 
 import tensor_cosdi as tc  # noqa: E402
 from tensor_cosdi.solvers.snr import clear_cache, estimate_snr  # noqa: E402
-
-SYSTEMS = (
-    "sd_cassi", "dd_cassi", "dual_camera_cassi", "cassi_vsi", "lytro_cassi", "c3slfi",
-    "cassdi_dfa", "cs2li", "mu_cosdi",
-)  # fmt: skip
 
 
 def budgets():
@@ -76,7 +71,7 @@ def main(argv=None):
         + f" | seconds, first stage alone ÷ {module.FAST_WARM_ITER} ADMM | PSNR difference dB |",
         "|---|---|---|---|" + "---|" * len(names) + "---|---|",
     ]
-    for name in SYSTEMS:
+    for name in IMAGERS:
         p = tc.studies.make_problem(name, "colorchecker", snr_db=None)
         snr = estimate_snr(p.system, p.measurement).snr_db
         chosen = module.fast_budget(p.system, p.measurement)

@@ -24,14 +24,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _protocol import RESULTS, positive_numbers, write_results  # noqa: E402
+from _protocol import IMAGERS, RESULTS, positive_numbers, write_results  # noqa: E402
 
 import tensor_cosdi as tc  # noqa: E402
 
-SYSTEMS = (
-    "sd_cassi", "dd_cassi", "dual_camera_cassi", "cassi_vsi", "lytro_cassi", "c3slfi",
-    "cassdi_dfa", "cs2li", "mu_cosdi",
-)  # fmt: skip
 METHODS = ("pnp_fast", "pnp_gap")
 #: A difference below −LOSS_DB is named as a loss in the file's last line.
 LOSS_DB = 0.3
@@ -42,7 +38,7 @@ def main(argv=None):
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--relax", default="1.0,1.9")
     ap.add_argument("--snr", type=float, default=30.0)
-    ap.add_argument("--systems", default=",".join(SYSTEMS))
+    ap.add_argument("--systems", default=",".join(IMAGERS))
     ap.add_argument("--scenes", default="colorchecker")
     ap.add_argument("--name", default="relax_systems")
     args = ap.parse_args(argv)
@@ -51,9 +47,9 @@ def main(argv=None):
             f"--name: expected a file name of letters, digits, _ . -, got {args.name!r}"
         )
     systems = [m for m in args.systems.split(",") if m]
-    unknown = sorted(set(systems) - set(SYSTEMS))
+    unknown = sorted(set(systems) - set(IMAGERS))
     if unknown or not systems:
-        raise SystemExit(f"--systems: expected some of {','.join(SYSTEMS)}, got {args.systems!r}")
+        raise SystemExit(f"--systems: expected some of {','.join(IMAGERS)}, got {args.systems!r}")
     scenes = [m for m in args.scenes.split(",") if m]
     if not scenes:
         raise SystemExit(f"--scenes: expected scene names, comma-separated, got {args.scenes!r}")

@@ -100,6 +100,18 @@ class Loop:
         return self.converged
 
 
+def check_relax(relax, *, auto: bool = False):
+    """ADMM's over-relaxation as a float in (0, 2), or ``"auto"`` where ``auto`` allows it;
+    anything else is a one-line ``ValueError``."""
+    if auto and isinstance(relax, str) and relax == "auto":
+        return relax
+    numeric = isinstance(relax, (int, float, np.floating)) and not isinstance(relax, bool)
+    if not (numeric and 0 < relax < 2):
+        what = "'auto' or a number" if auto else "a number"
+        raise ValueError(f"relax must be {what} in (0, 2), got {relax!r}")
+    return float(relax)
+
+
 def _gnorm(g) -> float:
     return max(float(tl.norm(g)), np.finfo(float).tiny)
 
@@ -145,10 +157,7 @@ def admm(
         1 is plain ADMM.  Above 1 it moves further along each x-step at no
         extra cost per iteration (one more cube held).
     """
-    numeric = isinstance(relax, (int, float, np.floating)) and not isinstance(relax, bool)
-    if not (numeric and 0 < relax < 2):
-        raise ValueError(f"relax must be a number in (0, 2), got {relax!r}")
-    relax = float(relax)
+    relax = check_relax(relax)
     r = rho * sensing_gain(op, g)
     solve = normal_solve if normal_solve is not None else (lambda b, x0: op.solve_normal(b, r))
     atg = op.apply_adjoint(g)

@@ -466,7 +466,7 @@ def pnp_gap(
         raise ValueError(f"nonneg must be True or False, got {nonneg!r}")
     chosen = accelerate != "auto"
     auto_admm_iter = splitting == "admm" and isinstance(max_iter, str)
-    relax = _check_relax(relax)
+    relax = engine.check_relax(relax, auto=True)
     need_snr = sigma_end == "auto" or auto_admm_iter or (splitting == "admm" and relax == "auto")
     accelerate, eps, snr = gap_settings(system, measurement, accelerate, eps, need_snr=need_snr)
     if splitting == "auto":
@@ -485,8 +485,7 @@ def pnp_gap(
     elif not (isinstance(rho, str) and rho == "auto"):
         check_positive("rho", rho)  # validated, unused by GAP
     if relax == "auto":
-        over = admm and getattr(system, "admm_relax", True)
-        relax = round(snr_schedule(snr, RELAX), 2) if over else 1.0
+        relax = _auto_relax(system, snr, RELAX) if admm else 1.0
     if isinstance(max_iter, str):
         if max_iter != "auto":
             raise ValueError(f"max_iter must be 'auto' or an integer ≥ 1, got {max_iter!r}")
@@ -620,17 +619,12 @@ def warm_started_gap(
     return x, _joined(hist, h2), conv
 
 
-def _check_relax(relax):
-    """``"auto"`` or a number in (0, 2) (as a float)."""
-    if isinstance(relax, str):
-        if relax != "auto":
-            raise ValueError(f"relax must be 'auto' or a number in (0, 2), got {relax!r}")
-        return relax
-    if isinstance(relax, bool) or not (
-        isinstance(relax, (int, float, np.floating)) and 0 < relax < 2
-    ):
-        raise ValueError(f"relax must be 'auto' or a number in (0, 2), got {relax!r}")
-    return float(relax)
+def _auto_relax(system, snr_db: float, table: dict) -> float:
+    """``relax="auto"``: ``table`` against the estimated SNR, rounded to 0.01; plain ADMM (1) on
+    a system whose ``admm_relax`` is false."""
+    if not getattr(system, "admm_relax", True):
+        return 1.0
+    return round(snr_schedule(snr_db, table), 2)
 
 
 def _check_warm_iter(warm_iter, warm):
@@ -811,12 +805,11 @@ def fast_settings(system, measurement, **options) -> dict:
     if auto:
         budget = fast_budget(system, measurement, out["warm"])
         out.update({k: budget[k] for k in auto})
-    if _check_relax(out["relax"]) == "auto" and not getattr(system, "admm_relax", True):
-        out["relax"] = 1.0  # plain ADMM where over-relaxation was measured to cost PSNR
-    elif out["relax"] == "auto":
+    if engine.check_relax(out["relax"], auto=True) == "auto":
         from .snr import estimate_snr
 
-        out["relax"] = round(snr_schedule(estimate_snr(system, measurement).snr_db, FAST_RELAX), 2)
+        snr = estimate_snr(system, measurement).snr_db  # cached: pnp_gap reads it too
+        out["relax"] = _auto_relax(system, snr, FAST_RELAX)
     return out
 
 

@@ -49,21 +49,30 @@ def test_admm_refuses_a_relaxation_outside_0_2(problem, bad):
         engine.admm(op, g, Ridge(0.05), rho=0.5, max_iter=2, relax=bad)
 
 
-def test_the_plug_and_play_methods_hand_their_relaxation_to_admm(monkeypatch):
-    from tensor_cosdi.solvers.pnp_gap import FAST_RELAX, RELAX
-
-    seen = []
-    real = engine.admm
+@pytest.fixture
+def seen(monkeypatch):
+    """The ``relax`` of every ``engine.admm`` call, in order."""
+    calls, real = [], engine.admm
 
     def spy(*args, **kwargs):
-        seen.append(kwargs.get("relax"))
+        calls.append(kwargs.get("relax"))
         return real(*args, **kwargs)
 
     monkeypatch.setattr(engine, "admm", spy)
+    return calls
+
+
+#: A two-iteration PnP-ADMM with the TV denoiser from the least-norm start.
+QUICK_ADMM = {"denoiser": "tv", "warm": "none", "max_iter": 2, "splitting": "admm"}
+
+
+def test_the_plug_and_play_methods_hand_their_relaxation_to_admm(seen):
+    from tensor_cosdi.solvers.pnp_gap import FAST_RELAX, RELAX
+
     p = tc.studies.make_problem(
         "sd_cassi", "colorchecker", shape=(24, 24), n_bands=4, snr_db=25, rng=0
     )
-    kw = {"denoiser": "tv", "warm": "none", "max_iter": 2, "splitting": "admm"}
+    kw = QUICK_ADMM
     tc.reconstruct(p.system, p.measurement, "pnp_gap", **kw)
     tc.reconstruct(p.system, p.measurement, "pnp_gap", relax=1.3, **kw)
     from tensor_cosdi.noise import snr_schedule
@@ -84,26 +93,17 @@ def test_the_plug_and_play_methods_hand_their_relaxation_to_admm(monkeypatch):
             fast_settings(p.system, p.measurement, relax=bad)
 
 
-
-def test_a_system_that_opts_out_keeps_plain_admm(monkeypatch):
+def test_a_system_that_opts_out_keeps_plain_admm(seen):
     """C3SLFI (``admm_relax = False``: over-relaxation cost PSNR there) takes ``relax=1`` under
     ``"auto"`` in both methods; a value given is still used."""
     from tensor_cosdi.solvers.pnp_gap import fast_settings
 
-    seen = []
-    real = engine.admm
-
-    def spy(*args, **kwargs):
-        seen.append(kwargs.get("relax"))
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(engine, "admm", spy)
     p = tc.studies.make_problem("c3slfi", "colorchecker", shape=(16, 16), n_bands=4, snr_db=25)
     assert p.system.admm_relax is False
     assert tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4).admm_relax is True
     assert fast_settings(p.system, p.measurement)["relax"] == 1.0
     assert fast_settings(p.system, p.measurement, relax=1.7)["relax"] == 1.7
-    kw = {"denoiser": "tv", "warm": "none", "max_iter": 2, "splitting": "admm"}
+    kw = QUICK_ADMM
     tc.reconstruct(p.system, p.measurement, "pnp_gap", **kw)
     tc.reconstruct(p.system, p.measurement, "pnp_gap", relax=1.7, **kw)
     assert seen == [1.0, 1.7]

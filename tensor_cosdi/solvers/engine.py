@@ -45,7 +45,9 @@ from ..operators import sensing_gain
 from ..validate import integer
 from ._base import History, relative_change
 
-__all__ = ["Loop", "admm", "gap", "fista", "twist", "least_norm", "lipschitz", "check_int"]
+__all__ = [
+    "Loop", "admm", "gap", "fista", "twist", "least_norm", "lipschitz", "check_int", "check_relax",
+]  # fmt: skip
 
 
 def check_int(name, value, low):

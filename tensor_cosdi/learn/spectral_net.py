@@ -48,6 +48,8 @@ __all__ = [
     "default_weights",
     "PRECISIONS",
     "bfloat16_is_fast",
+    "network_device",
+    "network_precision",
 ]
 
 #: ``SpectralDenoiser(precision=…)``: the network's arithmetic.  ``"auto"`` is bfloat16 on a CPU
@@ -337,6 +339,31 @@ def bfloat16_is_fast() -> bool:
         return False
 
 
+def network_device(x=None, device=None):
+    """The ``torch.device`` the denoiser runs on for the input ``x``: ``device`` where given,
+    else a torch tensor's own device, else CUDA when available, else the CPU."""
+    torch = require_torch()
+    if device is not None:
+        return torch.device(device)
+    if isinstance(x, torch.Tensor):
+        return x.device
+    return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+
+def network_precision(precision: str, device) -> str:
+    """The arithmetic (``"bfloat16"`` or ``"float32"``) the network runs in on ``device`` (a
+    ``torch.device`` or its name) for ``SpectralDenoiser(precision=precision)``: ``"auto"`` is
+    bfloat16 on a CPU with native bfloat16 instructions (:func:`bfloat16_is_fast`), float32
+    elsewhere."""
+    if precision not in PRECISIONS:
+        raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
+    if precision != "auto":
+        return precision
+    torch = require_torch()
+    cpu = torch.device(device).type == "cpu"
+    return "bfloat16" if cpu and bfloat16_is_fast() else "float32"
+
+
 class SpectralDenoiser:
     """The learned denoiser as a plug-in ``denoise(x, sigma) -> x``.
 
@@ -408,10 +435,7 @@ class SpectralDenoiser:
     def _network(self, dev):
         """``(net, dtype)`` the eigen-images go through on ``dev``."""
         torch = require_torch()
-        half = self.precision == "bfloat16" or (
-            self.precision == "auto" and dev.type == "cpu" and bfloat16_is_fast()
-        )
-        if not half:
+        if network_precision(self.precision, dev) == "float32":
             return _fast_layout(torch, self.net.to(dev)), torch.float32
         if self._half is None:
             import copy
@@ -420,12 +444,7 @@ class SpectralDenoiser:
         return _fast_layout(torch, self._half.to(dev)), torch.bfloat16
 
     def _device(self, x):
-        torch = require_torch()
-        if self.device is not None:
-            return torch.device(self.device)
-        if isinstance(x, torch.Tensor):
-            return x.device
-        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+        return network_device(x, self.device)
 
     def __call__(self, x, sigma):
         torch = require_torch()

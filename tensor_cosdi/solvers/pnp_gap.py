@@ -40,7 +40,7 @@ from .denoisers import resolve, self_ensemble, spectral_net
 from .panchromatic import PAN_SPECTRA
 from .priors import LEVEL_SCALES, Denoiser
 
-__all__ = ["pnp_gap", "pnp_fast", "fast_settings", "fast_budget"]
+__all__ = ["pnp_gap", "pnp_fast", "fast_settings", "fast_budget", "float32_on_cpu"]
 
 WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
 #: ``warm="gap_tv"`` with ``warm_iter="auto"``: GAP-TV iterations of the start.
@@ -97,6 +97,28 @@ FAST_ITER = 46
 FAST_WARM_ITER_CLEAN = 0
 FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04
+#: :func:`fast_budget` on noisy data where the network runs in float32 on a CPU
+#: (:func:`float32_on_cpu`): a denoiser call takes about twice as long as in bfloat16 there, and
+#: the budgets above took 7-8 s a cube on 2 cores (``benchmarks/results/pnp_fast_no_bf16.md``).
+#: Iterations and the start's ADMM iterations against the estimated SNR (log-linear, rounded),
+#: cross-validated on such a CPU among the candidates whose median time a cube, timed as a
+#: user's single call, fits the 5-s budget: 8 tuning scenes, 4 folds, TSA mask and a random
+#: code (``benchmarks/results/cv_pnp_fast_float32_noisy.md``; 18 / 22 / 26 / 30 iterations
+#: × 5 / 10 ADMM iterations of the start), each SNR on its own as the other SNR-anchored
+#: budgets (:data:`ADMM_ITER`).  At 30 dB every fold through the TSA mask and three of four
+#: through the random code chose 22 and 5, as did all 8 scenes for each code (tuning means
+#: 29.97 and 33.10 dB against 30.15 and 33.22 for 30 iterations, which took 5.6 and 6.0 s); at
+#: 20 dB every fold chose 18, with 10 ADMM iterations the better of the two on both codes
+#: (28.01 and 30.51 dB).
+FAST_ITER_FLOAT32 = {28.5: 22, 19.5: 18}
+FAST_WARM_ITER_FLOAT32 = {28.5: 5, 19.5: 10}
+#: :func:`fast_budget` on clean data where the network runs in float32 on a CPU: the first
+#: stage's cube alone, as :data:`FAST_WARM_ITER_CLEAN`, and 28 iterations ending at 0.04,
+#: cross-validated in the same way over 24 / 28 / 32 iterations × a last level of 0.04 /
+#: 0.05 / 0.06 (``benchmarks/results/cv_pnp_fast_float32_clean.md``): one setting for both
+#: codes, two folds of four (the other two chose 32, which took 5.0-5.6 s); tuning means
+#: 30.62 and 33.85 dB against 30.85 and 34.03 for the best candidate of each code.
+FAST_CLEAN_FLOAT32 = {"warm_iter": 0, "max_iter": 28, "sigma_end": 0.04}
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
 #: 30.71 dB (80 at 0.01: 29.99; 80 at 0.015: 30.32; 120 at 0.01: 30.47; 40 at 0.01: 28.93).
@@ -705,14 +727,17 @@ def pnp_fast(
     GAP-TV's.  On noisy data a 20-iteration OTD start ties with the 10-iteration one on the
     tuning scenes and is up to 0.1 dB better on the report scenes
     (``benchmarks/results/cv_pnp_fast_noisy_start.md``) for about 0.4 s more:
-    ``pnp_fast(warm_iter=20)``.  Its time rests on bfloat16: on a CPU without native bfloat16
-    instructions (:func:`~tensor_cosdi.learn.spectral_net.bfloat16_is_fast` false, e.g. AVX2
-    only) the network runs in float32 and a call takes about twice as long
-    (``benchmarks/results/pnp_fast_no_bf16.md``); fewer calls or a smaller network measured
-    there did not bring it under 5 s either (``float32_budget_30db.md``,
-    ``float32_budget_clean.md``, ``denoiser_weights_fast_w40b3.md``), nor did the network
-    quantized to int8 after training (``denoiser_int8.md``) or with its convolutions in
-    Tucker-2 form (``denoiser_weights_fast_k24.md``), both of which also cost PSNR.  In
+    ``pnp_fast(warm_iter=20)``.  On a CPU without native bfloat16 instructions
+    (:func:`~tensor_cosdi.learn.spectral_net.bfloat16_is_fast` false, e.g. AVX2 only) the
+    network runs in float32, where a call takes about twice as long, and the budget takes
+    fewer calls, chosen within the same 5 s (:func:`fast_budget`; time and PSNR on the report
+    scenes on such a CPU: ``benchmarks/results/pnp_fast_no_bf16.md``); there a smaller network
+    (``denoiser_weights_fast_w40b3.md``), the network quantized to int8 after training
+    (``denoiser_int8.md``) and its convolutions in Tucker-2 form
+    (``denoiser_weights_fast_k24.md``) each cost PSNR and stayed over 5 s at the full budget.
+    The budget follows the network's arithmetic, so the same call runs fewer iterations on
+    such a CPU; pass ``max_iter`` and ``warm_iter`` (or ``precision="bfloat16"``'s budget
+    from :func:`fast_budget`) for the same iterations on every machine.  In
     bfloat16 the result depends on the machine and moves by about 1e-3 when the measurement
     is rescaled; use ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It
     needs torch (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:
@@ -803,7 +828,7 @@ def fast_settings(system, measurement, **options) -> dict:
         out["pan_tv_steps"] = FAST_PAN_TV_STEPS
     auto = [k for k in BUDGET if isinstance(out[k], str) and out[k] == "auto"]
     if auto:
-        budget = fast_budget(system, measurement, out["warm"])
+        budget = fast_budget(system, measurement, out["warm"], out["precision"])
         out.update({k: budget[k] for k in auto})
     if engine.check_relax(out["relax"], auto=True) == "auto":
         from .snr import estimate_snr
@@ -817,7 +842,19 @@ def fast_settings(system, measurement, **options) -> dict:
 BUDGET = ("warm_iter", "max_iter", "sigma_end")
 
 
-def fast_budget(system, measurement, warm: str = "otd") -> dict:
+def float32_on_cpu(measurement, precision: str = "auto") -> bool:
+    """Whether :func:`pnp_fast`'s learned denoiser runs its network in float32 on a CPU for
+    ``measurement`` (its device: :func:`~tensor_cosdi.learn.spectral_net.network_device`;
+    its arithmetic: :func:`~tensor_cosdi.learn.spectral_net.network_precision`), where a call
+    takes about twice as long as in bfloat16 (``benchmarks/results/denoiser_speed_avx2.md``
+    against ``denoiser_speed.md``) and :func:`fast_budget` spends fewer of them."""
+    from ..learn.spectral_net import network_device, network_precision
+
+    device = network_device(measurement)
+    return device.type == "cpu" and network_precision(precision, device) == "float32"
+
+
+def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto") -> dict:
     """:func:`pnp_fast`'s ``warm_iter``, ``max_iter`` and ``sigma_end`` for ``measurement``.
 
     On a clean one (accelerated GAP: an estimated SNR of :data:`ACCELERATE_ABOVE_DB` or more)
@@ -825,7 +862,12 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     stage's cube alone (:data:`FAST_WARM_ITER_CLEAN`), :data:`FAST_ITER_CLEAN` iterations,
     the level ending at :data:`FAST_SIGMA_END_CLEAN`.  Otherwise :data:`FAST_WARM_ITER` ADMM
     iterations of the start, :data:`FAST_ITER` iterations and :func:`pnp_gap`'s own
-    ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT` on noisy data).  The trade is
+    ``sigma_end="auto"`` (:data:`SIGMA_END_ADMM_SHORT` on noisy data).  Where the network runs
+    in float32 on a CPU (:func:`float32_on_cpu`: ``precision="float32"``, or ``"auto"`` on a
+    CPU without native bfloat16), where each denoiser call takes about twice as long, fewer:
+    :data:`FAST_CLEAN_FLOAT32` on clean data, :data:`FAST_WARM_ITER_FLOAT32` and
+    :data:`FAST_ITER_FLOAT32` against the estimated SNR on noisy data, each chosen within the
+    5-s budget on such a CPU.  The trade is
     time-neutral at 256×256×28 (the cross-validation of :data:`FAST_ITER_CLEAN`); on small
     cubes, where the first stage is cheap beside the denoiser, it mostly costs more time
     (``benchmarks/results/fast_budget_systems.md``: every imager with a first stage at
@@ -837,6 +879,9 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     measurement : tensor of ``system.measurement_shape``
     warm : str
         :func:`pnp_fast`'s start (:data:`WARM_STARTS`).
+    precision : {"auto", "float32", "bfloat16"}
+        :func:`pnp_fast`'s ``precision``: with the measurement's device, the network's
+        arithmetic (:func:`float32_on_cpu`).
 
     Returns
     -------
@@ -847,18 +892,26 @@ def fast_budget(system, measurement, warm: str = "otd") -> dict:
     --------
     >>> import tensor_cosdi as tc
     >>> clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
-    >>> fast_budget(clean.system, clean.measurement)
+    >>> fast_budget(clean.system, clean.measurement, precision="bfloat16")
     {'warm_iter': 0, 'max_iter': 66, 'sigma_end': 0.04}
     >>> noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
-    >>> fast_budget(noisy.system, noisy.measurement)
+    >>> fast_budget(noisy.system, noisy.measurement, precision="bfloat16")
     {'warm_iter': 10, 'max_iter': 46, 'sigma_end': 'auto'}
     """
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
+    slow = float32_on_cpu(measurement, precision)  # checks precision
     first_stage = warm == "otd" and not system.panchromatic_exact
-    if first_stage and gap_settings(system, measurement, "auto", "auto")[0]:
+    accelerate, _, snr = gap_settings(system, measurement, "auto", "auto", need_snr=slow)
+    if first_stage and accelerate:
+        if slow:
+            return dict(FAST_CLEAN_FLOAT32)
         return {"warm_iter": FAST_WARM_ITER_CLEAN, "max_iter": FAST_ITER_CLEAN,
                 "sigma_end": FAST_SIGMA_END_CLEAN}  # fmt: skip
+    if slow:
+        return {"warm_iter": round(snr_schedule(snr, FAST_WARM_ITER_FLOAT32)),
+                "max_iter": round(snr_schedule(snr, FAST_ITER_FLOAT32)),
+                "sigma_end": "auto"}  # fmt: skip
     return {"warm_iter": FAST_WARM_ITER, "max_iter": FAST_ITER, "sigma_end": "auto"}
 
 
@@ -866,7 +919,8 @@ register_method(
     "pnp_fast",
     pnp_fast,
     summary="the learned plug-and-play path with 46 (noisy data) or 66 (clean) single "
-    "denoiser calls, in bfloat16 where the CPU runs it natively (torch)",
+    "denoiser calls in bfloat16 where the CPU runs it natively, fewer in float32 on a CPU "
+    "(torch)",
     requires=("torch",),
 )
 

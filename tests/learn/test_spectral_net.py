@@ -506,20 +506,24 @@ def test_pnp_fast_is_pnp_gap_with_fewer_cheaper_calls_and_still_beats_gap_tv():
     fast = tc.reconstruct(system, g, "pnp_fast", precision="float32")
     relax = pnp_gap_module.fast_settings(system, g)["relax"]
     assert relax > 1.5  # over-relaxed at 30 dB (FAST_RELAX; 1.83 here)
-    same = tc.reconstruct(system, g, "pnp_gap", max_iter=46, ensemble=1, warm_iter=10,
-                          pan_tv_steps=3, relax=relax)  # fmt: skip
+    budget = pnp_gap_module.fast_budget(system, g, precision="float32")
+    low = pnp_gap_module.float32_on_cpu(g, "float32")  # fewer calls of a float32 CPU network
+    full = {"warm_iter": 10, "max_iter": 46, "sigma_end": "auto"}
+    assert (budget["max_iter"] < 46) if low else (budget == full), budget
+    same = tc.reconstruct(system, g, "pnp_gap", max_iter=budget["max_iter"], ensemble=1,
+                          warm_iter=budget["warm_iter"], pan_tv_steps=3, relax=relax)  # fmt: skip
     np.testing.assert_array_equal(np.asarray(fast.cube), np.asarray(same.cube))
     plain = tc.reconstruct(system, g, "pnp_fast", precision="float32", relax=1.0)
     gain = (metrics.psnr(cube, np.asarray(fast.cube), data_range=1.0)
             - metrics.psnr(cube, np.asarray(plain.cube), data_range=1.0))  # fmt: skip
-    assert gain > 0.3, gain  # measured +0.91 dB against plain ADMM (relax=1)
+    assert gain > 0.3, gain  # against plain ADMM (relax=1): +0.78 dB (float32 budget), +0.91 (full)
     assert fast.options["precision"] == "float32"
     # on clean data (read as clean: 40.4 dB) its start is OTD's first stage alone, and the time
     # saved goes to iterations
     face = _real("face", (128, 128))
     wide = tc.systems.SDCASSI(np.tile(code, (2, 2)), n_bands=28, shifts=2)
     clean = wide.simulate(face.astype(np.float64))
-    budget = pnp_gap_module.fast_budget(wide, clean)
+    budget = pnp_gap_module.fast_budget(wide, clean, precision="bfloat16")
     assert budget == {"warm_iter": 0, "max_iter": 66, "sigma_end": 0.04}, budget
     fast_clean = tc.reconstruct(wide, clean, "pnp_fast", precision="float32", max_iter=3)
     same_clean = tc.reconstruct(wide, clean, "pnp_gap", max_iter=3, ensemble=1, warm_iter=0,
@@ -534,7 +538,8 @@ def test_pnp_fast_is_pnp_gap_with_fewer_cheaper_calls_and_still_beats_gap_tv():
     p_tv = metrics.psnr(cube, np.asarray(tv), data_range=1.0)
     auto = np.asarray(tc.reconstruct(system, g, "pnp_fast").cube)  # bfloat16 where native
     p_fast = metrics.psnr(cube, auto, data_range=1.0)
-    assert p_fast > p_tv + 6.0, (p_fast, p_tv)  # measured 46.31 against 38.35 (pnp_gap 47.22)
+    # measured 46.31 (bfloat16's budget) and 45.44 (float32 on a CPU) against 38.35 (pnp_gap 47.22)
+    assert p_fast > p_tv + 6.0, (p_fast, p_tv)
 
 
 @needs_torch

@@ -163,8 +163,8 @@ def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
     fast, slow = (M.FAST_WARM_ITER_CLEAN, M.FAST_ITER_CLEAN), (M.FAST_WARM_ITER, M.FAST_ITER)
     assert fast == (0, M.FAST_ITER_CLEAN) and slow == (10, 46) and M.FAST_ITER_CLEAN > 46
 
-    def budget(p, **kw):
-        s = M.fast_settings(p.system, p.measurement, **kw)
+    def budget(p, **kw):  # the budget of a network in bfloat16 (float32 on a CPU: below)
+        s = M.fast_settings(p.system, p.measurement, precision="bfloat16", **kw)
         return s["warm_iter"], s["max_iter"], s["sigma_end"]
 
     assert budget(clean) == (*fast, M.FAST_SIGMA_END_CLEAN) and budget(noisy) == (*slow, "auto")
@@ -173,12 +173,60 @@ def test_fast_budget_spends_the_start_on_iterations_on_clean_data_only():
     assert budget(clean, warm_iter=3, sigma_end=0.1) == (3, fast[1], 0.1)
     dual = tc.systems.DualCameraCASSI.example((8, 8, 4))
     g = dual.simulate(np.random.default_rng(0).random(dual.cube_shape))
-    assert M.fast_budget(dual, g) == {"warm_iter": 10, "max_iter": 46, "sigma_end": "auto"}
+    assert M.fast_budget(dual, g, precision="bfloat16") == {
+        "warm_iter": 10, "max_iter": 46, "sigma_end": "auto"
+    }  # fmt: skip
     phases = tc.studies.make_problem("cs2li", "colorchecker", snr_db=None)  # four axes
     assert estimate_snr(phases.system, phases.measurement).snr_db > M.ACCELERATE_ABOVE_DB
-    assert M.fast_budget(phases.system, phases.measurement)["max_iter"] == M.FAST_ITER_CLEAN
+    assert (
+        M.fast_budget(phases.system, phases.measurement, precision="bfloat16")["max_iter"]
+        == M.FAST_ITER_CLEAN
+    )
     with pytest.raises(ValueError, match="warm must be one of"):
         M.fast_budget(clean.system, clean.measurement, warm="tv")
+
+
+def test_fast_budget_spends_fewer_calls_where_the_network_runs_in_float32_on_a_cpu(monkeypatch):
+    """Where the learned denoiser's network runs in float32 on a CPU (a call about twice as
+    long as in bfloat16) ``pnp_fast`` takes the float32 budgets, fewer iterations than the
+    bfloat16 ones on clean and on noisy data; on CUDA float32 keeps the full budget; given
+    values are still kept and a bad precision is named."""
+    torch = pytest.importorskip("torch")
+    from tensor_cosdi.learn import spectral_net
+
+    clean = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
+    noisy = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=30)
+    full_clean = M.fast_budget(clean.system, clean.measurement, precision="bfloat16")
+    full_noisy = M.fast_budget(noisy.system, noisy.measurement, precision="bfloat16")
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: False)  # a CPU-only machine
+    assert M.float32_on_cpu(clean.measurement, "float32")
+    assert not M.float32_on_cpu(clean.measurement, "bfloat16")
+    assert M.float32_on_cpu(clean.measurement) == (not spectral_net.bfloat16_is_fast())
+    low_clean = M.fast_budget(clean.system, clean.measurement, precision="float32")
+    low_noisy = M.fast_budget(noisy.system, noisy.measurement, precision="float32")
+    snr = estimate_snr(noisy.system, noisy.measurement).snr_db
+    assert low_clean == M.FAST_CLEAN_FLOAT32
+    assert low_noisy == {
+        "warm_iter": round(snr_schedule(snr, M.FAST_WARM_ITER_FLOAT32)),
+        "max_iter": round(snr_schedule(snr, M.FAST_ITER_FLOAT32)),
+        "sigma_end": "auto",
+    }
+    assert set(low_noisy.values()) <= {"auto", *range(5, 23)}  # between the SNR anchors
+    assert low_clean["max_iter"] < full_clean["max_iter"]
+    assert low_noisy["max_iter"] < full_noisy["max_iter"]
+    assert low_clean["warm_iter"] == full_clean["warm_iter"] == 0  # the first stage alone
+    s = M.fast_settings(noisy.system, noisy.measurement, precision="float32", max_iter=40)
+    assert (s["max_iter"], s["warm_iter"]) == (40, low_noisy["warm_iter"])
+    auto = M.fast_settings(noisy.system, noisy.measurement)
+    assert auto["max_iter"] == (low_noisy if M.float32_on_cpu(noisy.measurement) else
+                                full_noisy)["max_iter"]  # fmt: skip
+    with pytest.raises(ValueError, match="precision must be one of"):
+        M.fast_budget(noisy.system, noisy.measurement, precision="half")
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)  # the network on CUDA
+    assert not M.float32_on_cpu(clean.measurement, "float32")
+    assert M.fast_budget(clean.system, clean.measurement, precision="float32") == full_clean
+    cpu_tensor = torch.as_tensor(np.asarray(clean.measurement))  # a CPU tensor stays there
+    assert M.float32_on_cpu(cpu_tensor, "float32")
 
 
 @pytest.mark.parametrize(

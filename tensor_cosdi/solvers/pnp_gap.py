@@ -99,7 +99,8 @@ FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04
 #: :func:`fast_budget` on noisy data where the network runs in float32 on a CPU
 #: (:func:`float32_on_cpu`): a denoiser call takes about twice as long as in bfloat16 there, and
-#: the budgets above took 7-8 s a cube on 2 cores (``benchmarks/results/pnp_fast_no_bf16.md``).
+#: the budgets above take 6.9-8.6 s a cube on 2 cores (the report scenes:
+#: ``benchmarks/results/pnp_fast_float32_budget_30db.md``, ``..._clean.md``).
 #: Iterations and the start's ADMM iterations against the estimated SNR (log-linear, rounded),
 #: cross-validated on such a CPU among the candidates whose median time a cube, timed as a
 #: user's single call, fits the 5-s budget: 8 tuning scenes, 4 folds, TSA mask and a random
@@ -117,7 +118,12 @@ FAST_WARM_ITER_FLOAT32 = {28.5: 5, 19.5: 10}
 #: cross-validated in the same way over 24 / 28 / 32 iterations × a last level of 0.04 /
 #: 0.05 / 0.06 (``benchmarks/results/cv_pnp_fast_float32_clean.md``): one setting for both
 #: codes, two folds of four (the other two chose 32, which took 5.0-5.6 s); tuning means
-#: 30.62 and 33.85 dB against 30.85 and 34.03 for the best candidate of each code.
+#: 30.62 and 33.85 dB against 30.85 and 34.03 for the best candidate of each code.  What the
+#: float32 budgets cost on the report scenes on such a CPU, both budgets in one run
+#: (``benchmarks/results/pnp_fast_float32_budget_30db.md``, ``..._clean.md``): TSA mask 30.91 →
+#: 30.70 dB at 30 dB and 32.68 → 31.22 noiseless, random code 33.72 → 33.70 and 35.94 → 34.79,
+#: median 6.93-8.57 → 4.27-4.91 s a cube; lit by CIE FL2 (``..._fl2_30db.md``,
+#: ``..._fl2_clean.md``) 32.45 → 30.91 and 35.49 → 33.59 dB.
 FAST_CLEAN_FLOAT32 = {"warm_iter": 0, "max_iter": 28, "sigma_end": 0.04}
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give
@@ -736,8 +742,8 @@ def pnp_fast(
     (``denoiser_int8.md``) and its convolutions in Tucker-2 form
     (``denoiser_weights_fast_k24.md``) each cost PSNR and stayed over 5 s at the full budget.
     The budget follows the network's arithmetic, so the same call runs fewer iterations on
-    such a CPU; pass ``max_iter`` and ``warm_iter`` (or ``precision="bfloat16"``'s budget
-    from :func:`fast_budget`) for the same iterations on every machine.  In
+    such a CPU; for the same iterations on every machine pass ``max_iter``, ``warm_iter`` and
+    ``sigma_end`` (``fast_budget(system, g, precision="bfloat16")`` gives the full ones).  In
     bfloat16 the result depends on the machine and moves by about 1e-3 when the measurement
     is rescaled; use ``precision="float32"`` (or :func:`pnp_gap`) where that matters.  It
     needs torch (``pip install "tensor_cosdi[torch]"``), like the learned denoiser it calls:
@@ -805,7 +811,7 @@ def fast_settings(system, measurement, **options) -> dict:
     --------
     >>> import tensor_cosdi as tc
     >>> p = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
-    >>> s = fast_settings(p.system, p.measurement)
+    >>> s = fast_settings(p.system, p.measurement, precision="bfloat16")
     >>> s["pan_tv_steps"], s["warm_iter"], s["max_iter"], s["sigma_end"]
     (3, 0, 66, 0.04)
     >>> fast_settings(p.system, p.measurement, warm="gap_tv")["pan_tv_steps"]

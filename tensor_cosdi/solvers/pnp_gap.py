@@ -113,6 +113,15 @@ FAST_SIGMA_END_CLEAN = 0.04
 #: (28.01 and 30.51 dB).
 FAST_ITER_FLOAT32 = {28.5: 22, 19.5: 18}
 FAST_WARM_ITER_FLOAT32 = {28.5: 5, 19.5: 10}
+#: The last level of those short runs on the RMS scale (a cube of three axes,
+#: ``sigma_scale="auto"``), against the estimated SNR: with 22 iterations the level stays
+#: higher than :data:`SIGMA_END_ADMM_SHORT`'s 0.04 at 30 dB.  Cross-validated at 30 dB over
+#: 0.04 / 0.055 / 0.07 / 0.09 on the 8 tuning scenes as they are, magnified 4× and lit by
+#: CIE FL2 (24 views), TSA mask and a random code
+#: (``benchmarks/results/cv_pnp_fast_float32_sigma_end.md``): tuning means 32.30 / 32.36 /
+#: 32.29 / 32.14 dB (TSA) and 36.07 / 36.24 / 36.06 / 35.65 (random); one setting for both
+#: codes chose 0.055 on every fold.  The 20-dB anchor is :data:`SIGMA_END_ADMM_SHORT`'s.
+FAST_SIGMA_END_FLOAT32 = {28.5: 0.055, 19.5: 0.2}
 #: :func:`fast_budget` on clean data where the network runs in float32 on a CPU: the first
 #: stage's cube alone, as :data:`FAST_WARM_ITER_CLEAN`, and 28 iterations ending at 0.04,
 #: cross-validated in the same way over 24 / 28 / 32 iterations × a last level of 0.04 /
@@ -834,7 +843,9 @@ def fast_settings(system, measurement, **options) -> dict:
         out["pan_tv_steps"] = FAST_PAN_TV_STEPS
     auto = [k for k in BUDGET if isinstance(out[k], str) and out[k] == "auto"]
     if auto:
-        budget = fast_budget(system, measurement, out["warm"], out["precision"])
+        budget = fast_budget(
+            system, measurement, out["warm"], out["precision"], out["sigma_scale"]
+        )
         out.update({k: budget[k] for k in auto})
     if engine.check_relax(out["relax"], auto=True) == "auto":
         from .snr import estimate_snr
@@ -860,7 +871,9 @@ def float32_on_cpu(measurement, precision: str = "auto") -> bool:
     return device.type == "cpu" and network_precision(precision, device) == "float32"
 
 
-def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto") -> dict:
+def fast_budget(
+    system, measurement, warm: str = "otd", precision: str = "auto", sigma_scale: str = "auto"
+) -> dict:
     """:func:`pnp_fast`'s ``warm_iter``, ``max_iter`` and ``sigma_end`` for ``measurement``.
 
     On a clean one (accelerated GAP: an estimated SNR of :data:`ACCELERATE_ABOVE_DB` or more)
@@ -873,7 +886,7 @@ def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto")
     CPU without native bfloat16), where each denoiser call takes about twice as long, fewer:
     :data:`FAST_CLEAN_FLOAT32` on clean data, :data:`FAST_WARM_ITER_FLOAT32` and
     :data:`FAST_ITER_FLOAT32` against the estimated SNR on noisy data, each chosen within the
-    5-s budget on such a CPU.  The trade is
+    5-s budget on such a CPU, the level ending at :data:`FAST_SIGMA_END_FLOAT32`.  The trade is
     time-neutral at 256×256×28 (the cross-validation of :data:`FAST_ITER_CLEAN`); on small
     cubes, where the first stage is cheap beside the denoiser, it mostly costs more time
     (``benchmarks/results/fast_budget_systems.md``: every imager with a first stage at
@@ -888,6 +901,10 @@ def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto")
     precision : {"auto", "float32", "bfloat16"}
         :func:`pnp_fast`'s ``precision``: with the measurement's device, the network's
         arithmetic (:func:`float32_on_cpu`).
+    sigma_scale : str
+        :func:`pnp_fast`'s ``sigma_scale``: the float32 budget's last level on noisy data
+        (:data:`FAST_SIGMA_END_FLOAT32`) is on the RMS scale, so it applies there (``"rms"``,
+        or ``"auto"`` on a cube of three axes); elsewhere ``sigma_end`` stays ``"auto"``.
 
     Returns
     -------
@@ -906,6 +923,10 @@ def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto")
     """
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
+    if not isinstance(sigma_scale, str) or sigma_scale not in ("auto", *LEVEL_SCALES):
+        raise ValueError(
+            f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
+        )
     slow = float32_on_cpu(measurement, precision)  # checks precision
     first_stage = warm == "otd" and not system.panchromatic_exact
     accelerate, _, snr = gap_settings(system, measurement, "auto", "auto", need_snr=slow)
@@ -915,9 +936,11 @@ def fast_budget(system, measurement, warm: str = "otd", precision: str = "auto")
         return {"warm_iter": FAST_WARM_ITER_CLEAN, "max_iter": FAST_ITER_CLEAN,
                 "sigma_end": FAST_SIGMA_END_CLEAN}  # fmt: skip
     if slow:
+        rms = sigma_scale == "rms" or (sigma_scale == "auto" and len(system.cube_shape) == 3)
         return {"warm_iter": round(snr_schedule(snr, FAST_WARM_ITER_FLOAT32)),
                 "max_iter": round(snr_schedule(snr, FAST_ITER_FLOAT32)),
-                "sigma_end": "auto"}  # fmt: skip
+                "sigma_end": round(snr_schedule(snr, FAST_SIGMA_END_FLOAT32), 4)
+                if rms else "auto"}  # fmt: skip
     return {"warm_iter": FAST_WARM_ITER, "max_iter": FAST_ITER, "sigma_end": "auto"}
 
 

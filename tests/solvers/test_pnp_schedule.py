@@ -209,9 +209,17 @@ def test_fast_budget_spends_fewer_calls_where_the_network_runs_in_float32_on_a_c
     assert low_noisy == {
         "warm_iter": round(snr_schedule(snr, M.FAST_WARM_ITER_FLOAT32)),
         "max_iter": round(snr_schedule(snr, M.FAST_ITER_FLOAT32)),
-        "sigma_end": "auto",
+        "sigma_end": round(snr_schedule(snr, M.FAST_SIGMA_END_FLOAT32), 4),
     }
-    assert set(low_noisy.values()) <= {"auto", *range(5, 23)}  # between the SNR anchors
+    assert 5 <= low_noisy["warm_iter"] <= 10 and 18 <= low_noisy["max_iter"] <= 22
+    assert 0.055 <= low_noisy["sigma_end"] <= 0.2  # between the SNR anchors
+    # the level is on the RMS scale: on the peak scale it stays pnp_gap's own "auto"
+    peak = M.fast_budget(noisy.system, noisy.measurement, precision="float32", sigma_scale="peak")
+    assert peak == {**low_noisy, "sigma_end": "auto"}
+    assert M.fast_settings(noisy.system, noisy.measurement, precision="float32",
+                           sigma_scale="peak")["sigma_end"] == "auto"  # fmt: skip
+    with pytest.raises(ValueError, match="sigma_scale must be 'auto' or one of"):
+        M.fast_budget(noisy.system, noisy.measurement, precision="float32", sigma_scale="max")
     assert low_clean["max_iter"] < full_clean["max_iter"]
     assert low_noisy["max_iter"] < full_noisy["max_iter"]
     assert low_clean["warm_iter"] == full_clean["warm_iter"] == 0  # the first stage alone

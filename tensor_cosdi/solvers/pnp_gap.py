@@ -99,7 +99,7 @@ FAST_ITER_CLEAN = 66
 FAST_SIGMA_END_CLEAN = 0.04
 #: :func:`fast_budget` on noisy data where the network runs in float32 on a CPU
 #: (:func:`float32_on_cpu`): a denoiser call takes about twice as long as in bfloat16 there, and
-#: the budgets above take 6.9-8.6 s a cube on 2 cores (the report scenes:
+#: the budgets above take 7.3-9.4 s a cube on 2 cores (the report scenes:
 #: ``benchmarks/results/pnp_fast_float32_budget_30db.md``, ``..._clean.md``).
 #: Iterations and the start's ADMM iterations against the estimated SNR (log-linear, rounded),
 #: cross-validated on such a CPU among the candidates whose median time a cube, timed as a
@@ -130,9 +130,9 @@ FAST_SIGMA_END_FLOAT32 = {28.5: 0.055, 19.5: 0.2}
 #: 30.62 and 33.85 dB against 30.85 and 34.03 for the best candidate of each code.  What the
 #: float32 budgets cost on the report scenes on such a CPU, both budgets in one run
 #: (``benchmarks/results/pnp_fast_float32_budget_30db.md``, ``..._clean.md``): TSA mask 30.91 →
-#: 30.70 dB at 30 dB and 32.68 → 31.22 noiseless, random code 33.72 → 33.70 and 35.94 → 34.79,
-#: median 6.93-8.57 → 4.27-4.91 s a cube; lit by CIE FL2 (``..._fl2_30db.md``,
-#: ``..._fl2_clean.md``) 32.45 → 30.91 and 35.49 → 33.59 dB.
+#: 30.75 dB at 30 dB and 32.68 → 31.22 noiseless, random code 33.72 → 33.84 and 35.94 → 34.76,
+#: 0.56-0.64× the seconds (median 7.31-9.41 → 4.57-5.40 s a cube); lit by CIE FL2
+#: (``..._fl2_30db.md``, ``..._fl2_clean.md``) 32.45 → 31.20 and 35.49 → 33.59 dB.
 FAST_CLEAN_FLOAT32 = {"warm_iter": 0, "max_iter": 28, "sigma_end": 0.04}
 #: ``sigma_end="auto"``: the last denoiser level against the estimated SNR (dB → relative σ).
 #: Noiseless, 8 tuning scenes, TSA mask, accelerated: 100 iterations ending at 0.015 give

@@ -509,13 +509,7 @@ def pnp_gap(
     if splitting == "auto":
         splitting = "gap" if accelerate or chosen else "admm"
     admm = splitting == "admm"
-    if not isinstance(sigma_scale, str) or sigma_scale not in ("auto", *LEVEL_SCALES):
-        raise ValueError(
-            f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
-        )
-    if sigma_scale == "auto":
-        three_way = len(tuple(getattr(system, "cube_shape", ()))) == 3
-        sigma_scale = SIGMA_SCALE["admm" if admm else "gap"] if three_way else "peak"
+    sigma_scale = _level_scale(system, sigma_scale, admm)
     if admm:
         rho = RHO if isinstance(rho, str) and rho == "auto" else rho
         rho = check_positive("rho", rho)
@@ -654,6 +648,19 @@ def warm_started_gap(
             **common,
         )  # fmt: skip
     return x, _joined(hist, h2), conv
+
+
+def _level_scale(system, sigma_scale, admm: bool) -> str:
+    """``sigma_scale`` checked, ``"auto"`` resolved by the splitting (:data:`SIGMA_SCALE`) on a
+    cube of three axes, ``"peak"`` on more."""
+    if not isinstance(sigma_scale, str) or sigma_scale not in ("auto", *LEVEL_SCALES):
+        raise ValueError(
+            f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
+        )
+    if sigma_scale != "auto":
+        return sigma_scale
+    three_way = len(tuple(getattr(system, "cube_shape", ()))) == 3
+    return SIGMA_SCALE["admm" if admm else "gap"] if three_way else "peak"
 
 
 def _auto_relax(system, snr_db: float, table: dict) -> float:
@@ -923,10 +930,7 @@ def fast_budget(
     """
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
-    if not isinstance(sigma_scale, str) or sigma_scale not in ("auto", *LEVEL_SCALES):
-        raise ValueError(
-            f"sigma_scale must be 'auto' or one of {LEVEL_SCALES}, got {sigma_scale!r}"
-        )
+    sigma_scale = _level_scale(system, sigma_scale, admm=True)  # the noisy budget's splitting
     slow = float32_on_cpu(measurement, precision)  # checks precision
     first_stage = warm == "otd" and not system.panchromatic_exact
     accelerate, _, snr = gap_settings(system, measurement, "auto", "auto", need_snr=slow)
@@ -936,11 +940,10 @@ def fast_budget(
         return {"warm_iter": FAST_WARM_ITER_CLEAN, "max_iter": FAST_ITER_CLEAN,
                 "sigma_end": FAST_SIGMA_END_CLEAN}  # fmt: skip
     if slow:
-        rms = sigma_scale == "rms" or (sigma_scale == "auto" and len(system.cube_shape) == 3)
         return {"warm_iter": round(snr_schedule(snr, FAST_WARM_ITER_FLOAT32)),
                 "max_iter": round(snr_schedule(snr, FAST_ITER_FLOAT32)),
                 "sigma_end": round(snr_schedule(snr, FAST_SIGMA_END_FLOAT32), 4)
-                if rms else "auto"}  # fmt: skip
+                if sigma_scale == "rms" else "auto"}  # fmt: skip
     return {"warm_iter": FAST_WARM_ITER, "max_iter": FAST_ITER, "sigma_end": "auto"}
 
 

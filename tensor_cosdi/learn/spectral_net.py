@@ -340,8 +340,27 @@ def bfloat16_is_fast() -> bool:
 
 
 def network_device(x=None, device=None):
-    """The ``torch.device`` the denoiser runs on for the input ``x``: ``device`` where given,
-    else a torch tensor's own device, else CUDA when available, else the CPU."""
+    """The ``torch.device`` the denoiser runs on for the input ``x``.
+
+    Parameters
+    ----------
+    x : tensor or ndarray, optional
+        The input: a torch tensor keeps its own device.
+    device : str or torch.device, optional
+        Given by the caller (``SpectralDenoiser(device=…)``): taken as it is.
+
+    Returns
+    -------
+    torch.device
+        ``device`` where given, else a torch tensor's own device, else CUDA when available,
+        else the CPU.
+
+    Examples
+    --------
+    >>> import torch
+    >>> network_device(torch.zeros(3)), network_device(device="cpu")
+    (device(type='cpu'), device(type='cpu'))
+    """
     torch = require_torch()
     if device is not None:
         return torch.device(device)
@@ -351,10 +370,27 @@ def network_device(x=None, device=None):
 
 
 def network_precision(precision: str, device) -> str:
-    """The arithmetic (``"bfloat16"`` or ``"float32"``) the network runs in on ``device`` (a
-    ``torch.device`` or its name) for ``SpectralDenoiser(precision=precision)``: ``"auto"`` is
-    bfloat16 on a CPU with native bfloat16 instructions (:func:`bfloat16_is_fast`), float32
-    elsewhere."""
+    """The arithmetic the network runs in on ``device`` for
+    ``SpectralDenoiser(precision=precision)``.
+
+    Parameters
+    ----------
+    precision : {"auto", "float32", "bfloat16"}
+        :data:`PRECISIONS`; anything else is a ``ValueError``.
+    device : str or torch.device
+        Where the network runs (:func:`network_device`).
+
+    Returns
+    -------
+    str
+        ``"bfloat16"`` or ``"float32"``: ``precision`` where given; ``"auto"`` is bfloat16 on
+        a CPU with native bfloat16 instructions (:func:`bfloat16_is_fast`), float32 elsewhere.
+
+    Examples
+    --------
+    >>> network_precision("float32", "cpu"), network_precision("auto", "cuda")
+    ('float32', 'float32')
+    """
     if precision not in PRECISIONS:
         raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
     if precision != "auto":

@@ -868,10 +868,30 @@ BUDGET = ("warm_iter", "max_iter", "sigma_end")
 
 def float32_on_cpu(measurement, precision: str = "auto") -> bool:
     """Whether :func:`pnp_fast`'s learned denoiser runs its network in float32 on a CPU for
-    ``measurement`` (its device: :func:`~tensor_cosdi.learn.spectral_net.network_device`;
-    its arithmetic: :func:`~tensor_cosdi.learn.spectral_net.network_precision`), where a call
-    takes about twice as long as in bfloat16 (``benchmarks/results/denoiser_speed_avx2.md``
-    against ``denoiser_speed.md``) and :func:`fast_budget` spends fewer of them."""
+    ``measurement``, where a call takes about twice as long as in bfloat16
+    (``benchmarks/results/denoiser_speed_avx2.md`` against ``denoiser_speed.md``) and
+    :func:`fast_budget` spends fewer of them.  Needs torch.
+
+    Parameters
+    ----------
+    measurement : tensor or ndarray
+        The measurement: its device is the network's
+        (:func:`~tensor_cosdi.learn.spectral_net.network_device`).
+    precision : {"auto", "float32", "bfloat16"}
+        :func:`pnp_fast`'s ``precision``
+        (:func:`~tensor_cosdi.learn.spectral_net.network_precision`).
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import torch
+    >>> g = torch.zeros(8, 10)  # a CPU tensor: the network runs on the CPU
+    >>> float32_on_cpu(g, "float32"), float32_on_cpu(g, "bfloat16")
+    (True, False)
+    """
     from ..learn.spectral_net import network_device, network_precision
 
     device = network_device(measurement)

@@ -313,8 +313,7 @@ class Store:
         self.path = Path(path)
         self.runs = json.loads(self.path.read_text())["runs"] if self.path.exists() else []
         self.index = {
-            key(r["scene"], r["snr_db"], r["mask"], r["method"], r["options"]): r
-            for r in self.runs
+            key(r["scene"], r["snr_db"], r["mask"], r["method"], r["options"]): r for r in self.runs
         }
         self.fresh, self.used, self.commit = set(fresh), {}, provenance()["commit"]
 
@@ -453,9 +452,7 @@ def cross_validate(
         "folds": out,
         "mean": float(np.mean(held)),
         "spread": float(np.std(held)),
-        "chosen_on_all": cands[
-            pick(all_means, all_seconds, tie_db, k_keep, no_slower, budget_s)
-        ],
+        "chosen_on_all": cands[pick(all_means, all_seconds, tie_db, k_keep, no_slower, budget_s)],
         "all_means": all_means,
         "all_seconds": all_seconds,
     }

@@ -68,9 +68,7 @@ def main(argv=None):
     sweep_psfs = rng.random((k, k, nl, nz, steps))
     sweep = BlurSum(cube, sweep_psfs, sum_axis=3)
     stack = cube + (steps,)
-    sweep_factors = (
-        SumAxis(stack, 3) @ Blur(stack, sweep_psfs) @ Replicate(cube, len(cube), steps)
-    )
+    sweep_factors = SumAxis(stack, 3) @ Blur(stack, sweep_psfs) @ Replicate(cube, len(cube), steps)
     rows = []  # (operator, direction, fused ms, by-factor ms, agreement)
     for name, op in stages.items():
         x = rng.standard_normal(op.input_shape)
@@ -85,8 +83,11 @@ def main(argv=None):
     y = rng.standard_normal(sweep.output_shape)
     for direction, fast, slow in (
         ("forward", lambda: sweep.apply(x), lambda: by_factors(sweep_factors, x)),
-        ("adjoint", lambda: sweep.apply_adjoint(y),
-         lambda: by_factors(sweep_factors, y, adjoint=True)),  # fmt: skip
+        (
+            "adjoint",
+            lambda: sweep.apply_adjoint(y),
+            lambda: by_factors(sweep_factors, y, adjoint=True),
+        ),  # fmt: skip
     ):
         err = float(np.abs(fast() - slow()).max())
         rows.append((f"focal sweep: BlurSum, {steps} steps", direction, median_seconds(fast, r),

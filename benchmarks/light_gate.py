@@ -122,7 +122,8 @@ def main(argv=None) -> None:
         "--noisy-from", default="0,25", help="estimated SNRs (dB) the noisy threshold starts at"
     )
     ap.add_argument(
-        "--keep", default="0.001,0.1,inf,0",
+        "--keep",
+        default="0.001,0.1,inf,0",
         help="the default in use, which wins ties: floor,clean,noisy,from_db or 'shut'",
     )
     ap.add_argument("--scenes-per-fold", type=int, default=2)
@@ -149,9 +150,7 @@ def main(argv=None) -> None:
     if default not in cands:
         raise SystemExit(f"--keep {args.keep!r} must be 'shut' or one of the candidates")
     options = {} if args.method == "pnp_fast" else {"pan_spectrum": "gated"}
-    folds = tuple(
-        views(f[: args.scenes_per_fold], None, lights) for f in datasets.tune_folds(4)
-    )
+    folds = tuple(views(f[: args.scenes_per_fold], None, lights) for f in datasets.tune_folds(4))
     mask = load_mask(args.mask)
     cache_path = Path(args.cache)
     cache = json.loads(cache_path.read_text()) if cache_path.exists() else {}
@@ -178,7 +177,6 @@ def main(argv=None) -> None:
         above = a_clean if est >= clean_db else (a_noisy if est >= from_db else INF)
         return r["open"][repr(f)] if r["reading"] > above else r["shut"]
 
-
     def rows_of(cand, vs):
         return [psnr(cand, v, s) for v in vs for s in snrs]
 
@@ -187,9 +185,8 @@ def main(argv=None) -> None:
     chosen = cv["chosen_on_all"]
 
     def name(c):
-        return (
-            f"floor {c[0]:g}, clean above {c[1]:g}, noisy above {c[2]:g}"
-            + (f" from {c[3]:g} dB" if np.isfinite(c[2]) else "")
+        return f"floor {c[0]:g}, clean above {c[1]:g}, noisy above {c[2]:g}" + (
+            f" from {c[3]:g} dB" if np.isfinite(c[2]) else ""
         )
 
     def mean(c, vs, snr_list=snrs):
@@ -238,8 +235,7 @@ def main(argv=None) -> None:
         "Mean PSNR by light (dB): the gate shut and forced open at each floor, over the views "
         "whose reading opens the smallest threshold (their count).",
         "",
-        "| light | SNR | views | shut | " + " | ".join(f"open, floor {f:g}" for f in floors)
-        + " |",
+        "| light | SNR | views | shut | " + " | ".join(f"open, floor {f:g}" for f in floors) + " |",
         "|---|---|---|---|" + "---|" * len(floors),
     ]
     for light in [None, *lights]:
@@ -252,8 +248,9 @@ def main(argv=None) -> None:
                 lines.append(
                     f"| {light or 'none'} | {snr_label(s)} | {len(opened)} | "
                     f"{np.mean([r['shut'] for r in opened]):.2f} | "
-                    + " | ".join(f"{np.mean([r['open'][repr(f)] for r in opened]):.2f}"
-                                 for f in floors)  # fmt: skip
+                    + " | ".join(
+                        f"{np.mean([r['open'][repr(f)] for r in opened]):.2f}" for f in floors
+                    )  # fmt: skip
                     + " |"
                 )
     lines += [
@@ -273,7 +270,8 @@ def main(argv=None) -> None:
             lines.append(
                 f"| {v} | {snr_label(s)} | {r['reading']:.3f} | {r['snr_db']:.1f} "
                 f"| {r['shut']:.2f} | "
-                + " | ".join("—" if o is None else f"{o:.2f}" for o in opened) + " |"
+                + " | ".join("—" if o is None else f"{o:.2f}" for o in opened)
+                + " |"
             )
     write_results(args.out, lines)
 

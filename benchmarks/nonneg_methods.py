@@ -165,8 +165,10 @@ def main(argv=None):
         counts[c] = counts.get(c, 0) + 1
     rows_at = ", ".join(f"{c} ({n} rows)" for c, n in counts.items())
     text = (
-        table(runs) + f"\n\nRows computed at commit {rows_at}.  \n"
-        + provenance_lines(provenance()) + "\n"
+        table(runs)
+        + f"\n\nRows computed at commit {rows_at}.  \n"
+        + provenance_lines(provenance())
+        + "\n"
     )
     (out / f"{args.name}.md").write_text(text)
     print(text)

@@ -198,9 +198,7 @@ def cv(args, store, cache):
         rep, rep_zoom = {}, {}
         magnified = views(datasets.REPORT_SCENES, args.zoom)[len(datasets.REPORT_SCENES) :]
         for m, opts in ((method, chosen), ("plain_gap_tv", {})):
-            rows = [
-                store.ensure(s, snr, mk, m, opts, cache=cache) for s in datasets.REPORT_SCENES
-            ]
+            rows = [store.ensure(s, snr, mk, m, opts, cache=cache) for s in datasets.REPORT_SCENES]
             rep[m] = {
                 "psnr": _mean(rows, "psnr"),
                 "ssim": _mean(rows, "ssim"),
@@ -219,7 +217,15 @@ def cv(args, store, cache):
         res["report"] = rep
         results[f"{mk}/{snr_label(snr)}"] = res
     results["joint"] = _joint(
-        method, cands, folds, conds, store, cache, args.tie_db, args.keep, args.no_slower,
+        method,
+        cands,
+        folds,
+        conds,
+        store,
+        cache,
+        args.tie_db,
+        args.keep,
+        args.no_slower,
         args.budget_s,
     )
     return _cv_markdown(method, grid, folds, results, args), results
@@ -274,7 +280,8 @@ def _cv_markdown(method, grid, folds, results, args):
         )
     if args.light:
         seen += (
-            ", lit by CIE illuminant " + " and ".join(f"`{x}` (`~{x}`)" for x in args.light)
+            ", lit by CIE illuminant "
+            + " and ".join(f"`{x}` (`~{x}`)" for x in args.light)
             + " and scaled to a peak of 1 (a radiance database's kind of scene)"
         )
     n = f"{n} views" if per_scene > 1 else n

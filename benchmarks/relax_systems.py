@@ -71,7 +71,9 @@ def main(argv=None):
         "PSNR dB with the cube's peak as data range, one run each; the difference is "
         f"against relax {base:g}.",
         "",
-        "| system | scene | cube axes | " + " | ".join(head) + " | "
+        "| system | scene | cube axes | "
+        + " | ".join(head)
+        + " | "
         + " | ".join(f"{m}: relax {a:g} − {base:g} dB" for m in methods for a in relaxes[1:])
         + " |",
         "|---|---|---|" + "---|" * len(head) + "---|" * (len(methods) * (len(relaxes) - 1)),
@@ -90,7 +92,9 @@ def main(argv=None):
         lines.append(
             f"| {name} | {scene} | {len(p.system.cube_shape)} | "
             + " | ".join(f"{psnr[m, a]:.2f}" for m in methods for a in relaxes)
-            + " | " + " | ".join(f"{d:+.2f}" for d in diffs) + " |"
+            + " | "
+            + " | ".join(f"{d:+.2f}" for d in diffs)
+            + " |"
         )
         print(lines[-1], flush=True)
     lost = [f"{n} ({d:+.2f} dB)" for n, d in worst.items() if d < -LOSS_DB]

@@ -616,6 +616,7 @@ def harness_cases():
         Case("harness", "clear error after them", lambda: int("x"), ("invalid",)),
     ]
 
+
 def hostile_file_cases(folder: Path):
     """Files built to read data from elsewhere or to inflate past ``max_bytes``, and files whose
     content is not what it looks like."""
@@ -752,9 +753,13 @@ def option_cases():
             problems[name] = (p.system, np.asarray(p.measurement, dtype=np.float64))
         return problems[name]
 
-    for method, opt in (("pnp_gap", "warm_iter"), ("pnp_fast", "warm_iter"), ("dl", "warm_iter"),
-                        ("otd", "admm_iter"),
-                        ("pnp_gap", "pan_iter")):  # "auto" or a count: not caught by type below
+    for method, opt in (
+        ("pnp_gap", "warm_iter"),
+        ("pnp_fast", "warm_iter"),
+        ("dl", "warm_iter"),
+        ("otd", "admm_iter"),
+        ("pnp_gap", "pan_iter"),
+    ):  # "auto" or a count: not caught by type below
         if method not in tc.reconstruct.methods():
             continue
         system, g = problem_for(method)
@@ -905,7 +910,6 @@ def lab_cases(folder: Path):
 
     out.append(Case("io.lab", "a frame log without its header line", headless, ("header",)))
     return out
-
 
 
 def catalogue(folder: Path, n_flips: int = 150):

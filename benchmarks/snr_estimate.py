@@ -204,7 +204,7 @@ def protocol_table() -> list[str]:
         f"## SD-CASSI 256×256×28, 2 px per band, the {len(scenes)} tuning scenes",
         "",
         "The estimate with the subspace fit (the one SD-CASSI calls for) and, beside it, with "
-        "the plain GAP-TV fit (`estimate_snr(..., fit=\"gap_tv\")`).",
+        'the plain GAP-TV fit (`estimate_snr(..., fit="gap_tv")`).',
         "",
         f"| code | true SNR | fit | estimate dB: min | median | max | verdict ok "
         f"| read ≥ {CLEAN:g} dB (`pnp_gap`'s accelerated path) |",
@@ -248,7 +248,7 @@ def effect_table(methods, scenes) -> list[str]:
         "",
         f"Systems whose frames are low-rank ({', '.join(systems)}), 64×64, 16 bands, four phase "
         f"steps, seeded codes (rng 0), tuning scenes {', '.join(scenes)}; every method with its "
-        "`\"auto\"` settings.  *without*: the system's `snr_frames_low_rank` patched to false "
+        '`"auto"` settings.  *without*: the system\'s `snr_frames_low_rank` patched to false '
         "(the estimate of the earlier releases).  Mean PSNR dB over the scenes (the study's "
         "score) and the mean estimate.",
         "",

@@ -66,9 +66,7 @@ def main(argv=None) -> None:
     rows = {}
     for light in lights:
         for snr in snrs:
-            vals = [
-                reading(s, light, snr, mask, args.tv_steps, args.pan_iter) for s in scenes
-            ]
+            vals = [reading(s, light, snr, mask, args.tv_steps, args.pan_iter) for s in scenes]
             rows[light, snr] = np.array(vals)
             print(light, snr_label(snr), np.round(vals, 3), flush=True)
     thr = subspace.ROUGH_SPECTRUM

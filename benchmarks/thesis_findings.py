@@ -252,8 +252,10 @@ def cs2li_code_study(args, log, client=None):
         for k in kappas:
             m = {key: _mean(rows, key, n_filters=f, transmittance=k) for key in (
                 "psnr", "ssim", "sam", "rmse", "depth_psnr", "depth_ssim")}  # fmt: skip
-            lines.append(f"| {f} | {k:.2f} | {m['psnr']:.2f} | {m['ssim']:.3f} | {m['sam']:.2f} | "
-                         f"{m['rmse']:.4f} | {m['depth_psnr']:.2f} | {m['depth_ssim']:.3f} |")
+            lines.append(
+                f"| {f} | {k:.2f} | {m['psnr']:.2f} | {m['ssim']:.3f} | {m['sam']:.2f} | "
+                f"{m['rmse']:.4f} | {m['depth_psnr']:.2f} | {m['depth_ssim']:.3f} |"
+            )
     return "\n".join(lines), {"rows": rows, "filters": list(filters), "kappas": list(kappas)}
 
 
@@ -851,7 +853,8 @@ def main(argv=None):
             vsi_design_study,
         ),
         "vsi_noise": (
-            "CASSI-VSI: beam-splitting ratio at 15 and 20 dB (Fig. 21-22, 102)", vsi_noise_study
+            "CASSI-VSI: beam-splitting ratio at 15 and 20 dB (Fig. 21-22, 102)",
+            vsi_noise_study,
         ),
         "cs2li_noise": (
             "CS2LI with binary and colour codes against SL + SD-CASSI at 20, 30, 50 dB "
@@ -863,7 +866,8 @@ def main(argv=None):
             cs2li_code_study,
         ),
         "vsi_systems": (
-            "CASSI-VSI against SD-CASSI and the dual-arm CASSI (Sec. 3.3.4)", vsi_systems_study
+            "CASSI-VSI against SD-CASSI and the dual-arm CASSI (Sec. 3.3.4)",
+            vsi_systems_study,
         ),
         "dfa": ("CASSDI-DFA: Zernike aberration and PSF crop (Sec. 4.3)", dfa_study),
         "sweep": ("CASSDI-DFA in the focal-sweep model (Sec. 4.1)", sweep_study),
@@ -918,9 +922,7 @@ def main(argv=None):
     with _client(args.workers) as client, ThreadPoolExecutor(max(1, len(keys))) as pool:
         # every study submits its cells to the same workers at once, so they balance
         log = partial(print, flush=True)
-        running = {
-            k: pool.submit(funcs[k][1], args, log, client) if client else None for k in keys
-        }
+        running = {k: pool.submit(funcs[k][1], args, log, client) if client else None for k in keys}
         for key in keys:
             title, fn = funcs[key]
             table, d = running[key].result() if client else fn(args, log)
@@ -1096,9 +1098,11 @@ def _direction(values) -> str:
 def _spread(values, fmt="{:+.2f}", unit="", over="seeds") -> str:
     values = np.asarray(values, dtype=float)
     sd = float(values.std(ddof=1)) if len(values) > 1 else 0.0
-    return f"{fmt.format(values.mean())} ± {sd:.2f}{unit} ({over}: " + ", ".join(
-        fmt.format(v) for v in values
-    ) + ")"
+    return (
+        f"{fmt.format(values.mean())} ± {sd:.2f}{unit} ({over}: "
+        + ", ".join(fmt.format(v) for v in values)
+        + ")"
+    )
 
 
 def _form_verdict(values) -> str:
@@ -1283,8 +1287,13 @@ def verdicts(data):
             rf = [x for x in r if x.get("fringes", "along") == fr]
             if not rf:
                 continue
-            g = _per_seed(rf, lambda rs: _mean(rs, "depth_psnr", method="CS2LI + OTD")
-                          - _mean(rs, "depth_psnr", method="SL + SD-CASSI (OTD per pattern)"))
+            g = _per_seed(
+                rf,
+                lambda rs: (
+                    _mean(rs, "depth_psnr", method="CS2LI + OTD")
+                    - _mean(rs, "depth_psnr", method="SL + SD-CASSI (OTD per pattern)")
+                ),
+            )
             row(
                 f"CS2LI over structured light + SD-CASSI, fringes {fr} the dispersion",
                 "up to +4 dB depth (Sec. 6.3)", _spread(g, unit=" dB"),
@@ -1330,9 +1339,15 @@ def verdicts(data):
         cells = [(f, k) for f in v["filters"] for k in v["kappas"]]
 
         def best(key, sign):
-            return [min(cells, key=lambda c, rs=rs: sign * _mean(
-                rs, key, n_filters=c[0], transmittance=c[1])) for rs in (  # fmt: skip
-                [x for x in r if x["seed"] == q] for q in sorted({x["seed"] for x in r}))]
+            return [
+                min(
+                    cells,
+                    key=lambda c, rs=rs: sign * _mean(rs, key, n_filters=c[0], transmittance=c[1]),
+                )
+                for rs in (  # fmt: skip
+                    [x for x in r if x["seed"] == q] for q in sorted({x["seed"] for x in r})
+                )
+            ]
 
         def cell(c):
             return f"#f {c[0]}, κ {c[1]:.2f}"
@@ -1401,8 +1416,11 @@ def verdicts(data):
         r = data["table1_dl"]["rows"]
         for other, label, thesis in (
             ("dl", "DL-3D (K-SVD)", "mean +3.2 dB, less SAM"),
-            ("dl5", "DL-5D (K-SVD on whole lenslets)",
-             "better: −1.3 … +1.0 dB at 20 dB (Table 1), \"up to 1.4 dB\" (text)"),
+            (
+                "dl5",
+                "DL-5D (K-SVD on whole lenslets)",
+                'better: −1.3 … +1.0 dB at 20 dB (Table 1), "up to 1.4 dB" (text)',
+            ),
             ("lytro", "Lytro-CASSI", "mean +2.9 dB, 4.3° less SAM"),
         ):
             if not any(x["method"] == other for x in r):

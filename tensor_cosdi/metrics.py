@@ -95,7 +95,12 @@ def _bands_last_as_images(x: np.ndarray, axis: int) -> np.ndarray:
 
 
 def ssim(
-    image_true, image_test, *, data_range=None, channel_axis: int = 2, win_size: int = 7,
+    image_true,
+    image_test,
+    *,
+    data_range=None,
+    channel_axis: int = 2,
+    win_size: int = 7,
     band_axis=None,
 ) -> float:
     """Structural similarity per band (scikit-image, Gaussian-free 7×7 window), averaged.

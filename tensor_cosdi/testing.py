@@ -325,8 +325,16 @@ def _hostile_zarr(folder, secret) -> dict:
     def v2(name, chunk=b"", dtype="<f8", filters=None, compressor=None, chunks=(4,)):
         store = folder / f"{name}.zarr"
         store.mkdir()
-        meta = {"zarr_format": 2, "shape": [4], "chunks": list(chunks), "dtype": dtype,
-                "compressor": compressor, "fill_value": 0, "order": "C", "filters": filters}
+        meta = {
+            "zarr_format": 2,
+            "shape": [4],
+            "chunks": list(chunks),
+            "dtype": dtype,
+            "compressor": compressor,
+            "fill_value": 0,
+            "order": "C",
+            "filters": filters,
+        }
         (store / ".zarray").write_text(json.dumps(meta))
         (store / "0").write_bytes(chunk)
         return store

@@ -57,6 +57,7 @@ def pytest_configure(config):
             "install torch==2.13.0 first"
         )
 
+
 BACKENDS = [
     pytest.param(("numpy", "float64"), id="numpy-float64"),
     pytest.param(("numpy", "float32"), id="numpy-float32"),

@@ -28,39 +28,88 @@ MISTAKES = {
     "plan: count not a number": (["plan", "snapshots", "four", "p.json"], "count"),
     "plan: count too large": (["plan", "snapshots", str(10**8), "p.json"], "frames"),
     "acquire: broken plan file": (
-        ["acquire", "plan.json", "--port", "/dev/nonexistent", "--frames-dir", ".", "--log",
-         "l.jsonl"], "plan"),  # fmt: skip
+        [
+            "acquire",
+            "plan.json",
+            "--port",
+            "/dev/nonexistent",
+            "--frames-dir",
+            ".",
+            "--log",
+            "l.jsonl",
+        ],
+        "plan",
+    ),  # fmt: skip
     "acquire: missing plan file": (
-        ["acquire", "nowhere.json", "--port", "/dev/nonexistent", "--frames-dir", ".", "--log",
-         "l.jsonl"], "nowhere.json"),  # fmt: skip
+        [
+            "acquire",
+            "nowhere.json",
+            "--port",
+            "/dev/nonexistent",
+            "--frames-dir",
+            ".",
+            "--log",
+            "l.jsonl",
+        ],
+        "nowhere.json",
+    ),  # fmt: skip
     "reconstruct: no inputs": (["reconstruct", "--out", "c.h5"], "--system"),
     "reconstruct: unknown system": (
-        ["reconstruct", "--system", "cassi9", "--mask", "mask.mat", "--measurement", "meas.mat",
-         "--bands", "4", "--out", "c.h5"], "cassi9"),  # fmt: skip
+        [
+            "reconstruct",
+            "--system",
+            "cassi9",
+            "--mask",
+            "mask.mat",
+            "--measurement",
+            "meas.mat",
+            "--bands",
+            "4",
+            "--out",
+            "c.h5",
+        ],
+        "cassi9",
+    ),  # fmt: skip
     "reconstruct: unknown method": ([*RECON, "--out", "c.h5", "--method", "magic"], "magic"),
     "reconstruct: missing variable": (
-        [*RECON[:-4], "--measurement", "meas.mat:nope", "--shift", "1", "--out", "c.h5"], "nope"),
+        [*RECON[:-4], "--measurement", "meas.mat:nope", "--shift", "1", "--out", "c.h5"],
+        "nope",
+    ),
     "reconstruct: wrong measurement width": (
-        [*RECON[:-1], "2", "--out", "c.h5"], "measurement shape"),  # fmt: skip
+        [*RECON[:-1], "2", "--out", "c.h5"],
+        "measurement shape",
+    ),  # fmt: skip
     "reconstruct: micrometre wavelengths": (
-        [*RECON, "--wavelengths", "0.45:0.65", "--out", "c.h5"], "micrometres"),  # fmt: skip
+        [*RECON, "--wavelengths", "0.45:0.65", "--out", "c.h5"],
+        "micrometres",
+    ),  # fmt: skip
     "reconstruct: unsupported output": ([*RECON, "--out", "c.tif"], ".h5"),
     "reconstruct: option of the wrong kind": (
-        [*RECON, "--out", "c.h5", "--option", "max_iter=yes"], "max_iter"),  # fmt: skip
+        [*RECON, "--out", "c.h5", "--option", "max_iter=yes"],
+        "max_iter",
+    ),  # fmt: skip
     "reconstruct: bad system option": (
-        [*RECON, "--out", "c.h5", "--system-option", "shear_direction=2"], "shear_direction"),
+        [*RECON, "--out", "c.h5", "--system-option", "shear_direction=2"],
+        "shear_direction",
+    ),
     "reconstruct: --calibrate on the bundle path": (
-        ["reconstruct", "cal.npz", "f0.tif", "--out", "o.npz", "--calibrate"], "direct path"),
+        ["reconstruct", "cal.npz", "f0.tif", "--out", "o.npz", "--calibrate"],
+        "direct path",
+    ),
     "reconstruct: preview point not a pair": (
-        [*RECON, "--out", "c.h5", "--preview", "--points", "3"], "ROW,COL"),  # fmt: skip
+        [*RECON, "--out", "c.h5", "--preview", "--points", "3"],
+        "ROW,COL",
+    ),  # fmt: skip
     "preview: missing file": (["preview", "nothing.h5"], "nothing.h5"),
     "preview: no wavelengths": (["preview", "cube.npy"], "wavelengths"),
     "preview: garbage HDF5": (["preview", "junk.h5"], "junk.h5"),
     "info: missing file": (["info", "nothing.mat"], "nothing.mat"),
     "info: unknown extension": (["info", "plan.json"], ".json"),
     "train-denoiser: no output": (["train-denoiser"], "--out"),
-    "train-dcosnet: negative steps": (["train-dcosnet", "--out", "w.pt", "--steps", "-1"],
-                                      "steps"),  # fmt: skip
+    "train-dcosnet: negative steps": (
+        ["train-dcosnet", "--out", "w.pt", "--steps", "-1"],
+        "steps",
+    ),  # fmt: skip
 }
 
 

@@ -91,8 +91,15 @@ def test_cs2li_depth_beats_pattern_by_pattern_sd_cassi_on_a_real_scene():
         datasets.data_dir()
     except FileNotFoundError:
         pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
-    recs = studies.cs2li_comparison(("cave.face",), ("cs2li", "sl_sd_cassi"), snrs=(30,),
-                                    shape=(32, 32), n_bands=8, seeds=(1,), progress=False)
+    recs = studies.cs2li_comparison(
+        ("cave.face",),
+        ("cs2li", "sl_sd_cassi"),
+        snrs=(30,),
+        shape=(32, 32),
+        n_bands=8,
+        seeds=(1,),
+        progress=False,
+    )
     depth = {r["imager"]: r["depth_psnr"] for r in recs}
     # 32×32×8 cave.face, 30 dB, fringes across, seed 1: CS2LI 30.95 dB, SL + SD-CASSI 21.42
     assert depth["cs2li"] > depth["sl_sd_cassi"] + 5.0, depth
@@ -102,7 +109,10 @@ def test_c3slfi_sparsity_records_and_bad_fractions():
     recs = studies.c3slfi_sparsity("chelsea", shape=(16, 16), views=(2, 2), n_bands=4,
                                    fractions=(0.9, 0.99), max_iter=5, pan_iter=5)  # fmt: skip
     assert [(r["form"], r["basis"]) for r in recs] == [
-        ("3d", "wdct"), ("3d", "otd"), ("5d", "wdct"), ("5d", "otd")
+        ("3d", "wdct"),
+        ("3d", "otd"),
+        ("5d", "wdct"),
+        ("5d", "otd"),
     ]
     for r in recs:
         assert 0 < r["share_0.9"] <= r["share_0.99"] <= 1

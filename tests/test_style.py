@@ -1,4 +1,5 @@
-"""House style CI enforces: `ruff check` clean (pyproject.toml rules), and a package without
+"""House style CI enforces: `ruff check` clean (pyproject.toml rules), `ruff format` applied
+(code blocks of the Markdown docs too), and a package without
 import cycles (module- and function-level imports alike): split by concern into sub-packages,
 never into siblings that import each other."""
 
@@ -11,15 +12,21 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_ruff_check_is_clean():
+def _ruff(*args) -> subprocess.CompletedProcess:
     ruff = shutil.which("ruff", path=str(Path(sys.executable).parent)) or shutil.which("ruff")
     assert ruff, "ruff is part of the test extra (pip install '.[test]')"
-    out = subprocess.run(
-        [ruff, "check", "--output-format", "concise", str(ROOT)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-    )
+    return subprocess.run([ruff, *args, str(ROOT)], capture_output=True, text=True, cwd=ROOT)
+
+
+def test_ruff_check_is_clean():
+    out = _ruff("check", "--output-format", "concise")
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_ruff_format_is_applied():
+    """Every file as `ruff format` writes it (run `ruff format .` to fix; `# fmt: skip` keeps a
+    hand-aligned table)."""
+    out = _ruff("format", "--check", "--output-format", "concise")
     assert out.returncode == 0, out.stdout + out.stderr
 
 

@@ -60,8 +60,9 @@ def test_local_client_pins_threads_and_keeps_glibcs_mmap_threshold():
     import os
 
     with studies.local_client(1) as client:
-        env = client.run(lambda: {k: os.environ.get(k) for k in ("OMP_NUM_THREADS",
-                                                                   "MALLOC_TRIM_THRESHOLD_")})
+        env = client.run(
+            lambda: {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_")}
+        )
         assert list(env.values()) == [{"OMP_NUM_THREADS": "1", "MALLOC_TRIM_THRESHOLD_": None}]
         rows = studies.sweep({"x": [1, 2], "y": [5]}, _square, client=client, progress=False)
     assert [r["value"] for r in rows] == [6, 9]

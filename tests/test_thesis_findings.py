@@ -101,8 +101,11 @@ def test_every_verdict_follows_from_its_per_seed_values(verdict_rows):
 def test_both_fringe_orientations_are_in_the_table(verdict_rows):
     text, rows = verdict_rows
     assert "| along | CS2LI + OTD |" in text and "| across | CS2LI + OTD |" in text
-    assert {r[0].rsplit(",", 1)[-1].strip() for r in rows
-            if "CS2LI" in r[0] and "a departure" not in r[1]} == {  # fmt: skip
+    assert {
+        r[0].rsplit(",", 1)[-1].strip()
+        for r in rows
+        if "CS2LI" in r[0] and "a departure" not in r[1]
+    } == {  # fmt: skip
         "fringes along the dispersion",
         "fringes across the dispersion",
     }

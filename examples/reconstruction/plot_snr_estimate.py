@@ -41,7 +41,6 @@ for name in tc.studies.SYSTEMS:
         )
 
 
-
 def verdict(snr, est):
     if snr is None:
         return "ok" if est > 32 else "reads noise"

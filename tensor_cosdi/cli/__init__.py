@@ -65,8 +65,6 @@ from .util import (
 __all__ = ["main", "build_parser"]
 
 
-
-
 def __getattr__(name):
     if name == "DEMO_CASES":  # built from the registry on first use
         return demo_cases()
@@ -219,8 +217,6 @@ def _reconstruct(args) -> int:
     return 0
 
 
-
-
 def _systems_help() -> str:
     from ..systems import REGISTRY
 
@@ -231,8 +227,7 @@ def _methods_help() -> str:
     from ..solvers import METHODS, methods
 
     listed = ", ".join(
-        f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n
-        for n in methods()
+        f"{n} ({'/'.join(METHODS[n].systems)} only)" if METHODS[n].systems else n for n in methods()
     )
     return f"reconstruction method (default otd): {listed}"
 
@@ -423,9 +418,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="probability that a batch is a magnified view (a smaller crop upsampled to the "
         "patch; default 0)",
     )  # fmt: skip
-    tr.add_argument(
-        "--zoom-max", type=float, default=3.0, help="largest magnification (default 3)"
-    )
+    tr.add_argument("--zoom-max", type=float, default=3.0, help="largest magnification (default 3)")
     tr.add_argument(
         "--illumination", type=float, default=0.5, metavar="P",
         help="probability of a random illuminant and, apart, of a shading ramp (default 0.5)",
@@ -443,9 +436,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="starting weights: shipped (fine-tune the package's network) or a train-denoiser "
         ".pt file of the same --width/--blocks (default: random, from --seed)",
     )  # fmt: skip
-    tr.add_argument(
-        "--warmup", type=int, default=200, help="linear warm-up steps (default 200)"
-    )
+    tr.add_argument("--warmup", type=int, default=200, help="linear warm-up steps (default 200)")
     tr.set_defaults(func=run_train_denoiser)
 
     dc = sub.add_parser(
@@ -496,8 +487,6 @@ def build_parser() -> argparse.ArgumentParser:
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
     dc.set_defaults(func=run_train_dcosnet)
     return parser
-
-
 
 
 def main(argv=None) -> int:

@@ -147,8 +147,7 @@ def _reconstruct_direct(args) -> int:
     out = Path(args.out)
     if out.suffix.lower() not in (".npz", ".h5", ".hdf5"):  # never a name other than the one asked
         raise ValueError(
-            f"--out {args.out}: a reconstruction bundle is an .h5 or .npz file "
-            f"(e.g. {out.stem}.h5)"
+            f"--out {args.out}: a reconstruction bundle is an .h5 or .npz file (e.g. {out.stem}.h5)"
         )
     if out.is_dir():
         raise IsADirectoryError(f"--out {args.out} is a folder; give a file name")
@@ -259,9 +258,7 @@ def preview_target(spec: str, out, force: bool) -> Path:
     try:
         import matplotlib  # noqa: F401
     except ImportError:
-        raise ImportError(
-            "a preview needs matplotlib: pip install 'tensor_cosdi[plot]'"
-        ) from None
+        raise ImportError("a preview needs matplotlib: pip install 'tensor_cosdi[plot]'") from None
     from ..io import files
 
     path, _ = files.split_key(spec)

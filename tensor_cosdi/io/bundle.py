@@ -400,8 +400,7 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
             raise  # ours: sizes, shapes, a missing document — they name the file already
         except Exception as e:  # HDF5 raises OSError, KeyError, RuntimeError on a damaged file
             raise ValueError(
-                f"{p}: not a readable HDF5 bundle — truncated or corrupted "
-                f"({reason(e)})"
+                f"{p}: not a readable HDF5 bundle — truncated or corrupted ({reason(e)})"
             ) from e
     else:
         limit = MAX_ARRAY_BYTES if max_bytes is None else max_bytes

@@ -645,8 +645,9 @@ def training_code(weights):
         if kind == "seeded":
             return seeded_code(cfg["code_shape"], int(cfg["code_seed"]))
     except (KeyError, TypeError) as exc:
-        raise ValueError(f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet "
-                         f"({exc})") from None
+        raise ValueError(
+            f"{path} is not a D-CoSNet checkpoint of tensor-cosdi train-dcosnet ({exc})"
+        ) from None
     return None
 
 

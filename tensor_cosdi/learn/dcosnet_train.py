@@ -322,8 +322,11 @@ def _code_record(cfg: DCoSNetConfig) -> dict:
     if not cfg.fixed_code:
         return {}
     need = [cfg.patch, cfg.patch + cfg.margin]
-    return {"code": "learned" if cfg.learn_code else "seeded", "code_shape": need,
-            "code_seed": cfg.seed}
+    return {
+        "code": "learned" if cfg.learn_code else "seeded",
+        "code_shape": need,
+        "code_seed": cfg.seed,
+    }
 
 
 def train_dcosnet(

@@ -91,7 +91,13 @@ class TrainConfig:
         check_config(
             self,
             (
-                "steps", "batch", "patch", "r_max", "width", "blocks", "checkpoint_every",
+                "steps",
+                "batch",
+                "patch",
+                "r_max",
+                "width",
+                "blocks",
+                "checkpoint_every",
                 "max_shift",
             ),  # fmt: skip
         )
@@ -323,9 +329,7 @@ def _denoiser_loss(torch, net, rng, dev, cfg: TrainConfig, cubes, step=0):
     sig = torch.from_numpy(sig_np.astype(np.float32)).to(dev)
     noise = sig[:, None, None] * torch.randn(clean.shape).to(dev)
     if rng.random() < cfg.coded_fraction:
-        noise = nullspace_noise(
-            torch, noise, rng, cfg.patch, cfg.max_shift, cfg.density_spread
-        )
+        noise = nullspace_noise(torch, noise, rng, cfg.patch, cfg.max_shift, cfg.density_spread)
     noisy = clean + noise
     scale = noisy.abs().amax(dim=(1, 2)).clamp_min(1e-6)
     noisy, clean = noisy / scale[:, None, None], clean / scale[:, None, None]
@@ -376,7 +380,9 @@ def train_denoiser(
         build=lambda torch, cfg, data: _build(torch, cfg),
         batch_loss=_denoiser_loss,
         weights_config=lambda cfg: {
-            "r_max": cfg.r_max, "width": cfg.width, "blocks": cfg.blocks,
+            "r_max": cfg.r_max,
+            "width": cfg.width,
+            "blocks": cfg.blocks,
             "conv_rank": cfg.conv_rank,
         },  # fmt: skip
         resume=resume,

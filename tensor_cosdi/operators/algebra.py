@@ -102,8 +102,6 @@ def _as_scalar(value) -> float | None:
     return None
 
 
-
-
 # --------------------------------------------------------------------- protocol
 class TensorOperator:
     """A linear map between tensors of fixed shapes (the protocol of DESIGN.md).
@@ -233,12 +231,12 @@ class TensorOperator:
 
     def __matmul__(self, other):
         if isinstance(other, TensorOperator):
-                return Composition([self, other])
+            return Composition([self, other])
         return self.forward(other)
 
     def __add__(self, other):
         if isinstance(other, TensorOperator):
-                return OperatorSum([self, other])
+            return OperatorSum([self, other])
         return NotImplemented
 
     def __radd__(self, other):
@@ -248,7 +246,7 @@ class TensorOperator:
 
     def __sub__(self, other):
         if isinstance(other, TensorOperator):
-                return OperatorSum([self, Scaled(-1.0, other)])
+            return OperatorSum([self, Scaled(-1.0, other)])
         return NotImplemented
 
     def __neg__(self):

@@ -195,8 +195,14 @@ def register_method(
     METHODS.register(
         name,
         Method(
-            func, dict(defaults), summary, name, tuple(requires), tuple(systems),
-            dict(needs or {}), bool(solves),
+            func,
+            dict(defaults),
+            summary,
+            name,
+            tuple(requires),
+            tuple(systems),
+            dict(needs or {}),
+            bool(solves),
         ),  # fmt: skip
         replace=replace,
         builtin=builtin,

@@ -850,9 +850,7 @@ def fast_settings(system, measurement, **options) -> dict:
         out["pan_tv_steps"] = FAST_PAN_TV_STEPS
     auto = [k for k in BUDGET if isinstance(out[k], str) and out[k] == "auto"]
     if auto:
-        budget = fast_budget(
-            system, measurement, out["warm"], out["precision"], out["sigma_scale"]
-        )
+        budget = fast_budget(system, measurement, out["warm"], out["precision"], out["sigma_scale"])
         out.update({k: budget[k] for k in auto})
     if engine.check_relax(out["relax"], auto=True) == "auto":
         from .snr import estimate_snr

@@ -73,9 +73,7 @@ def conditioning_design(
     cls = SYSTEMS[system]  # an unknown name lists the registered ones
     allowed = _parameters(cls, system)
     if parameter not in allowed:
-        raise ValueError(
-            f"{parameter!r} is not a design parameter of {system!r}; it has {allowed}"
-        )
+        raise ValueError(f"{parameter!r} is not a design parameter of {system!r}; it has {allowed}")
     default = DEFAULT_SHAPES.get(system, (32, 32, 8))
     cube_shape = default if cube_shape is None else tuple(cube_shape)
     if len(cube_shape) != len(default):

@@ -105,9 +105,7 @@ def colour_code_design(
         raise ValueError(f"every #f must lie in 1…n_bands = {n_bands}, got {filters}")
     if any(not 0 < k <= 1 for k in transmittances):
         raise ValueError(f"every κ must lie in (0, 1], got {list(transmittances)}")
-    grid = {
-        "n_filters": filters, "transmittance": list(transmittances), "seed": seed_list(seeds)
-    }
+    grid = {"n_filters": filters, "transmittance": list(transmittances), "seed": seed_list(seeds)}
     run = partial(  # a module-level function: picklable for Dask workers
         colour_code_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
         method=method, **options,
@@ -471,9 +469,7 @@ def c3slfi_dictionary(
         raise ValueError(f"no training scene left once {list(exclude)} are excluded")
     if aligned and any(8 % v for v in views):
         raise ValueError(f"DL-5D needs views dividing the 8-pixel patch, got {tuple(views)}")
-    return _trained_dictionary(
-        names, tuple(shape), tuple(views), int(n_bands), seed, bool(aligned)
-    )
+    return _trained_dictionary(names, tuple(shape), tuple(views), int(n_bands), seed, bool(aligned))
 
 
 @lru_cache(maxsize=8)
@@ -514,8 +510,12 @@ def c3slfi_table_run(
     if method in ("dl", "dl5"):  # DL-3D / DL-5D: K-SVD dictionaries from other scenes
         if form != "3d":
             raise ValueError("the DL baselines code lenslet patches: use form='3d'")
-        options.setdefault("dictionary", c3slfi_dictionary(
-            tuple(shape), tuple(views), n_bands, exclude=(scene,), aligned=method == "dl5"))
+        options.setdefault(
+            "dictionary",
+            c3slfi_dictionary(
+                tuple(shape), tuple(views), n_bands, exclude=(scene,), aligned=method == "dl5"
+            ),
+        )
         method = "dl"
     if form == "5d":
         system, g = p.system.as_5d(), p.system.measurement_to_5d(g)

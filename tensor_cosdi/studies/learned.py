@@ -35,7 +35,13 @@ REPORT_CAVE_SCENES = ("cave.beads", "cave.face", "cave.real_and_fake_apples")
 
 
 def learned_code_run(
-    weights, *, scene="cave.face", shape=(256, 256), snr_db=None, seed=0, device="cpu",
+    weights,
+    *,
+    scene="cave.face",
+    shape=(256, 256),
+    snr_db=None,
+    seed=0,
+    device="cpu",
     reference=None,
 ) -> dict:
     """One cell of :func:`learned_code` and :func:`learned_imagers`: the D-CoSNet ``weights``

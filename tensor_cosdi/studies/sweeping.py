@@ -24,6 +24,7 @@ def seed_list(seeds) -> list:
         raise ValueError("seeds must hold at least one integer")
     return out
 
+
 def _call(run, params):
     out = run(**params)
     if not isinstance(out, dict):
@@ -79,6 +80,7 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
         raise ImportError(
             "a Dask sweep needs the dask extra: pip install 'tensor_cosdi[dask]'"
         ) from None
+
     def gather(client):
         futures = client.map(_call, [run] * len(combos), combos, pure=False)
         if progress:

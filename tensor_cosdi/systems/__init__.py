@@ -36,8 +36,17 @@ from .lytro_cassi import LytroCASSI
 from .mu_cosdi import MODALITIES, MuCoSDI
 from .registry import REGISTRY, SystemRegistry
 
-for _cls in (SDCASSI, DDCASSI, DualCameraCASSI, CASSIVSI, CASSDIDFA, C3SLFI, LytroCASSI, CS2LI,
-             MuCoSDI):
+for _cls in (
+    SDCASSI,
+    DDCASSI,
+    DualCameraCASSI,
+    CASSIVSI,
+    CASSDIDFA,
+    C3SLFI,
+    LytroCASSI,
+    CS2LI,
+    MuCoSDI,
+):
     REGISTRY.register_class(_cls, builtin=True)
 del _cls
 

@@ -142,8 +142,7 @@ class LytroCASSI(System):
         cassi = [SumAxis(shear.output_shape, 2) @ shear @ Code(c, cube) for c in _shots(self.code)]
         pad = Pad((nx, ny), axis=1, before=0, after=extra)
         rgb = [
-            pad @ SumAxis(cube, 2) @ Code(self.response[:, c], cube, axes=(2,))
-            for c in range(3)
+            pad @ SumAxis(cube, 2) @ Code(self.response[:, c], cube, axes=(2,)) for c in range(3)
         ]
         self._finish(
             Stack(cassi + rgb, axis=2), wavelengths=wl, axes=("x", "y", "λ"),

@@ -111,10 +111,10 @@ def test_every_symmetry_of_a_fortran_cube_comes_back_in_its_layout():
 
     def view(a, k):  # the eight symmetries: transpose, then flip rows / columns
         a = a.transpose(1, 0, 2) if k & 4 else a
-        return a[::-1 if k & 1 else 1, ::-1 if k & 2 else 1]
+        return a[:: -1 if k & 1 else 1, :: -1 if k & 2 else 1]
 
     def unview(a, k):
-        a = a[::-1 if k & 1 else 1, ::-1 if k & 2 else 1]
+        a = a[:: -1 if k & 1 else 1, :: -1 if k & 2 else 1]
         return a.transpose(1, 0, 2) if k & 4 else a
 
     den = SpectralDenoiser()
@@ -224,8 +224,10 @@ def test_cli_train_denoiser(tmp_path, capsys):
     assert cli.main(args[:1] + ["--out", str(old)] + recipe + args[3:]) == 0
     cfg = json.loads(torch.load(old, weights_only=True)["train_config"])
     assert (cfg["illumination"], cfg["max_shift"], cfg["density_spread"]) == (0.0, 2, 0.0)
-    for bad, msg in ((["--density-spread", "0.5"], "density_spread must be a number in [0, 0.5)"),
-                     (["--illumination", "-1"], "illumination must be a number in [0, 1]")):
+    for bad, msg in (
+        (["--density-spread", "0.5"], "density_spread must be a number in [0, 0.5)"),
+        (["--illumination", "-1"], "illumination must be a number in [0, 1]"),
+    ):
         assert cli.main(args[:1] + ["--out", str(tmp_path / "b.pt")] + bad + args[3:]) == 2
         assert msg in capsys.readouterr().err
 

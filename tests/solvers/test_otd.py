@@ -235,8 +235,11 @@ def test_progress_bar_on_request(capsys):
         ({"pan_spectrum": "led"}, r"pan_spectrum must be one of \('flat', 'fitted', 'fitted_z'"),
         ({"admm_iter": -1}, "admm_iter must be an integer ≥ 0, got -1"),
         ({"admm_iter": "none"}, "admm_iter must be an integer ≥ 0 or 'auto', got 'none'"),
-        ({"admm_iter": 0, "pan_iter": 0}, r"admm_iter=0 returns the first stage's cube, and "
-         r"there is none here \(pan_iter=0\)"),
+        (
+            {"admm_iter": 0, "pan_iter": 0},
+            r"admm_iter=0 returns the first stage's cube, and "
+            r"there is none here \(pan_iter=0\)",
+        ),
     ],
 )
 def test_bad_options_are_clear_errors(options, message):
@@ -554,8 +557,7 @@ def test_light_gate_weights_the_atoms_only_under_a_sharp_light():
     cube = radiance(chart, wl, "FL2")
     g = sd.forward(cube)
     err = {
-        name: np.linalg.norm(subspace_gap_tv(sd, g, refit_at=k, **kw) - cube)
-        / np.linalg.norm(cube)
+        name: np.linalg.norm(subspace_gap_tv(sd, g, refit_at=k, **kw) - cube) / np.linalg.norm(cube)
         for name, k in (("plain", None), ("gated", at))
     }
     assert err["gated"] < 0.9 * err["plain"], err

@@ -39,7 +39,8 @@ def test_short_and_long_runs_and_plain_gap_keep_their_tables(levels):
     seen, snr = levels
     assert seen["admm, 40"] == (snr_schedule(snr, M.SIGMA_END_ADMM_SHORT), 40)
     assert seen["admm, auto"] == (
-        snr_schedule(snr, M.SIGMA_END_ADMM), round(snr_schedule(snr, M.ADMM_ITER))
+        snr_schedule(snr, M.SIGMA_END_ADMM),
+        round(snr_schedule(snr, M.ADMM_ITER)),
     )
     assert seen["admm, auto"][1] > 50  # a long run: the long table
     assert seen["accelerated, 40"] == (snr_schedule(snr, M.SIGMA_END_SHORT), 40)
@@ -391,5 +392,6 @@ def test_a_cube_with_more_axes_keeps_the_peak_and_its_own_tables():
     assert seen["sd_cassi", "peak"][:2] == ("peak", snr_schedule(s3, M.SIGMA_END_ADMM_SHORT_PEAK))
     for scale in ("auto", "peak"):
         assert seen["cassdi_dfa", scale][:2] == (
-            "peak", snr_schedule(s4, M.SIGMA_END_ADMM_SHORT_PEAK)
+            "peak",
+            snr_schedule(s4, M.SIGMA_END_ADMM_SHORT_PEAK),
         )

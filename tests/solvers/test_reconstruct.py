@@ -181,8 +181,9 @@ def test_defaults_are_written_once_in_each_signature():
         params = list(inspect.signature(entry.func).parameters.values())[2:]
         assert entry.defaults == {p.name: p.default for p in params}, name
     # wdct through reconstruct and called directly agree (they once differed: mu 0.05 vs 0.2)
-    assert inspect.signature(tc.solvers.wdct_admm).parameters["mu"].default == (
-        tc.solvers.METHODS["wdct"].defaults["mu"]
+    assert (
+        inspect.signature(tc.solvers.wdct_admm).parameters["mu"].default
+        == (tc.solvers.METHODS["wdct"].defaults["mu"])
     )
 
 

@@ -64,8 +64,17 @@ def test_admm_stage_reaches_the_tied_least_squares_solution():
     op = ModeProduct(shape, {2: rng.standard_normal((4, 3))})  # tall: one minimiser
     g = op.forward(rng.random(shape))
     C, b = SumAxis(shape, 2), rng.random((6, 5))
-    x, _, _ = admm_stage(op, g, np.zeros(shape) + 0.5, basis={2: "dct"},
-                         couplings=[(C, b, 0.3)], lam=1e-12, max_iter=400, cg_iter=20, tol=1e-12)
+    x, _, _ = admm_stage(
+        op,
+        g,
+        np.zeros(shape) + 0.5,
+        basis={2: "dct"},
+        couplings=[(C, b, 0.3)],
+        lam=1e-12,
+        max_iter=400,
+        cg_iter=20,
+        tol=1e-12,
+    )
     A, M = op.to_matrix().toarray(), C.to_matrix().toarray()
     s = 0.3 * op.lipschitz(np.zeros(shape))
     want = np.linalg.solve(A.T @ A + s * M.T @ M, A.T @ vec(g) + s * M.T @ vec(b))

@@ -250,7 +250,7 @@ def main(argv=None) -> None:
                     f"{np.mean([r['shut'] for r in opened]):.2f} | "
                     + " | ".join(
                         f"{np.mean([r['open'][repr(f)] for r in opened]):.2f}" for f in floors
-                    )  # fmt: skip
+                    )
                     + " |"
                 )
     lines += [

@@ -759,12 +759,12 @@ def option_cases():
         ("dl", "warm_iter"),
         ("otd", "admm_iter"),
         ("pnp_gap", "pan_iter"),
-    ):  # "auto" or a count: not caught by type below
+    ):  # "auto" or a count: not caught by type below (0 is a count there: the first stage alone)
         if method not in tc.reconstruct.methods():
             continue
         system, g = problem_for(method)
         extra = (NEEDS[method],) if method in NEEDS else ()
-        for v in (True, "0.5", float("inf"), 0, "many"):
+        for v in (True, "0.5", float("inf"), -1, "many"):
             out.append(Case("options", f"{method} {opt}={v!r}",
                             lambda m=method, o=opt, v=v, s=system, g=g:
                             tc.reconstruct(s, g, m, **{o: v}), (opt, *extra)))  # fmt: skip
@@ -774,7 +774,7 @@ def option_cases():
         extra = (NEEDS[method],) if method in NEEDS else ()
         for opt, default in METHODS[method].defaults.items():
             if isinstance(default, bool):
-                bad = ["yes", 1]
+                bad = ["yes", 1, None]
             elif isinstance(default, (int, float)):
                 bad = [True, "0.5", float("inf")]
             else:
@@ -825,6 +825,11 @@ def option_cases():
                                              direction="search"), ("movable",)),
         ("mirror_symmetric NaN shift", lambda: tc.io.mirror_symmetric([0, np.nan]), ("shifts",)),
         ("mirror_symmetric no shifts", lambda: tc.io.mirror_symmetric([]), ("shifts",)),
+        ("pnp_gap guard=0.5 with ADMM (the guard unused there)",
+         lambda: tc.reconstruct(*problem_for("pnp_gap"), "pnp_gap", denoiser="tv",
+                                splitting="admm", guard=0.5), ("guard",)),
+        ("wdct wavelet_name=3", lambda: tc.reconstruct(*problem_for("wdct"), "wdct",
+                                                       wavelet_name=3), ("wavelet",)),
         ("pnp_gap pan_iter with a GAP-TV start",
          lambda: tc.reconstruct(*problem_for("pnp_gap"), "pnp_gap", warm="gap_tv", pan_iter=30),
          ("pan_iter",)),

@@ -94,16 +94,18 @@ def option_types(where: str, options: dict, defaults: dict) -> None:
     """Check each option's *kind* against its default's: a number where the default is a number
     (not a boolean, not a string, finite), a flag where it is a flag.
 
-    ``None`` is left to the method (some take it as "off"), as are options
-    whose default is ``None``, a string (``"auto"`` and the like) or a
-    container are left to the method, which knows their meaning.  ``where``
-    names the method or system in the message.
+    ``None`` is left to the method (some take it as "off"), except for a flag, which is only
+    ``True`` or ``False``; options whose default is ``None``, a string (``"auto"`` and the
+    like) or a container are left to the method, which knows their meaning.  ``where`` names
+    the method or system in the message.
     """
     for key, value in options.items():
-        if key not in defaults or value is None:  # None: "off", where the method allows it
+        if key not in defaults:
             continue
         default = defaults[key]
         label = f"{where}: option {key}"
+        if value is None and not isinstance(default, (bool, np.bool_)):
+            continue  # None: "off", where the method allows it; a flag is True or False
         if isinstance(default, (bool, np.bool_)):
             flag(label, value)
         elif isinstance(default, numbers.Integral):

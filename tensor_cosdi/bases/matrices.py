@@ -130,6 +130,11 @@ def wavelet(n: int, name: str = "sym8", *, level="auto") -> np.ndarray:
     import pywt
 
     n = _size(n)
+    if not isinstance(name, str):
+        raise ValueError(
+            f"the wavelet must be a PyWavelets name such as 'sym8', got {type(name).__name__} "
+            f"{name!r}"
+        )
     try:
         w = pywt.Wavelet(name)
     except ValueError:
@@ -140,9 +145,8 @@ def wavelet(n: int, name: str = "sym8", *, level="auto") -> np.ndarray:
     if level == 0:
         return np.eye(n)
     with warnings.catch_warnings():
-        warnings.simplefilter(
-            "ignore"
-        )  # deep levels on short signals: boundary wrap-around is intended
+        # deep levels on short signals: boundary wrap-around is intended
+        warnings.simplefilter("ignore")
         cols = [
             np.concatenate(pywt.wavedec(e, w, mode="periodization", level=level)) for e in np.eye(n)
         ]

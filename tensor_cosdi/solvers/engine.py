@@ -47,6 +47,7 @@ from ._base import History, relative_change
 
 __all__ = [
     "Loop", "admm", "gap", "fista", "twist", "least_norm", "lipschitz", "check_int", "check_relax",
+    "check_guard",
 ]  # fmt: skip
 
 
@@ -112,6 +113,17 @@ def check_relax(relax, *, auto: bool = False):
         what = "'auto' or a number" if auto else "a number"
         raise ValueError(f"relax must be {what} in (0, 2), got {relax!r}")
     return float(relax)
+
+
+def check_guard(guard):
+    """:func:`gap`'s divergence guard as a float ratio > 1, or ``None`` (off); anything else is a
+    one-line ``ValueError``."""
+    if guard is None:
+        return None
+    numeric = isinstance(guard, (int, float, np.floating)) and not isinstance(guard, bool)
+    if not (numeric and guard > 1):
+        raise ValueError(f"guard must be a ratio > 1 or None, got {guard!r}")
+    return float(guard)
 
 
 def _gnorm(g) -> float:
@@ -262,8 +274,7 @@ def gap(
     that feedback grows instead of shrinking and the iterates diverge — the
     residual is the signal, and it needs no ground truth.
     """
-    if guard is not None and not guard > 1:
-        raise ValueError(f"guard must be a ratio > 1 or None, got {guard!r}")
+    guard = check_guard(guard)
     best, rises, last = (np.inf, None), 0, np.inf
     lam = eps * sensing_gain(op, g)
     x = least_norm(op, g, eps) if start is None else start

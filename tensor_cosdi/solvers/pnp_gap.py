@@ -504,6 +504,7 @@ def pnp_gap(
     chosen = accelerate != "auto"
     auto_admm_iter = splitting == "admm" and isinstance(max_iter, str)
     relax = engine.check_relax(relax, auto=True)
+    guard = engine.check_guard(guard)  # checked on every splitting, used by accelerated GAP
     need_snr = sigma_end == "auto" or auto_admm_iter or (splitting == "admm" and relax == "auto")
     accelerate, eps, snr = gap_settings(system, measurement, accelerate, eps, need_snr=need_snr)
     if splitting == "auto":

@@ -103,3 +103,37 @@ def test_add_noise_arguments():
     with pytest.raises(ValueError, match="NaN or inf"):
         noise.add_noise(np.full((8, 8), np.nan), 30.0, rng=0)
     assert noise.add_noise(x, None) is x  # documented: no noise
+
+
+@pytest.fixture(scope="module")
+def small_problem():
+    p = studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    return p.system, p.measurement
+
+
+@pytest.mark.parametrize(
+    "method, kw, word",
+    [
+        ("gap_tv", {"progress": None}, "progress must be True or False, got None"),
+        ("otd", {"nonneg": None}, "nonneg must be True or False, got None"),
+        # the guard is accelerated GAP's; on the ADMM splitting it is unused, yet still checked
+        ("pnp_gap", {"denoiser": "tv", "splitting": "admm", "guard": 0.5}, "guard must be"),
+        ("pnp_gap", {"denoiser": "tv", "splitting": "gap", "guard": True}, "guard must be"),
+        ("wdct", {"wavelet_name": 3}, "wavelet must be a PyWavelets name"),
+        ("wdct", {"wavelet_name": float("nan")}, "wavelet must be a PyWavelets name"),
+    ],
+)
+def test_a_flag_given_none_a_guard_unused_and_a_wavelet_that_is_no_name(
+    small_problem, method, kw, word
+):
+    system, g = small_problem
+    with pytest.raises(ValueError, match=word):
+        tc.reconstruct(system, g, method, **kw)
+
+
+def test_a_guard_of_none_and_a_wavelet_in_capitals_still_work(small_problem):
+    system, g = small_problem
+    tc.reconstruct(system, g, "pnp_gap", denoiser="tv", splitting="admm", guard=None, max_iter=2)
+    a = tc.reconstruct(system, g, "wdct", wavelet_name="SYM4", max_iter=3).cube  # PyWavelets' case
+    b = tc.reconstruct(system, g, "wdct", wavelet_name="sym4", max_iter=3).cube
+    np.testing.assert_array_equal(a, b)

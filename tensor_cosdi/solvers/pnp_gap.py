@@ -200,7 +200,10 @@ RELAX = {28.5: 1.0, 19.5: 1.0}
 #: 1 / 1.5 / 1.8 / 1.9 →
 #: 32.43 / 32.75 / 32.88 / 32.97 dB at 30 dB (every fold 1.9; 1.9 against 1: the FL2 views
 #: +0.92 dB on average, +0.07 to +1.59 a view, the others +0.34, −0.21 to +0.70),
-#: 30.33 / 30.07 / 29.94 / 29.93 at 20 dB (every fold 1).
+#: 30.33 / 30.07 / 29.94 / 29.93 at 20 dB (every fold 1).  With the float32 budget
+#: (:data:`FAST_ITER_FLOAT32`, 22 iterations at 30 dB) through both codes, the same 24 views
+#: (``benchmarks/results/cv_pnp_fast_float32_relax_30db.md``): 1 / 1.5 / 1.9 → 31.72 / 32.13 /
+#: 32.36 dB (TSA) and 35.40 / 35.96 / 36.22 (random code); every fold of each code chose 1.9.
 FAST_RELAX = {28.5: 1.9, 19.5: 1.0}
 #: ADMM 80 → 160 iterations of one call, cross-validated with cycling
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,

@@ -87,7 +87,7 @@ def main(argv=None):
             "adjoint",
             lambda: sweep.apply_adjoint(y),
             lambda: by_factors(sweep_factors, y, adjoint=True),
-        ),  # fmt: skip
+        ),
     ):
         err = float(np.abs(fast() - slow()).max())
         rows.append((f"focal sweep: BlurSum, {steps} steps", direction, median_seconds(fast, r),

@@ -1344,9 +1344,7 @@ def verdicts(data):
                     cells,
                     key=lambda c, rs=rs: sign * _mean(rs, key, n_filters=c[0], transmittance=c[1]),
                 )
-                for rs in (  # fmt: skip
-                    [x for x in r if x["seed"] == q] for q in sorted({x["seed"] for x in r})
-                )
+                for rs in ([x for x in r if x["seed"] == q] for q in sorted({x["seed"] for x in r}))
             ]
 
         def cell(c):

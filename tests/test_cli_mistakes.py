@@ -21,55 +21,21 @@ def folder(tmp_path, monkeypatch):
 
 RECON = ["reconstruct", "--system", "sd_cassi", "--mask", "mask.mat:mask", "--bands", "4",
          "--measurement", "meas.mat:meas", "--shift", "1"]  # fmt: skip
+#: ``acquire``'s arguments after the plan: a port that does not exist, frames here, a log.
+ACQUIRE = ["--port", "/dev/nonexistent", "--frames-dir", ".", "--log", "l.jsonl"]
 
 MISTAKES = {
     "demo: negative size": (["demo", "--size", "-3"], "size"),
     "plan: unknown kind": (["plan", "bursts", "4", "p.json"], "invalid choice"),
     "plan: count not a number": (["plan", "snapshots", "four", "p.json"], "count"),
     "plan: count too large": (["plan", "snapshots", str(10**8), "p.json"], "frames"),
-    "acquire: broken plan file": (
-        [
-            "acquire",
-            "plan.json",
-            "--port",
-            "/dev/nonexistent",
-            "--frames-dir",
-            ".",
-            "--log",
-            "l.jsonl",
-        ],
-        "plan",
-    ),  # fmt: skip
-    "acquire: missing plan file": (
-        [
-            "acquire",
-            "nowhere.json",
-            "--port",
-            "/dev/nonexistent",
-            "--frames-dir",
-            ".",
-            "--log",
-            "l.jsonl",
-        ],
-        "nowhere.json",
-    ),  # fmt: skip
+    "acquire: broken plan file": (["acquire", "plan.json", *ACQUIRE], "plan"),
+    "acquire: missing plan file": (["acquire", "nowhere.json", *ACQUIRE], "nowhere.json"),
     "reconstruct: no inputs": (["reconstruct", "--out", "c.h5"], "--system"),
     "reconstruct: unknown system": (
-        [
-            "reconstruct",
-            "--system",
-            "cassi9",
-            "--mask",
-            "mask.mat",
-            "--measurement",
-            "meas.mat",
-            "--bands",
-            "4",
-            "--out",
-            "c.h5",
-        ],
+        ["reconstruct", "--system", "cassi9", *RECON[3:], "--out", "c.h5"],
         "cassi9",
-    ),  # fmt: skip
+    ),
     "reconstruct: unknown method": ([*RECON, "--out", "c.h5", "--method", "magic"], "magic"),
     "reconstruct: missing variable": (
         [*RECON[:-4], "--measurement", "meas.mat:nope", "--shift", "1", "--out", "c.h5"],
@@ -78,16 +44,16 @@ MISTAKES = {
     "reconstruct: wrong measurement width": (
         [*RECON[:-1], "2", "--out", "c.h5"],
         "measurement shape",
-    ),  # fmt: skip
+    ),
     "reconstruct: micrometre wavelengths": (
         [*RECON, "--wavelengths", "0.45:0.65", "--out", "c.h5"],
         "micrometres",
-    ),  # fmt: skip
+    ),
     "reconstruct: unsupported output": ([*RECON, "--out", "c.tif"], ".h5"),
     "reconstruct: option of the wrong kind": (
         [*RECON, "--out", "c.h5", "--option", "max_iter=yes"],
         "max_iter",
-    ),  # fmt: skip
+    ),
     "reconstruct: bad system option": (
         [*RECON, "--out", "c.h5", "--system-option", "shear_direction=2"],
         "shear_direction",
@@ -99,7 +65,7 @@ MISTAKES = {
     "reconstruct: preview point not a pair": (
         [*RECON, "--out", "c.h5", "--preview", "--points", "3"],
         "ROW,COL",
-    ),  # fmt: skip
+    ),
     "preview: missing file": (["preview", "nothing.h5"], "nothing.h5"),
     "preview: no wavelengths": (["preview", "cube.npy"], "wavelengths"),
     "preview: garbage HDF5": (["preview", "junk.h5"], "junk.h5"),
@@ -109,7 +75,7 @@ MISTAKES = {
     "train-dcosnet: negative steps": (
         ["train-dcosnet", "--out", "w.pt", "--steps", "-1"],
         "steps",
-    ),  # fmt: skip
+    ),
 }
 
 

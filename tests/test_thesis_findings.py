@@ -105,7 +105,7 @@ def test_both_fringe_orientations_are_in_the_table(verdict_rows):
         r[0].rsplit(",", 1)[-1].strip()
         for r in rows
         if "CS2LI" in r[0] and "a departure" not in r[1]
-    } == {  # fmt: skip
+    } == {
         "fringes along the dispersion",
         "fringes across the dispersion",
     }

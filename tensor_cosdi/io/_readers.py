@@ -406,12 +406,13 @@ def _zarr_chunks_bounded(path: Path, name: str, folder: Path, bytes_codecs, chun
     than a chunk's ``chunk_bytes`` (a compression bomb): each bytes-to-bytes codec, last one
     first, is bounded without inflating."""
     for root, dirs, files in os.walk(folder):
+        # a sub-folder with its own metadata is another array, not this one's chunks
         dirs[:] = [
             d
             for d in dirs
             if not (Path(root, d) / "zarr.json").exists()
             and not (Path(root, d) / ".zarray").exists()
-        ]  # fmt: skip  (other arrays)
+        ]
         for f in files:
             if f in _ZARR_METADATA:
                 continue

@@ -37,6 +37,7 @@ so no option depends on the measurement's scale.
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
 import tensorly as tl
@@ -120,7 +121,7 @@ def check_guard(guard):
     one-line ``ValueError``."""
     if guard is None:
         return None
-    numeric = isinstance(guard, (int, float, np.floating)) and not isinstance(guard, bool)
+    numeric = isinstance(guard, numbers.Real) and not isinstance(guard, (bool, np.bool_))
     if not (numeric and guard > 1):
         raise ValueError(f"guard must be a ratio > 1 or None, got {guard!r}")
     return float(guard)

@@ -134,6 +134,7 @@ def test_a_flag_given_none_a_guard_unused_and_a_wavelet_that_is_no_name(
 def test_a_guard_of_none_and_a_wavelet_in_capitals_still_work(small_problem):
     system, g = small_problem
     tc.reconstruct(system, g, "pnp_gap", denoiser="tv", splitting="admm", guard=None, max_iter=2)
+    assert tc.solvers.engine.check_guard(np.int64(3)) == 3.0  # a NumPy integer is a ratio too
     a = tc.reconstruct(system, g, "wdct", wavelet_name="SYM4", max_iter=3).cube  # PyWavelets' case
     b = tc.reconstruct(system, g, "wdct", wavelet_name="sym4", max_iter=3).cube
     np.testing.assert_array_equal(a, b)

@@ -1,7 +1,7 @@
 """House style CI enforces: `ruff check` clean (pyproject.toml rules), `ruff format` applied
-(code blocks of the Markdown docs too), and a package without
-import cycles (module- and function-level imports alike): split by concern into sub-packages,
-never into siblings that import each other."""
+(the Markdown docs' code blocks too), and a package without import cycles (module- and
+function-level imports alike): split by concern into sub-packages, never into siblings that
+import each other."""
 
 import ast
 import shutil

@@ -37,13 +37,12 @@ so no option depends on the measurement's scale.
 from __future__ import annotations
 
 import math
-import numbers
 
 import numpy as np
 import tensorly as tl
 
 from ..operators import sensing_gain
-from ..validate import integer
+from ..validate import integer, number
 from ._base import History, relative_change
 
 __all__ = [
@@ -117,14 +116,9 @@ def check_relax(relax, *, auto: bool = False):
 
 
 def check_guard(guard):
-    """:func:`gap`'s divergence guard as a float ratio > 1, or ``None`` (off); anything else is a
-    one-line ``ValueError``."""
-    if guard is None:
-        return None
-    numeric = isinstance(guard, numbers.Real) and not isinstance(guard, (bool, np.bool_))
-    if not (numeric and guard > 1):
-        raise ValueError(f"guard must be a ratio > 1 or None, got {guard!r}")
-    return float(guard)
+    """:func:`gap`'s divergence guard as a finite float ratio > 1, or ``None`` (off); anything
+    else is a one-line ``ValueError`` (:func:`tensor_cosdi.validate.number`)."""
+    return None if guard is None else number("guard", guard, low=1, low_open=True)
 
 
 def _gnorm(g) -> float:

@@ -56,7 +56,7 @@ def test_guard_does_not_change_a_converging_run(problem):
 @pytest.mark.parametrize("bad", [1.0, 0.5, -2.0])
 def test_guard_must_be_a_ratio_above_one(problem, bad):
     op, g = problem
-    with pytest.raises(ValueError, match="guard must be a ratio > 1"):
+    with pytest.raises(ValueError, match="guard must be a finite number > 1"):
         engine.gap(op, g, Denoiser("tv", sigma=0.05), guard=bad)
 
 

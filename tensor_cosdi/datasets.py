@@ -23,6 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ._units import check_wavelengths_nm
+from .validate import integer, precision
+
 __all__ = [
     "KAIST_WAVELENGTHS",
     "HSI_SCENES",
@@ -236,6 +239,52 @@ def data_file(relative) -> Path:
     )
 
 
+def _scene_arrays(p: Path) -> tuple[np.ndarray, np.ndarray]:
+    """``(cube, wavelengths)`` of a scene file, read through the bounded readers of
+    :mod:`tensor_cosdi.io.files` (declared sizes checked before anything is allocated; no
+    pickles; regular files only) and checked: a 3-D cube of unsigned integers or floats,
+    finite and non-negative, and one increasing band centre in nm per band."""
+    from .io.files import read_array, require_file
+
+    require_file(p, "scene file")
+    try:
+        raw = read_array(p, "cube")
+        wl = read_array(p, "wavelengths_nm")
+    except KeyError as e:  # its message lists what the file holds
+        raise ValueError(
+            f"expected arrays 'cube' and 'wavelengths_nm' in a scene file: {e.args[0]}"
+        ) from None
+    if raw.dtype.kind not in "uf":
+        raise ValueError(
+            f"{p}: 'cube' must hold unsigned integers or floats, got {raw.dtype} "
+            "(signed, boolean and complex values are not light)"
+        )
+    if raw.ndim != 3:
+        raise ValueError(f"{p}: 'cube' must be (rows, columns, bands), got shape {raw.shape}")
+    if wl.dtype.kind not in "iuf" or wl.ndim != 1:
+        raise ValueError(
+            f"{p}: 'wavelengths_nm' must be 1-D numbers, got {wl.dtype} of shape {wl.shape}"
+        )
+    wl = check_wavelengths_nm(wl, f"{p}: wavelengths_nm")
+    if wl.size != raw.shape[2]:
+        raise ValueError(f"{p}: cube of shape {raw.shape} does not match {wl.size} wavelengths")
+    if wl.size > 1 and not np.all(np.diff(wl) > 0):
+        raise ValueError(f"{p}: wavelengths_nm must increase strictly, got {wl.tolist()}")
+    if raw.dtype.kind == "f" and not np.all(np.isfinite(raw)):
+        raise ValueError(f"{p}: 'cube' holds NaN or infinite values")
+    if raw.dtype.kind == "f" and raw.size and raw.min() < 0:
+        raise ValueError(f"{p}: 'cube' holds negative values (min {raw.min():g}); light is ≥ 0")
+    return raw, wl
+
+
+def _crop_shape(shape) -> tuple[int, int]:
+    try:
+        h, w = shape
+    except (TypeError, ValueError):
+        raise ValueError(f"shape must be (rows, columns), got {shape!r}") from None
+    return integer("shape rows", h, low=1), integer("shape columns", w, low=1)
+
+
 def load_hsi(
     name, wavelengths=None, *, shape=None, folder=None, dtype="float64"
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -245,14 +294,28 @@ def load_hsi(
     ----------
     name : str or path
         A scene of :data:`HSI_SCENES` (looked up in :func:`data_dir`) or a
-        path to an ``.npz`` with ``cube`` and ``wavelengths_nm``.
+        path to an ``.npz`` with ``cube`` (unsigned integers, scaled by their
+        type's maximum, or floats; finite and non-negative) and
+        ``wavelengths_nm`` (strictly increasing nm, one per band).  The file is
+        read with :func:`tensor_cosdi.io.read_array`: its declared sizes are
+        checked before anything is allocated, and pickles are refused.
     wavelengths : array of nm, optional
         Resample onto these band centres by linear interpolation (each must
         lie inside the scene's range); default the scene's own bands.
         ``"kaist"`` means :data:`KAIST_WAVELENGTHS`.
     shape : (rows, columns), optional
         A centred crop of this size.
+    dtype : "float64" or "float32"
+
+    Raises
+    ------
+    FileNotFoundError
+        No such scene file (or no data folder).
+    ValueError
+        An unknown scene name, a file that is not a regular file, or one whose arrays
+        break the rules above (each message names the file and what was wrong).
     """
+    dtype = precision("dtype", dtype)
     p = Path(name)
     if p.suffix != ".npz":
         if name not in HSI_SCENES:
@@ -261,30 +324,22 @@ def load_hsi(
                 "(or pass a path to an .npz)"
             )
         p = data_dir(folder) / f"{name}.npz"
-    if not p.is_file():
-        raise FileNotFoundError(f"scene file not found: {p}")
-    with np.load(p, allow_pickle=False) as d:
-        if "cube" not in d or "wavelengths_nm" not in d:
-            raise ValueError(
-                f"{p}: expected arrays 'cube' and 'wavelengths_nm', found {sorted(d.files)}"
-            )
-        raw, wl = d["cube"], np.asarray(d["wavelengths_nm"], dtype=np.float64)
-    if raw.ndim != 3 or raw.shape[2] != wl.size:
-        raise ValueError(f"{p}: cube of shape {raw.shape} does not match {wl.size} wavelengths")
+    raw, wl = _scene_arrays(p)
     scale = float(np.iinfo(raw.dtype).max) if raw.dtype.kind == "u" else 1.0
     cube = raw.astype(np.float64) / scale
     if shape is not None:
-        h, w = (int(v) for v in shape)
+        h, w = _crop_shape(shape)
         if h > cube.shape[0] or w > cube.shape[1]:
             raise ValueError(f"crop {shape} is larger than the scene's {cube.shape[:2]}")
         r0, c0 = (cube.shape[0] - h) // 2, (cube.shape[1] - w) // 2
         cube = cube[r0 : r0 + h, c0 : c0 + w]
     if wavelengths is not None:
-        target = (
-            KAIST_WAVELENGTHS
-            if isinstance(wavelengths, str) and wavelengths == "kaist"
-            else np.asarray(wavelengths, dtype=np.float64)
-        )
+        if isinstance(wavelengths, str) and wavelengths == "kaist":
+            target = KAIST_WAVELENGTHS
+        else:
+            target = check_wavelengths_nm(wavelengths, "wavelengths")
+            if target.ndim != 1:
+                raise ValueError(f"wavelengths must be 1-D band centres, got shape {target.shape}")
         if target.min() < wl.min() or target.max() > wl.max():
             raise ValueError(
                 f"wavelengths {target.min():g}–{target.max():g} nm lie outside the scene's "

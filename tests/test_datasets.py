@@ -125,3 +125,67 @@ def test_an_installed_package_finds_the_data_from_its_checkout(tmp_path, monkeyp
     monkeypatch.chdir(tmp_path / "venv")  # far from any data: a clear error naming where
     with pytest.raises(FileNotFoundError, match="TENSOR_COSDI_DATA"):
         datasets.data_dir()
+
+
+def _scene_file(path, cube, wavelengths=None):
+    wl = np.linspace(400.0, 700.0, cube.shape[-1]) if wavelengths is None else wavelengths
+    np.savez(path, cube=cube, wavelengths_nm=wl)
+    return path
+
+
+@pytest.mark.parametrize(
+    "cube, wavelengths, match",
+    [
+        (np.ones((4, 4, 3), complex), None, "unsigned integers or floats, got complex128"),
+        (-np.ones((4, 4, 3), np.int16), None, "unsigned integers or floats, got int16"),
+        (np.ones((4, 4, 3), bool), None, "unsigned integers or floats, got bool"),
+        (np.full((4, 4, 3), np.nan), None, "NaN or infinite"),
+        (-np.ones((4, 4, 3)), None, "negative values"),
+        (np.ones((4, 12)), None, r"\(rows, columns, bands\), got shape \(4, 12\)"),
+        (np.ones((4, 4, 3)), np.array([0.4, 0.5, 0.6]), "look like micrometres"),
+        (np.ones((4, 4, 3)), np.array([500.0, 450.0, 600.0]), "must increase strictly"),
+        (np.ones((4, 4, 4)), np.ones((2, 2)) * 500, "must be 1-D numbers"),
+        (np.ones((4, 4, 3)), np.linspace(400, 700, 4), r"does not match 4 wavelengths"),
+    ],
+)
+def test_a_scene_file_is_checked_before_use(tmp_path, cube, wavelengths, match):
+    path = _scene_file(tmp_path / "scene.npz", cube, wavelengths)
+    with pytest.raises(ValueError, match=match):
+        datasets.load_hsi(path)
+
+
+def test_a_scene_file_is_read_bounded_and_only_from_a_regular_file(tmp_path):
+    import io
+    import zipfile
+
+    bomb = tmp_path / "bomb.npz"  # a member declaring 6.7 GiB, holding a few bytes
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (30000, 30000, 1)}
+    )
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("cube.npy", header.getvalue() + b"\0" * 64)
+        wl = io.BytesIO()
+        np.save(wl, np.array([500.0]))
+        z.writestr("wavelengths_nm.npy", wl.getvalue())
+    with pytest.raises(ValueError, match="above the 4.00 GiB limit"):
+        datasets.load_hsi(bomb)
+    (tmp_path / "folder.npz").mkdir()
+    with pytest.raises(ValueError, match="not a regular file"):
+        datasets.load_hsi(tmp_path / "folder.npz")
+    with pytest.raises(FileNotFoundError, match="scene file not found"):
+        datasets.load_hsi(tmp_path / "missing.npz")
+
+
+def test_crop_and_precision_are_checked(tmp_path):
+    path = _scene_file(tmp_path / "scene.npz", np.ones((8, 8, 3)))
+    with pytest.raises(ValueError, match="shape rows must be an integer ≥ 1, got 2.5"):
+        datasets.load_hsi(path, shape=(2.5, 3))
+    with pytest.raises(ValueError, match=r"shape must be \(rows, columns\)"):
+        datasets.load_hsi(path, shape=4)
+    with pytest.raises(ValueError, match="dtype must be"):
+        datasets.load_hsi(path, dtype="int8")
+    with pytest.raises(ValueError, match="look like micrometres"):
+        datasets.load_hsi(path, wavelengths=[0.5, 0.6])
+    cube, wl = datasets.load_hsi(path, shape=(4, 4), dtype="float32")
+    assert cube.shape == (4, 4, 3) and cube.dtype == np.float32 and wl.size == 3

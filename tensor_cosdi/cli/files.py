@@ -21,10 +21,13 @@ def _values(text: str, flag: str, what: str):
             raise ValueError(what) from None
     p = Path(text)
     if p.is_file():
+        from ..io.files import read_array
+
         try:
-            v = np.load(p, allow_pickle=False) if p.suffix == ".npy" else np.loadtxt(
-                p, delimiter="," if p.suffix == ".csv" else None
-            )  # fmt: skip
+            if p.suffix.lower() == ".npy":  # bounded: the declared size is checked first
+                v = read_array(p)
+            else:
+                v = np.loadtxt(p, delimiter="," if p.suffix.lower() == ".csv" else None)
         except Exception as e:
             raise ValueError(f"{flag} {text}: not a file of numbers ({e})") from None
         v = np.asarray(v)

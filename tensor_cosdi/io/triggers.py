@@ -50,6 +50,31 @@ log = logging.getLogger(__name__)
 
 #: Most frames one acquisition plan holds (a day of 1 Hz captures): more is refused up front.
 MAX_PLAN_FRAMES = 100_000
+#: The largest plan file :meth:`AcquisitionPlan.load` reads (bytes).
+MAX_PLAN_FILE_BYTES = 64 * 2**20
+#: The longest plan name, and the longest axis name of a step's index.
+MAX_PLAN_NAME, MAX_AXIS_NAME = 200, 32
+
+
+def _short(value, n: int = 60) -> str:
+    """``repr(value)`` cut to ``n`` characters (an error message never echoes a whole file)."""
+    text = repr(value)
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
+def _step(s, i: int) -> "Step":
+    """Step ``i`` of a plan: a :class:`Step`, or a mapping of its fields (a saved plan's)."""
+    if isinstance(s, Step):
+        return s
+    if not isinstance(s, dict):
+        raise ValueError(f"step {i} must be a Step or a mapping, got {_short(s)}")
+    unknown = set(s) - {"index", "commands", "frame"}
+    if unknown or "index" not in s or "frame" not in s:
+        raise ValueError(
+            f"step {i} needs 'index' and 'frame' (and may have 'commands'), got keys {sorted(s)}"
+        )
+    return Step(s["index"], s.get("commands", ()), s["frame"])
+
 
 __all__ = [
     "Step",
@@ -97,6 +122,29 @@ class Step:
     commands: tuple = ()
     frame: str = ""
 
+    def __post_init__(self):
+        if not isinstance(self.index, dict) or not self.index:
+            raise ValueError(
+                f"a step's index must be a non-empty mapping of axis names to frame numbers, "
+                f"e.g. {{'t': 3}}; got {_short(self.index)}"
+            )
+        index = {}
+        for axis, n in self.index.items():
+            if not (isinstance(axis, str) and axis.isidentifier() and len(axis) <= MAX_AXIS_NAME):
+                raise ValueError(
+                    f"a step's index names its axes by identifiers of at most {MAX_AXIS_NAME} "
+                    f"characters (k, t, z…), got {_short(axis)}"
+                )
+            index[axis] = integer(f"index {axis!r}", n, low=0)
+        if isinstance(self.commands, str) or not isinstance(self.commands, (list, tuple)):
+            raise ValueError(
+                f"a step's commands must be a list of command strings, got {_short(self.commands)}"
+            )
+        if not isinstance(self.frame, str):
+            raise ValueError(f"a step's frame must be a file name, got {_short(self.frame)}")
+        object.__setattr__(self, "index", index)
+        object.__setattr__(self, "commands", tuple(self.commands))
+
     def to_dict(self):
         return {"index": dict(self.index), "commands": list(self.commands), "frame": self.frame}
 
@@ -116,9 +164,27 @@ class AcquisitionPlan:
     name: str = "plan"
 
     def __post_init__(self):
-        steps = tuple(s if isinstance(s, Step) else Step(**s) for s in self.steps)
+        if not isinstance(self.name, str) or len(self.name) > MAX_PLAN_NAME:
+            raise ValueError(
+                f"a plan's name must be text of at most {MAX_PLAN_NAME} characters, got "
+                f"{_short(self.name)}"
+            )
+        if not isinstance(self.steps, (list, tuple)):
+            raise ValueError(f"a plan's steps must be a list, got {_short(self.steps)}")
+        if len(self.steps) > MAX_PLAN_FRAMES:
+            raise ValueError(f"a plan holds at most {MAX_PLAN_FRAMES} steps, got {len(self.steps)}")
+        steps = tuple(_step(s, i) for i, s in enumerate(self.steps))
         if not steps:
             raise ValueError("an acquisition plan needs at least one step")
+        seen = {}
+        for i, st in enumerate(steps):
+            key = tuple(sorted(st.index.items()))
+            if key in seen:
+                raise ValueError(
+                    f"steps {seen[key]} and {i} both fill index {st.index}: every frame needs its "
+                    "own place in the measurement"
+                )
+            seen[key] = i
         frames = [s.frame for s in steps]
         if any(not f for f in frames) or len(set(frames)) != len(frames):
             raise ValueError("every step needs its own, non-empty frame file name")
@@ -179,13 +245,22 @@ class AcquisitionPlan:
 
     @classmethod
     def load(cls, path) -> "AcquisitionPlan":
+        """A plan written by :meth:`save`: a regular JSON file of at most
+        :data:`MAX_PLAN_FILE_BYTES`, every step checked as :class:`Step` checks it."""
+        from ._readers import require_file
+
         p = Path(path)
-        try:
-            doc = json.loads(p.read_text())
-            return cls(
-                tuple(Step(s["index"], tuple(s["commands"]), s["frame"]) for s in doc["steps"]),
-                doc.get("name", p.stem),
+        require_file(p, "acquisition plan")
+        if p.stat().st_size > MAX_PLAN_FILE_BYTES:
+            raise ValueError(
+                f"{p}: {p.stat().st_size} bytes, larger than a plan of {MAX_PLAN_FRAMES} steps "
+                f"can be ({MAX_PLAN_FILE_BYTES} bytes); not an acquisition plan"
             )
+        try:
+            doc = json.loads(p.read_text(encoding="utf-8"))
+            if not isinstance(doc, dict) or not isinstance(doc.get("steps"), list):
+                raise ValueError("expected a JSON object with a list of 'steps'")
+            return cls(tuple(doc["steps"]), doc.get("name", p.stem))
         except (OSError, ValueError, KeyError, TypeError) as e:
             raise ValueError(f"{p}: not an acquisition plan ({type(e).__name__}: {e})") from e
 

@@ -37,7 +37,10 @@ class DCoSNetConfig:
     density drawn from 0.3–0.7, half and half: a network for any binary code)
     ``"seeded"`` (one fixed Bernoulli(½) code of the crop's size drawn from
     ``seed``, :func:`~tensor_cosdi.learn.dcosnet.seeded_code`, used whole and
-    never flipped) or a path to a ``.npy``/``.mat`` holding one 2-D code.
+    never flipped) or a path to a ``.npy``/``.mat`` holding one 2-D code
+    (``FILE.mat:NAME`` picks a variable of a file holding several), real,
+    finite and non-negative, read with the bounded readers of
+    :mod:`tensor_cosdi.io.files`.
     ``learn_code``: learn the code with the network (thesis §7.3), starting
     from the ``"seeded"`` code (the only mask it takes) during the first
     ``code_until`` of the steps, then holding it while the network adapts to
@@ -172,25 +175,43 @@ def _load_mask(spec, folder=None):
                 f"the TSA mask is not at {path}; pass mask='random' (--mask random) or a path"
             )
     else:
-        path = Path(spec)
-        if not path.is_file():
-            raise FileNotFoundError(f"mask file not found: {path}")
-    if path.suffix == ".npy":
-        arrays = {"array": np.load(path, allow_pickle=False)}
-    elif path.suffix == ".mat":
-        import scipy.io
+        from ..io.files import split_key
 
-        arrays = {k: v for k, v in scipy.io.loadmat(path).items() if not k.startswith("__")}
-    else:
-        raise ValueError(f"mask must be 'tsa', 'random', a .npy or a .mat file, got {spec!r}")
-    codes = {k: v for k, v in arrays.items() if np.ndim(v) == 2}
-    if len(codes) != 1:
-        raise ValueError(
-            f"{path}: expected one 2-D code, found {[(k, np.shape(v)) for k, v in arrays.items()]}"
-        )
-    code = np.asarray(next(iter(codes.values())), dtype=np.float64)
-    if not np.all(np.isfinite(code)) or code.min() < 0:
-        raise ValueError(f"{path}: the code must be finite and non-negative")
+        name, key = split_key(spec)
+        path = Path(name)
+        if path.suffix.lower() not in (".npy", ".mat"):
+            raise ValueError(
+                f"mask must be 'tsa', 'random', a .npy or a .mat file (FILE.mat:NAME picks a "
+                f"variable), got {spec!r}"
+            )
+        return _code_file(path, key)
+    return _code_file(path, None)
+
+
+def _code_file(path: Path, key):
+    """The one 2-D code of a ``.npy`` / ``.mat`` file (``key``: the variable), read through
+    :func:`tensor_cosdi.io.read_array` (sizes checked before anything is allocated, regular
+    files only, no pickles) and checked: real, finite and non-negative."""
+    from ..io.files import array_entries, read_array, require_file
+
+    require_file(path, "mask file")
+    if key is None and path.suffix.lower() == ".mat":  # the one 2-D variable, if there is one
+        found = array_entries(path, ".mat")
+        codes = [k for k, v in found.items() if len(v[0]) == 2]
+        if len(codes) != 1:
+            listing = [(k, tuple(v[0])) for k, v in found.items()]
+            raise ValueError(
+                f"{path}: expected one 2-D code, found {listing}; name one with {path}:NAME"
+            )
+        key = codes[0]
+    code = read_array(path, key)
+    if code.dtype.kind not in "biuf":
+        raise ValueError(f"{path}: the code must hold real numbers, got dtype {code.dtype}")
+    if code.ndim != 2:
+        raise ValueError(f"{path}: expected one 2-D code, got shape {code.shape}")
+    code = code.astype(np.float64)
+    if code.size == 0 or not np.all(np.isfinite(code)) or code.min() < 0:
+        raise ValueError(f"{path}: the code must be non-empty, finite and non-negative")
     return code
 
 
@@ -202,11 +223,12 @@ def training_data(cfg: DCoSNetConfig, folder=None):
 
     wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
     names = training_scenes(cfg.hold_out)
-    cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in names]
     need = (cfg.patch, cfg.patch + cfg.margin)
+    # the code first: a bad mask file fails before 28 scenes are read
     code = seeded_code(need, cfg.seed) if cfg.mask == "seeded" else _load_mask(cfg.mask, folder)
     if code is not None and (code.shape[0] < need[0] or code.shape[1] < need[1]):
         raise ValueError(f"the mask {code.shape} is smaller than a training crop {need}")
+    cubes = [load_hsi(name, wl, folder=folder, dtype="float32")[0] for name in names]
     offsets = None  # SD-CASSI, CASSI-VSI: the batch's sensing is built from its codes alone
     if cfg.system in ("sd_cassi", "cassi_vsi"):
         offsets = tuple(int(v) for v in cfg.make_system(np.ones(need)).shifts)

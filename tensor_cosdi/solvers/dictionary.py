@@ -30,6 +30,7 @@ import scipy.sparse as sp
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .. import _backend as B
+from ..validate import integer
 
 __all__ = ["PatchDictionary", "train_dictionary", "dictionary_admm"]
 
@@ -130,22 +131,32 @@ class PatchDictionary:
     """
 
     def __init__(self, atoms, patch: int, channels: int, *, stride=None, max_nonzero=None):
-        atoms = np.asarray(atoms, dtype=np.float64)
-        self.patch, self.channels = int(patch), int(channels)
+        atoms = np.asarray(atoms)
+        if atoms.dtype.kind not in "iuf":
+            raise ValueError(f"atoms must be real numbers, got dtype {atoms.dtype}")
+        atoms = atoms.astype(np.float64)
+        self.patch, self.channels = (
+            integer("patch", patch, low=1),
+            integer("channels", channels, low=1),
+        )
         dim = self.patch**2 * self.channels
         if atoms.ndim != 2 or atoms.shape[0] != dim:
             raise ValueError(
                 f"atoms must be ({dim}, n_atoms) for {patch}×{patch}×{channels} patches, "
                 f"got {atoms.shape}"
             )
+        if atoms.shape[1] == 0 or not np.all(np.isfinite(atoms)):
+            raise ValueError("atoms must hold at least one column, all of finite values")
         norms = np.linalg.norm(atoms, axis=0)
         if (norms == 0).any():
             raise ValueError("atoms has an all-zero column")
         self.atoms = atoms / norms
-        self.stride = max(self.patch // 2, 1) if stride is None else int(stride)
-        self.max_nonzero = min(16, dim) if max_nonzero is None else int(max_nonzero)
-        if self.stride < 1 or self.max_nonzero < 1:
-            raise ValueError("stride and max_nonzero must be positive integers")
+        self.stride = (
+            max(self.patch // 2, 1) if stride is None else integer("stride", stride, low=1)
+        )
+        self.max_nonzero = (
+            min(16, dim) if max_nonzero is None else integer("max_nonzero", max_nonzero, low=1)
+        )
 
     def _gram(self):
         if getattr(self, "_G", None) is None:
@@ -174,11 +185,28 @@ class PatchDictionary:
 
     @classmethod
     def load(cls, path) -> PatchDictionary:
-        with np.load(path) as z:
-            if "atoms" not in z or "meta" not in z:
-                raise ValueError(f"{path} is not a PatchDictionary file (needs atoms and meta)")
-            p, c, s, k = (int(v) for v in z["meta"])
-            return cls(z["atoms"], p, c, stride=s, max_nonzero=k)
+        """A dictionary written by :meth:`save`, read through :func:`tensor_cosdi.io.read_array`
+        (sizes checked before anything is allocated, no pickles) and checked as the constructor
+        checks its arguments."""
+        from ..io.files import read_array, require_file
+
+        path = Path(path)
+        require_file(path, "dictionary file")
+        if path.suffix.lower() != ".npz":
+            raise ValueError(f"{path}: a PatchDictionary file is an .npz written by save()")
+        try:
+            atoms, meta = read_array(path, "atoms"), read_array(path, "meta")
+        except KeyError:
+            raise ValueError(
+                f"{path} is not a PatchDictionary file (needs atoms and meta)"
+            ) from None
+        if meta.dtype.kind not in "iu" or meta.shape != (4,):
+            raise ValueError(
+                f"{path}: 'meta' must be 4 integers (patch, channels, stride, max_nonzero), got "
+                f"{meta.dtype} of shape {meta.shape}"
+            )
+        p, c, s, k = meta.tolist()
+        return cls(atoms, p, c, stride=s, max_nonzero=k)
 
     def _check(self, shape):
         p = self.patch

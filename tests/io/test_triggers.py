@@ -186,6 +186,51 @@ def test_plans(tmp_path):
         )
 
 
+_OK_STEP = {"index": {"k": 0}, "commands": ["DMD 0"], "frame": "f0.tif"}
+
+
+@pytest.mark.parametrize(
+    "doc, message",
+    [
+        ({"steps": [dict(_OK_STEP, commands="DMD 0")]}, "commands must be a list"),
+        ({"steps": [dict(_OK_STEP, index=[1, 2])]}, "index must be a non-empty mapping"),
+        ({"steps": [dict(_OK_STEP, index={})]}, "index must be a non-empty mapping"),
+        ({"steps": [dict(_OK_STEP, index={"k": -1})]}, "index 'k' must be an integer ≥ 0"),
+        ({"steps": [dict(_OK_STEP, index={"k": 1.5})]}, "index 'k' must be an integer ≥ 0"),
+        ({"steps": [dict(_OK_STEP, index={"k": True})]}, "index 'k' must be an integer ≥ 0"),
+        ({"steps": [dict(_OK_STEP, index={"../x": 1})]}, "identifiers of at most 32"),
+        ({"steps": [dict(_OK_STEP, frame=3)]}, "frame must be a file name"),
+        ({"steps": [dict(_OK_STEP, foo=1)]}, r"got keys \['commands', 'foo'"),
+        ({"steps": [_OK_STEP, dict(_OK_STEP, frame="f1.tif")]}, "steps 0 and 1 both fill"),
+        ({"name": 5, "steps": [_OK_STEP]}, "name must be text"),
+        ({"name": "x" * 500, "steps": [_OK_STEP]}, "at most 200 characters, got 'xxx.*…"),
+        ({"steps": {"a": _OK_STEP}}, "a JSON object with a list of 'steps'"),
+        ([_OK_STEP], "a JSON object with a list of 'steps'"),
+    ],
+)
+def test_a_plan_file_is_checked_step_by_step(tmp_path, doc, message):
+    path = tmp_path / "plan.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=message):
+        AcquisitionPlan.load(path)
+
+
+def test_a_plan_is_read_only_from_a_regular_file_of_bounded_size(tmp_path):
+    from tensor_cosdi.io.triggers import MAX_PLAN_FILE_BYTES
+
+    fifo = tmp_path / "plan.json"
+    os.mkfifo(fifo)  # reading it would block for ever
+    with pytest.raises(ValueError, match="not a regular file"):
+        AcquisitionPlan.load(fifo)
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(MAX_PLAN_FILE_BYTES + 1)  # sparse: no disk used
+    with pytest.raises(ValueError, match="larger than a plan"):
+        AcquisitionPlan.load(big)
+    with pytest.raises(FileNotFoundError, match="acquisition plan not found"):
+        AcquisitionPlan.load(tmp_path / "missing.json")
+
+
 @pytest.mark.parametrize(
     "command, message",
     [

@@ -519,3 +519,38 @@ def test_cassi_vsi_sensing_and_its_banded_woodbury_step():
     np.testing.assert_allclose(out[0].permute(1, 2, 0).numpy(), want, rtol=1e-9, atol=1e-12)
     with pytest.raises(ValueError, match="0 < alpha_t"):
         Sensing.coded_shear(codes, systems[0].shifts, alpha_t=0.0)
+
+
+@needs_torch
+def test_a_training_mask_file_is_read_bounded_and_checked(tmp_path):
+    """A mask file is read by the bounded readers and checked before any scene is read."""
+    import scipy.io
+
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, training_data
+
+    def data(mask):
+        return training_data(DCoSNetConfig(mask=str(mask), patch=16, hold_out=2))
+
+    np.save(tmp_path / "complex.npy", np.ones((64, 64), complex))
+    np.save(tmp_path / "cube.npy", np.ones((64, 64, 2)))
+    np.save(tmp_path / "nan.npy", np.full((64, 64), np.nan))
+    scipy.io.savemat(tmp_path / "two.mat", {"a": np.ones((64, 80)), "b": np.zeros((64, 80))})
+    with open(tmp_path / "huge.npy", "wb") as f:  # declares 74.5 GiB, holds 64 bytes
+        np.lib.format.write_array_header_1_0(
+            f, {"descr": "<f8", "fortran_order": False, "shape": (100000, 100000)}
+        )
+        f.write(b"\0" * 64)
+    for name, match in [
+        ("complex.npy", "must hold real numbers, got dtype complex128"),
+        ("cube.npy", r"one 2-D code, got shape \(64, 64, 2\)"),
+        ("nan.npy", "finite and non-negative"),
+        ("two.mat", r"expected one 2-D code, found .*name one with .*two.mat:NAME"),
+        ("huge.npy", "above the 4.00 GiB limit"),
+        ("code.tif", "a .npy or a .mat file"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            data(tmp_path / name)
+    with pytest.raises(FileNotFoundError, match="mask file not found"):
+        data(tmp_path / "missing.npy")
+    _, code, _ = data(f"{tmp_path / 'two.mat'}:a")  # FILE.mat:NAME picks one
+    assert code.shape == (64, 80) and code.dtype == np.float64 and np.all(code == 1)

@@ -163,3 +163,43 @@ def test_aligned_training_patches_are_whole_lenslets():
     for bad in (0, -4, 1.5, True, (4, 0)):
         with pytest.raises(ValueError, match="align"):
             train_dictionary([cube], patch=8, n_patches=50, n_iter=1, align=bad)
+
+
+def test_a_dictionary_file_is_read_bounded_and_checked(tmp_path):
+    import io
+    import zipfile
+
+    good = np.random.default_rng(0).random((27, 10))
+    cases = {
+        "meta3.npz": ({"atoms": good, "meta": np.array([3, 3, 1])}, "'meta' must be 4 integers"),
+        "metaf.npz": (
+            {"atoms": good, "meta": np.array([3.7, 3, 1, 2])},
+            "'meta' must be 4 integers.*got float64",
+        ),
+        "stride.npz": ({"atoms": good, "meta": np.array([3, 3, -1, 2])}, "stride must be"),
+        "nan.npz": ({"atoms": np.full((27, 10), np.nan), "meta": np.array([3, 3, 1, 2])}, "finite"),
+        "text.npz": ({"atoms": np.array(["a"]), "meta": np.array([3, 3, 1, 2])}, "real numbers"),
+        "other.npz": ({"cube": good}, "not a PatchDictionary file"),
+    }
+    for name, (arrays, match) in cases.items():
+        np.savez(tmp_path / name, **arrays)
+        with pytest.raises(ValueError, match=match):
+            PatchDictionary.load(tmp_path / name)
+    header = io.BytesIO()  # atoms declaring 6.7 GiB in a file of a few bytes
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (30000, 30000)}
+    )
+    meta = io.BytesIO()
+    np.save(meta, np.array([3, 3, 1, 2]))
+    with zipfile.ZipFile(tmp_path / "bomb.npz", "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("atoms.npy", header.getvalue() + b"\0" * 64)
+        z.writestr("meta.npy", meta.getvalue())
+    with pytest.raises(ValueError, match="above the 4.00 GiB limit"):
+        PatchDictionary.load(tmp_path / "bomb.npz")
+    (tmp_path / "folder.npz").mkdir()
+    with pytest.raises(ValueError, match="not a regular file"):
+        PatchDictionary.load(tmp_path / "folder.npz")
+    with pytest.raises(FileNotFoundError, match="dictionary file not found"):
+        PatchDictionary.load(tmp_path / "missing.npz")
+    with pytest.raises(ValueError, match="patch must be an integer ≥ 1, got 2.5"):
+        PatchDictionary(good, 2.5, 3)

@@ -917,6 +917,108 @@ def lab_cases(folder: Path):
     return out
 
 
+def _npz_declaring(path: Path, member: str, shape, extra: dict) -> Path:
+    """An ``.npz`` whose ``member`` declares ``shape`` of float64 and holds 64 bytes."""
+    import io
+    import zipfile
+
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": tuple(shape)}
+    )
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr(f"{member}.npy", header.getvalue() + b"\0" * 64)
+        for name, value in extra.items():
+            buf = io.BytesIO()
+            np.save(buf, value)
+            z.writestr(f"{name}.npy", buf.getvalue())
+    return path
+
+
+def reader_cases(folder: Path):
+    """The readers outside :mod:`tensor_cosdi.io.files`: a scene file, a patch dictionary, a
+    D-CoSNet training mask and an acquisition plan, each hostile or malformed."""
+    from tensor_cosdi.datasets import load_hsi
+    from tensor_cosdi.io.triggers import AcquisitionPlan
+    from tensor_cosdi.solvers.dictionary import PatchDictionary
+
+    out = []
+    d = folder / "readers"
+    d.mkdir()
+    wl3 = np.linspace(400.0, 700.0, 3)
+    scenes = {
+        "complex cube": ({"cube": np.ones((4, 4, 3), complex)}, ("complex",)),
+        "signed integer cube": ({"cube": -np.ones((4, 4, 3), np.int16)}, ("int16",)),
+        "NaN cube": ({"cube": np.full((4, 4, 3), np.nan)}, ("nan",)),
+        "negative cube": ({"cube": -np.ones((4, 4, 3))}, ("negative",)),
+        "micrometre wavelengths": ({"wavelengths_nm": wl3 / 1000}, ("micrometres",)),
+        "unsorted wavelengths": ({"wavelengths_nm": wl3[[1, 0, 2]]}, ("increase",)),
+        "2-D wavelengths": (
+            {"cube": np.ones((4, 4, 4)), "wavelengths_nm": np.full((2, 2), 500.0)},
+            ("1-d",),
+        ),
+        "no wavelengths": ({"wavelengths_nm": None}, ("wavelengths_nm",)),
+    }
+    for what, (arrays, words) in scenes.items():
+        doc = {"cube": np.ones((4, 4, 3)), "wavelengths_nm": wl3, **arrays}
+        path = d / f"scene_{what.replace(' ', '_')}.npz"
+        np.savez(path, **{k: v for k, v in doc.items() if v is not None})
+        out.append(Case("io.readers", f"load_hsi: {what}", lambda p=path: load_hsi(p), words))
+    bomb = _npz_declaring(d / "scene_bomb.npz", "cube", (30000, 30000, 1), {"wavelengths_nm": wl3})
+    out.append(Case("io.readers", "load_hsi: a cube declaring 6.7 GiB",
+                    lambda: load_hsi(bomb), ("limit",)))  # fmt: skip
+    atoms = np.random.default_rng(0).random((27, 10))
+    dictionaries = {
+        "3 meta values": ({"atoms": atoms, "meta": np.array([3, 3, 1])}, ("4 integers",)),
+        "fractional meta": ({"atoms": atoms, "meta": np.array([3.7, 3, 1, 2])}, ("4 integers",)),
+        "NaN atoms": ({"atoms": np.full((27, 10), np.nan), "meta": np.array([3, 3, 1, 2])},
+                      ("finite",)),
+        "text atoms": ({"atoms": np.array(["a"]), "meta": np.array([3, 3, 1, 2])}, ("real",)),
+    }  # fmt: skip
+    for what, (arrays, words) in dictionaries.items():
+        path = d / f"dict_{what.replace(' ', '_')}.npz"
+        np.savez(path, **arrays)
+        out.append(Case("io.readers", f"PatchDictionary.load: {what}",
+                        lambda p=path: PatchDictionary.load(p), words))  # fmt: skip
+    dbomb = _npz_declaring(d / "dict_bomb.npz", "atoms", (30000, 30000), {"meta": np.arange(4)})
+    out.append(Case("io.readers", "PatchDictionary.load: atoms declaring 6.7 GiB",
+                    lambda: PatchDictionary.load(dbomb), ("limit",)))  # fmt: skip
+    try:
+        from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, training_data
+    except ImportError:  # no PyTorch: the D-CoSNet cases are left out
+        training_data = None
+    if training_data is not None:  # the mask is read (and refused) before any scene
+        np.save(d / "mask_complex.npy", np.ones((8, 8), complex))
+        with open(d / "mask_bomb.npy", "wb") as f:
+            np.lib.format.write_array_header_1_0(
+                f, {"descr": "<f8", "fortran_order": False, "shape": (100000, 100000)}
+            )
+            f.write(b"\0" * 64)
+        for name, words in (("mask_complex.npy", ("real",)), ("mask_bomb.npy", ("limit",))):
+            out.append(Case("io.readers", f"D-CoSNet mask: {name}",
+                            lambda n=name: training_data(DCoSNetConfig(
+                                mask=str(d / n), patch=16, hold_out=2)), words))  # fmt: skip
+    ok = {"index": {"k": 0}, "commands": ["DMD 0"], "frame": "f0.tif"}
+    plans = {
+        "index a list": [dict(ok, index=[1, 2])],
+        "negative index": [dict(ok, index={"k": -1})],
+        "fractional index": [dict(ok, index={"k": 1.5})],
+        "commands a string": [dict(ok, commands="DMD 0")],
+        "two steps at one index": [ok, dict(ok, frame="f1.tif")],
+    }
+    for what, steps in plans.items():
+        path = d / f"plan_{what.replace(' ', '_')}.json"
+        path.write_text(json.dumps({"steps": steps}))
+        out.append(Case("io.readers", f"AcquisitionPlan.load: {what}",
+                        lambda p=path: AcquisitionPlan.load(p), ("index", "commands")))  # fmt: skip
+    fifo = d / "plan_fifo.json"
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(fifo)
+        out.append(Case("io.readers", "AcquisitionPlan.load: a FIFO",
+                        lambda: AcquisitionPlan.load(fifo), ("regular file",)))  # fmt: skip
+    return out
+
+
 def catalogue(folder: Path, n_flips: int = 150):
     return (
         system_cases()
@@ -928,6 +1030,7 @@ def catalogue(folder: Path, n_flips: int = 150):
         + hostile_file_cases(folder)
         + option_cases()
         + lab_cases(folder)
+        + reader_cases(folder)
     )
 
 

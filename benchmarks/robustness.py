@@ -914,6 +914,12 @@ def lab_cases(folder: Path):
         return Acquisition(AcquisitionPlan.patterns(2), None, log, lambda s: None).run()
 
     out.append(Case("io.lab", "a frame log without its header line", headless, ("header",)))
+    if hasattr(os, "mkfifo"):  # reading a FIFO would block for ever
+        from tensor_cosdi.io.triggers import read_log
+
+        os.mkfifo(folder / "fifo.jsonl")
+        out.append(Case("io.lab", "a FIFO as the frame log",
+                        lambda: read_log(folder / "fifo.jsonl"), ("regular file",)))  # fmt: skip
     return out
 
 

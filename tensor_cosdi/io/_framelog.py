@@ -7,14 +7,29 @@ import json
 import os
 from pathlib import Path
 
+#: The largest frame log :func:`read_log` reads (bytes): a log of the largest plan is ~50 MB.
+MAX_LOG_BYTES = 256 * 2**20
+
 
 def read_log(path) -> tuple[dict | None, list[dict]]:
-    """``(header, entries)`` of a frame log; a truncated last line (crash mid-write) is ignored."""
+    """``(header, entries)`` of a frame log; a truncated last line (crash mid-write) is ignored.
+
+    Nothing there: ``(None, [])``.  Something there that is not a regular file (a FIFO, a
+    folder, a device), or a file over :data:`MAX_LOG_BYTES`, is refused before it is read."""
+    from ._readers import require_file
+
     p = Path(path)
-    if not p.exists():
+    if not os.path.lexists(p):
         return None, []
+    require_file(p, "frame log")
+    size = p.stat().st_size
+    if size > MAX_LOG_BYTES:
+        raise ValueError(
+            f"{p}: {size} bytes, above the {MAX_LOG_BYTES}-byte limit of a frame log; is this "
+            "a frame log?"
+        )
     header, entries = None, []
-    text = p.read_text()
+    text = p.read_text(encoding="utf-8", errors="replace")
     lines = text.split("\n")
     complete = lines[:-1]  # the part after the last newline is an unfinished write
     for n, line in enumerate(complete):
@@ -24,6 +39,8 @@ def read_log(path) -> tuple[dict | None, list[dict]]:
             obj = json.loads(line)
         except ValueError:
             raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
+        if not isinstance(obj, dict):
+            raise ValueError(f"{p}: line {n + 1} is not a JSON object; is this a frame log?")
         if "plan" in obj and "started" in obj and header is None:
             header = obj
         elif "step" in obj and "sha256" in obj:  # frame entries; events ("reacquire") skipped
@@ -68,6 +85,11 @@ class _Lock:
             try:
                 self.fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
             except FileExistsError:
+                if not self.path.is_file() or self.path.is_symlink():  # never read a FIFO
+                    raise ValueError(
+                        f"{self.path}: not a regular file, so not a lock this library wrote; "
+                        "remove it"
+                    ) from None
                 try:
                     pid = int(self.path.read_text().split()[0])
                 except (OSError, ValueError, IndexError):

@@ -327,6 +327,28 @@ def test_a_second_acquisition_on_the_same_log_refuses_and_a_stale_lock_is_taken(
     assert not (tmp_path / "log.jsonl.lock").exists()
 
 
+def test_a_fifo_as_the_log_or_its_lock_is_refused_not_read(tmp_path, device):
+    """Reading a FIFO blocks for ever: neither the frame log nor its lock is ever read as one."""
+    from tensor_cosdi.io.triggers import read_log
+
+    plan = AcquisitionPlan.snapshots(2)
+    log = tmp_path / "log.jsonl"
+    os.mkfifo(log)
+    with pytest.raises(ValueError, match="not a regular file"):
+        read_log(log)
+    with SerialDevice(device().port, timeout=0.5) as host:
+        with pytest.raises(ValueError, match="not a regular file"):
+            Acquisition(plan, host, log, Camera(tmp_path)).run()
+    other = tmp_path / "other.jsonl"
+    os.mkfifo(tmp_path / "other.jsonl.lock")
+    with SerialDevice(device().port, timeout=0.5) as host:
+        with pytest.raises(ValueError, match="not a regular file, so not a lock"):
+            Acquisition(plan, host, other, Camera(tmp_path)).run()
+    (tmp_path / "list.jsonl").write_text("[1, 2]\n")
+    with pytest.raises(ValueError, match="line 1 is not a JSON object"):
+        read_log(tmp_path / "list.jsonl")
+
+
 class _StreamingPort:
     """A port that answers every read with bytes and never a newline (and has no timeout)."""
 

@@ -402,6 +402,28 @@ def fault_cases(folder: Path):
 def misc_cases(folder: Path):
     out = []
     x = np.random.default_rng(5).random((8, 8, 3))
+    from tensor_cosdi import colour, optics, scenes
+
+    wl5 = [450, 500, 550, 600, 650]
+    nan_cube = np.ones((2, 2, 5))
+    nan_cube[0, 0, 0] = np.nan
+    phase = optics.projector_phase((1, 8), 2.0)[..., 0]
+    for module, label, call, words in [
+        ("optics", "zernike_radial m > n", lambda: optics.zernike_radial(2, 4, x[0, 0]),
+         ("zernike",)),
+        ("optics", "zernike_radial n − m odd", lambda: optics.zernike_radial(3, 0, x[0, 0]),
+         ("zernike",)),
+        ("optics", "gray_code_patterns 80 bits", lambda: optics.gray_code_patterns(phase, 80),
+         ("at most",)),
+        ("colour", "to_srgb NaN cube", lambda: colour.to_srgb(nan_cube, wl5), ("nan",)),
+        ("scenes", "default_wavelengths in micrometres",
+         lambda: scenes.default_wavelengths(8, 0.45, 0.65), ("micrometres",)),
+        ("noise", "snr_db shapes that broadcast", lambda: noise.snr_db(x, x[:, :1]), ("shape",)),
+        ("noise", "snr_db NaN", lambda: noise.snr_db(x, np.full_like(x, np.nan)), ("finite",)),
+        ("noise", "snr_db_from_sigma negative power",
+         lambda: noise.snr_db_from_sigma(-1.0, 0.1), ("power",)),
+    ]:  # fmt: skip
+        out.append(Case(module, label, call, words))
     for label, (a, b, kw, words) in {
         "psnr shape mismatch": (x, x[:-1], {}, ("shape",)),
         "psnr data_range 0": (x, x, {"data_range": 0}, ("data_range",)),

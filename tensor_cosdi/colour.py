@@ -66,6 +66,8 @@ def to_srgb(
     wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
     if wl.size != c.shape[-1]:
         raise ValueError(f"expected {c.shape[-1]} wavelengths (one per band), got {wl.size}")
+    if not np.isfinite(c).all():
+        raise ValueError("the cube holds NaN or infinite values; an image of them has no colour")
     if not np.isfinite(wl).all() or wl.min() < 360 or wl.max() > 830 or (np.diff(wl) <= 0).any():
         raise ValueError(f"wavelengths must increase strictly within 360–830 nm, got {wl.tolist()}")
     if illuminant not in colour.SDS_ILLUMINANTS:

@@ -25,7 +25,12 @@ __all__ = [
 def snr_db(clean, noisy) -> float:
     """``10 log10(Σ g² / Σ (noisy − g)²)`` in dB (``inf`` when equal)."""
     g = np.asarray(B.to_numpy(clean), dtype=np.float64)
-    e = np.asarray(B.to_numpy(noisy), dtype=np.float64) - g
+    n = np.asarray(B.to_numpy(noisy), dtype=np.float64)
+    if g.shape != n.shape:
+        raise ValueError(f"clean {g.shape} and noisy {n.shape} must have the same shape")
+    if not (np.isfinite(g).all() and np.isfinite(n).all()):
+        raise ValueError("snr_db: clean and noisy must hold finite values")
+    e = n - g
     den = float(np.sum(e * e))
     return float("inf") if den == 0 else 10.0 * np.log10(float(np.sum(g * g)) / den)
 
@@ -208,7 +213,10 @@ def frame_rank_sigma(x) -> float:
 
 
 def snr_db_from_sigma(power: float, sigma: float) -> float:
-    """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``)."""
+    """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``); ``power`` and ``σ`` finite and ≥ 0."""
+    for name, v in (("power", power), ("sigma", sigma)):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not 0 <= v < np.inf:
+            raise ValueError(f"{name} must be a finite number ≥ 0, got {v!r}")
     return float("inf") if sigma == 0 else float(10.0 * np.log10(power / sigma**2))
 
 

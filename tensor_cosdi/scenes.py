@@ -34,6 +34,7 @@ import numpy as np
 
 from . import _backend as B
 from ._registry import Registry
+from ._units import check_wavelengths_nm
 from .operators import validate_shape
 
 __all__ = [
@@ -62,8 +63,9 @@ PHOTOS = ("astronaut", "chelsea", "coffee", "rocket")
 def default_wavelengths(n_bands: int = 28, start: float = 450.0, stop: float = 650.0) -> np.ndarray:
     """``n_bands`` evenly spaced wavelengths in nm (default 28 bands, 450–650 nm)."""
     (n_bands,) = validate_shape((n_bands,), "n_bands")
-    if not (np.isfinite(start) and np.isfinite(stop) and 0 < start < stop):
-        raise ValueError(f"need 0 < start < stop (nm), got start={start}, stop={stop}")
+    check_wavelengths_nm([start, stop], "start and stop")  # names micrometres
+    if not start < stop:
+        raise ValueError(f"need start < stop (nm), got start={start}, stop={stop}")
     return np.linspace(start, stop, n_bands)
 
 

@@ -133,3 +133,14 @@ def test_radiance_refuses_bad_input(args, kwargs, match):
 
     with pytest.raises(ValueError, match=match):
         radiance(*args, **kwargs)
+
+
+def test_a_cube_with_nan_has_no_colour_and_micrometres_are_named():
+    cube = np.ones((2, 2, 5))
+    cube[0, 0, 1] = np.nan
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        to_srgb(cube, [450, 500, 550, 600, 650])
+    with pytest.raises(ValueError, match="look like micrometres"):
+        default_wavelengths(8, 0.45, 0.65)
+    with pytest.raises(ValueError, match="start < stop"):
+        default_wavelengths(8, 650.0, 450.0)

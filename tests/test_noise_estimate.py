@@ -387,3 +387,15 @@ def test_cameras_read_against_their_own_signal_and_a_wrong_grouping_is_refused()
     bad = Miscounted(system.code, n_bands=8)
     with pytest.raises(ValueError, match="Miscounted.snr_frame_groups must name every one"):
         grouped_reading_db(bad, g, sigmas)
+
+
+def test_snr_db_refuses_what_it_cannot_measure():
+    with pytest.raises(ValueError, match="same shape"):
+        noise.snr_db(np.ones((4, 4)), np.ones((4, 1)))  # would broadcast
+    with pytest.raises(ValueError, match="finite"):
+        noise.snr_db(np.full(4, np.nan), np.ones(4))
+    for power, sigma in ((-1.0, 0.1), (1.0, -0.1), (np.nan, 0.1), (1.0, np.inf)):
+        with pytest.raises(ValueError, match="finite number ≥ 0"):
+            noise.snr_db_from_sigma(power, sigma)
+    assert noise.snr_db_from_sigma(1.0, 0.0) == np.inf
+    assert noise.snr_db_from_sigma(1.0, 0.1) == pytest.approx(20.0)

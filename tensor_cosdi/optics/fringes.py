@@ -25,6 +25,11 @@ __all__ = [
 ]
 
 
+#: The most Gray-code bits :func:`gray_code_patterns` and :func:`gray_to_binary` take: the
+#: labels are int64.
+MAX_GRAY_BITS = 62
+
+
 def _steps(n_steps):
     if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
         raise ValueError(
@@ -161,6 +166,8 @@ def gray_code_patterns(
         )
     if isinstance(n_bits, bool) or not isinstance(n_bits, numbers.Integral) or n_bits < 1:
         raise ValueError(f"n_bits must be a positive integer, got {n_bits!r}")
+    if n_bits > MAX_GRAY_BITS:  # labels are int64: wider codes would shift past their bits
+        raise ValueError(f"n_bits must be at most {MAX_GRAY_BITS}, got {n_bits}")
     if h.max() >= 2**n_bits:
         raise ValueError(
             f"{n_bits} Gray-code bits label {2**n_bits} half periods, the phase needs "
@@ -178,6 +185,10 @@ def gray_to_binary(bits) -> np.ndarray:
         raise ValueError("bits need a trailing axis of Gray-code bits")
     if not np.all((b == 0) | (b == 1)):
         raise ValueError("Gray-code bits must be 0 or 1 (threshold the frames first)")
+    if b.shape[-1] > MAX_GRAY_BITS:
+        raise ValueError(
+            f"at most {MAX_GRAY_BITS} Gray-code bits (int64 labels), got {b.shape[-1]}"
+        )
     b = b.astype(np.int64)
     out = b[..., 0].copy()
     acc = b[..., 0].copy()

@@ -219,3 +219,16 @@ def test_the_share_of_light_in_a_crop_follows_from_the_pupil():
         warnings.simplefilter("error", optics.PSFCropWarning)
         optics.psf_stack([450, 650], [800, 1300], lens=lens, size=41, zernike={6: 0.25})
         optics.psf_stack([450], [800], lens=lens, size=5, zernike={6: 0.9}, min_share=None)
+
+
+def test_zernike_radial_and_gray_codes_refuse_pairs_and_widths_they_cannot_hold():
+    for n, m in ((2, 4), (3, 0), (-2, 0), (2.0, 0), (True, 0)):
+        with pytest.raises(ValueError, match="Zernike radial|must be an integer"):
+            optics.zernike_radial(n, m, np.ones(3))
+    np.testing.assert_allclose(optics.zernike_radial(2, -2, np.array([0.5])), [0.25])
+    phase = optics.projector_phase((1, 8), 2.0)[..., 0]
+    with pytest.raises(ValueError, match="n_bits must be at most 62, got 80"):
+        optics.gray_code_patterns(phase, 80)
+    with pytest.raises(ValueError, match="at most 62 Gray-code bits"):
+        optics.gray_to_binary(np.zeros((2, 63)))
+    assert optics.gray_code_patterns(phase, 62).shape == (1, 8, 62)

@@ -54,6 +54,19 @@ MISTAKES = {
         [*RECON, "--out", "c.h5", "--option", "max_iter=yes"],
         "max_iter",
     ),
+    "reconstruct: an option given twice": (
+        [*RECON, "--out", "c.h5", "--option", "max_iter=5", "--option", "max_iter=9"],
+        "given twice",
+    ),
+    "reconstruct: a system option given twice": (
+        [*RECON, "--out", "c.h5", "--system-option", "a=1", "--system-option", "a=2"],
+        "given twice",
+    ),
+    "reconstruct: an option without a name": ([*RECON, "--out", "c.h5", "--option", "=5"], "name"),
+    "reconstruct: an option nested too deeply": (
+        [*RECON, "--out", "c.h5", "--option", "x=" + "[" * 100000],
+        "nested",
+    ),
     "reconstruct: bad system option": (
         [*RECON, "--out", "c.h5", "--system-option", "shear_direction=2"],
         "shear_direction",

@@ -59,6 +59,7 @@ from .util import (
     _option_value,
     _positive_int,
     done_line,
+    option_dict,
     run_metadata,
 )
 
@@ -186,7 +187,7 @@ def _reconstruct(args) -> int:
         sources, dark=args.dark, flat=args.flat, roi=args.roi, binning=args.binning
     )
     g = frames_to_measurement(cal.system, frames)
-    options = dict(args.option or [])
+    options = option_dict(args.option, "--option")
     if "progress" in defaults:
         options.setdefault("progress", not args.quiet)
     t0 = time.perf_counter()

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .util import _method_defaults, done_line, run_metadata
+from .util import _method_defaults, done_line, option_dict, run_metadata
 
 
 def _values(text: str, flag: str, what: str):
@@ -106,7 +106,7 @@ def _system_from_args(args, code):
 
     cls = REGISTRY[args.system]  # an unknown name lists the registered ones
     params = inspect.signature(cls.__init__).parameters
-    kwargs = dict(args.system_option or [])
+    kwargs = option_dict(args.system_option, "--system-option")
     named = {"n_bands": args.bands}
     if args.shift is not None:
         named["shifts"] = parse_shifts(args.shift, args.bands)
@@ -175,7 +175,7 @@ def _reconstruct_direct(args) -> int:
     registration = {}
     if getattr(args, "calibrate", False):
         system, registration = _registered(system, g)
-    options = dict(args.option or [])
+    options = option_dict(args.option, "--option")
     if "progress" in defaults:
         options.setdefault("progress", not args.quiet)
     t0 = time.perf_counter()

@@ -25,10 +25,29 @@ def _option_value(text: str):
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
     key, value = text.split("=", 1)
+    if not key.isidentifier():
+        raise argparse.ArgumentTypeError(
+            f"expected key=value with an option name before '=', got {text!r}"
+        )
     try:
         return key, json.loads(value)
+    except RecursionError:
+        raise argparse.ArgumentTypeError(f"{key}: the value is nested too deeply") from None
     except ValueError:
         return key, value
+
+
+def option_dict(pairs, flag: str) -> dict:
+    """``{key: value}`` of repeated ``FLAG key=value`` arguments; a key given twice is an error
+    (which of the two was meant is not guessed)."""
+    out = {}
+    for key, value in pairs or []:
+        if key in out:
+            raise ValueError(
+                f"{flag} {key}= is given twice ({out[key]!r} and {value!r}); give it once"
+            )
+        out[key] = value
+    return out
 
 
 def _method_defaults(name):

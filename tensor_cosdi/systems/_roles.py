@@ -68,17 +68,34 @@ class Problem:
     extras: dict = field(default_factory=dict)
 
 
+def _frame_values(f, what: str) -> np.ndarray:
+    """``f`` as float64, or a ``ValueError`` naming ``what``: real numbers only (a complex frame
+    would lose its imaginary part), all finite (a NaN pixel would reach every estimate)."""
+    a = np.asarray(B.to_numpy(f))
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{what} must hold real numbers, got dtype {a.dtype}")
+    a = a.astype(np.float64)
+    if not np.isfinite(a).all():
+        bad = int(np.size(a) - np.count_nonzero(np.isfinite(a)))
+        raise ValueError(
+            f"{what} holds {bad} NaN or infinite pixel(s); replace them (e.g. by their "
+            "neighbours' median) before stacking"
+        )
+    return a
+
+
 def stack_frames(frames) -> np.ndarray:
-    """A list of 2-D frames or an ``(H, W[, N])`` array → an ``(H, W, N)`` float64 stack."""
+    """A list of 2-D frames or an ``(H, W[, N])`` array → an ``(H, W, N)`` float64 stack of
+    finite real values."""
     if isinstance(frames, (list, tuple)):
         if not frames:
             raise ValueError("no frames given")
         shapes = {np.shape(f) for f in frames}
         if len(shapes) != 1:
             raise ValueError(f"frames of different shapes: {sorted(shapes)}")
-        a = np.stack([np.asarray(f, dtype=np.float64) for f in frames], axis=-1)
+        a = np.stack([_frame_values(f, f"frame {i}") for i, f in enumerate(frames)], axis=-1)
     else:
-        a = np.asarray(B.to_numpy(frames), dtype=np.float64)
+        a = _frame_values(frames, "the frames")
         if a.ndim == 2:
             a = a[..., None]
     if a.ndim != 3:

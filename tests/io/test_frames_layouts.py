@@ -190,6 +190,14 @@ def test_layout_errors():
     dual = tc.systems.DualCameraCASSI.example((8, 8, 4))
     frames = io.dual_camera_frames(np.ones((8, 11)), np.ones((8, 8)))
     assert io.frames_to_measurement(dual, frames).shape == (8, 11, 2)
+    bad = np.ones((8, 11))
+    bad[2, 3] = np.nan
+    for system in (sd, dual):  # every layout stacks through the same check
+        with pytest.raises(ValueError, match="frame 0 holds 1 NaN or infinite pixel"):
+            io.frames_to_measurement(system, [bad, np.ones((8, 11))][: system.frame_count])
+    with pytest.raises(ValueError, match="must hold real numbers, got dtype complex128"):
+        io.frames_to_measurement(sd, np.ones((8, 11), complex))
+    assert io.frames_to_measurement(sd, np.ones((8, 11), np.uint16)).dtype == np.float64
 
 
 @pytest.mark.skipif(not MASK.exists(), reason="../shared/data not present")

@@ -208,6 +208,10 @@ RELAX = {28.5: 1.0, 19.5: 1.0}
 #: (:data:`FAST_ITER_FLOAT32`, 22 iterations at 30 dB) through both codes, the same 24 views
 #: (``benchmarks/results/cv_pnp_fast_float32_relax_30db.md``): 1 / 1.5 / 1.9 → 31.72 / 32.13 /
 #: 32.36 dB (TSA) and 35.40 / 35.96 / 36.22 (random code); every fold of each code chose 1.9.
+#: At 20 dB with that budget (18 iterations), both codes, the same views
+#: (``benchmarks/results/cv_pnp_fast_float32_relax_20db.md``): 1 / 1.4 / 1.9 → 30.41 / 30.47 /
+#: 30.38 dB (TSA) and 33.17 / 32.94 / 32.76 (random code); one setting for both codes: 1, every
+#: fold.
 FAST_RELAX = {28.5: 1.9, 19.5: 1.0}
 #: ADMM 80 → 160 iterations of one call, cross-validated with cycling
 #: (``benchmarks/results/cv_pnp_gap_calls_30db.md``: 8 tuning scenes, 4 folds, 30 dB, TSA,

@@ -408,6 +408,9 @@ def misc_cases(folder: Path):
     nan_cube = np.ones((2, 2, 5))
     nan_cube[0, 0, 0] = np.nan
     phase = optics.projector_phase((1, 8), 2.0)[..., 0]
+    sd_small = tc.systems.SDCASSI.example((8, 8, 4))
+    nan_frame = np.ones(sd_small.measurement_shape)
+    nan_frame[1, 1] = np.nan
     for module, label, call, words in [
         ("optics", "zernike_radial m > n", lambda: optics.zernike_radial(2, 4, x[0, 0]),
          ("zernike",)),
@@ -422,6 +425,10 @@ def misc_cases(folder: Path):
         ("noise", "snr_db NaN", lambda: noise.snr_db(x, np.full_like(x, np.nan)), ("finite",)),
         ("noise", "snr_db_from_sigma negative power",
          lambda: noise.snr_db_from_sigma(-1.0, 0.1), ("power",)),
+        ("io.frames", "frames_to_measurement NaN pixel",
+         lambda: tc.io.frames_to_measurement(sd_small, [nan_frame]), ("nan",)),
+        ("io.frames", "frames_to_measurement complex frame",
+         lambda: tc.io.frames_to_measurement(sd_small, nan_frame.astype(complex)), ("real",)),
     ]:  # fmt: skip
         out.append(Case(module, label, call, words))
     for label, (a, b, kw, words) in {

@@ -134,3 +134,11 @@ def studies_scene():
         return datasets.scene_or("cave.face", "chelsea")[0]
     except FileNotFoundError:
         pytest.skip("hsi_train scenes not present (set TENSOR_COSDI_DATA)")
+
+
+def test_conditioning_options_are_checked():
+    p = studies.make_problem("sd_cassi", shape=(8, 8), n_bands=4)
+    with pytest.raises(ValueError, match="exact_below must be an integer ≥ 0"):
+        studies.conditioning(p.system, exact_below=-1)
+    with pytest.raises(ValueError, match="tol must be"):
+        studies.conditioning(p.system, tol=0.0)

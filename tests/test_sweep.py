@@ -71,3 +71,15 @@ def test_local_client_pins_threads_and_keeps_glibcs_mmap_threshold():
     with pytest.raises(ValueError, match="n_workers"):
         with studies.local_client(0):
             pass
+
+
+def test_a_grid_axis_without_values_and_options_for_no_method_are_errors():
+    with pytest.raises(ValueError, match=r"grid\['x'\] holds no values"):
+        studies.sweep({"x": [], "y": [1]}, _square, progress=False)
+    p = studies.make_problem("sd_cassi", shape=(8, 8), n_bands=4)
+    with pytest.raises(ValueError, match="at least one method"):
+        studies.compare(p, ())
+    with pytest.raises(ValueError, match=r"options given for \['otd'\]"):
+        studies.compare(p, ("gap_tv",), options={"otd": {"lam": 1.0}})
+    (row,) = studies.compare(p, "gap_tv", options={"gap_tv": {"max_iter": 2}})
+    assert row["method"] == "gap_tv" and row["iterations"] == 2

@@ -22,6 +22,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
+from ..validate import integer, number
 from .gram import MAX_BANDWIDTH, Pattern, pattern_from_terms, probe_structure
 from .routing import Routing
 from .woodbury import conjugate_gradient, gram_eigenvalues
@@ -311,6 +312,8 @@ class TensorOperator:
         ``exact_below`` measurements) or ``"lanczos"`` (SciPy ``eigsh``
         through :meth:`aslinearoperator`).
         """
+        integer("exact_below", exact_below, low=0)
+        number("tol", tol, low=0, low_open=True)
         gram = self.gram_dual()
         m = int(np.prod(self.output_shape))
         out = {"structure": None if gram is None else gram.kind, "size": m}

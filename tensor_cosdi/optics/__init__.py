@@ -21,7 +21,7 @@ from .fringes import (
     projector_phase,
 )
 from .glass import GLASSES, Glass, refractive_index, register_glass
-from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism
+from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism, NoDesign
 from .psf import (
     Lens,
     PSFCropWarning,
@@ -41,6 +41,7 @@ __all__ = [
     "refractive_index",
     "register_glass",
     "DoubleAmiciPrism",
+    "NoDesign",
     "THESIS_FIELD_DEG",
     "zernike",
     "zernike_radial",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism
+from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism, NoDesign
 
 __all__ = ["prism_grid", "eq190_phi3", "THESIS_DESIGN"]
 
@@ -82,6 +82,10 @@ def prism_grid(
     lo, hi = (float(v) for v in band_nm)
     if not 200 <= lo < center_nm < hi <= 20000:
         raise ValueError(f"need 200 ≤ band_nm[0] < center_nm < band_nm[1] (nm), got {band_nm}")
+    for name, v in (("distance_mm", distance_mm), ("pixel_um", pixel_um),
+                    ("aperture_mm", aperture_mm)):  # fmt: skip
+        if isinstance(v, bool) or not (isinstance(v, (int, float, np.number)) and 0 < v < np.inf):
+            raise ValueError(f"{name} must be a finite length > 0, got {v!r}")
     rows = []
     for g1, g2 in glass_pairs:
         for p1 in np.atleast_1d(np.asarray(phi1, dtype=np.float64)):
@@ -90,7 +94,7 @@ def prism_grid(
                 prism = DoubleAmiciPrism.design(
                     phi1=float(p1), center_nm=center_nm, glass1=g1, glass2=g2
                 )
-            except ValueError as exc:
+            except NoDesign as exc:  # valid inputs, no such prism: a row that says why
                 rows.append({**row, "phi3": np.nan, "note": str(exc).split(";")[0]})
                 continue
             a1, a2 = prism.apex_angles

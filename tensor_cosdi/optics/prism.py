@@ -9,7 +9,7 @@ import numpy as np
 
 from .glass import _glass
 
-__all__ = ["DoubleAmiciPrism", "THESIS_FIELD_DEG"]
+__all__ = ["DoubleAmiciPrism", "NoDesign", "THESIS_FIELD_DEG"]
 
 #: Half field of view of the thesis' lens–detector pair (100 mm, 4 mm detector): ``atan(4 / 200)``
 #: in degrees,
@@ -22,6 +22,11 @@ def _finite(name, value):
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return v
+
+
+class NoDesign(ValueError):
+    """No ``φ3`` in the range searched zeroes the deviation (:meth:`DoubleAmiciPrism.design`):
+    the inputs are valid, the design does not exist."""
 
 
 @dataclass(frozen=True)
@@ -247,6 +252,27 @@ class DoubleAmiciPrism:
         """
         from scipy.optimize import brentq
 
+        from .._units import check_wavelengths_nm
+
+        # the inputs first: an unknown glass or a NaN angle must not read as "no design"
+        _glass(glass1), _glass(glass2)
+        if isinstance(phi1, bool) or not (
+            isinstance(phi1, (int, float, np.floating, np.integer)) and 0 < phi1 < 180
+        ):
+            raise ValueError(f"phi1 must be an angle in degrees in (0, 180), got {phi1!r}")
+        check_wavelengths_nm([center_nm], "center_nm")
+        if not (isinstance(field_deg, (int, float, np.floating, np.integer)) and
+                0 <= field_deg < 180):  # fmt: skip
+            raise ValueError(f"field_deg must be degrees in [0, 180), got {field_deg!r}")
+        try:
+            lo, hi = (float(v) for v in phi3_range)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"phi3_range must be two angles (lo, hi), got {phi3_range!r}"
+            ) from None
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ValueError(f"phi3_range must be two finite angles lo < hi, got {phi3_range!r}")
+
         def f(phi3):
             try:
                 p = cls(phi1, phi3, glass1, glass2)
@@ -258,13 +284,12 @@ class DoubleAmiciPrism:
             except ValueError:
                 return np.nan
 
-        lo, hi = (float(v) for v in phi3_range)
         grid = np.linspace(max(lo, 45.0 + 1e-6), min(hi, 90.0 - 1e-6, 180.0 - phi1 - 1e-6), 200)
         vals = np.array([f(p) for p in grid])
         ok = np.isfinite(vals)
         idx = np.nonzero(ok[:-1] & ok[1:] & (np.sign(vals[:-1]) != np.sign(vals[1:])))[0]
         if idx.size == 0:
-            raise ValueError(
+            raise NoDesign(
                 f"no φ3 in {phi3_range} gives zero deviation at {center_nm:g} nm "
                 f"for φ1 = {phi1:g}° "
                 f"({glass1}/{glass2}); try another phi1"

@@ -140,13 +140,27 @@ def score_depth(problem: Problem, depth) -> dict:
 def compare(
     problem: Problem, methods=("otd", "gap_tv"), options=None, *, progress: bool = False
 ) -> list[dict]:
-    """Run ``methods`` on ``problem``; one row per method with its scores and seconds.
+    """Run ``methods`` (a method name or a sequence of them) on ``problem``; one row per method
+    with its scores and seconds.
 
-    ``options`` maps a method name to its keyword options.
+    ``options`` maps a method name to its keyword options; options for a method that is not
+    among ``methods`` are an error (they would be dropped).
     """
     from ..solvers import reconstruct
 
-    options = options or {}
+    if isinstance(methods, str):
+        methods = (methods,)
+    methods = tuple(methods)
+    if not methods:
+        raise ValueError("compare needs at least one method")
+    options = {} if options is None else options
+    if not isinstance(options, dict):
+        raise ValueError(f"options must map method names to option dicts, got {options!r}")
+    unused = sorted(set(options) - set(methods))
+    if unused:  # options for a method that does not run would be dropped without a word
+        raise ValueError(
+            f"options given for {unused}, which are not among the methods {list(methods)}"
+        )
     rows = []
     for m in methods:
         opts = dict(options.get(m, {}))

@@ -65,6 +65,8 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
     for k, v in grid.items():
         if isinstance(v, (str, bytes)) or not hasattr(v, "__iter__"):
             raise ValueError(f"grid[{k!r}] must be a sequence of values, got {v!r}")
+        if not list(v):
+            raise ValueError(f"grid[{k!r}] holds no values: the sweep would run nothing")
     if not callable(run):
         raise ValueError(f"run must be callable, got {run!r}")
     keys = list(grid)

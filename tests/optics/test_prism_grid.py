@@ -51,3 +51,22 @@ def test_no_solution_is_a_row_that_says_so_and_bad_bands_are_errors():
 )
 def test_added_glasses_give_their_catalogue_index(glass, n_d):
     assert float(refractive_index(glass, 587.5618)) == pytest.approx(n_d, abs=2e-5)
+
+
+def test_bad_inputs_are_errors_not_rows_without_a_design():
+    """An unknown glass or a NaN angle is an error; only a valid prism without a φ3 that zeroes
+    the deviation becomes a row with a note (``NoDesign``)."""
+    from tensor_cosdi.optics import NoDesign
+
+    with pytest.raises(ValueError, match="unknown glass 'X'"):
+        tc.studies.prism_grid(glass_pairs=(("X", "SF4"),))
+    with pytest.raises(ValueError, match="phi1 must be an angle"):
+        tc.studies.prism_grid(phi1=(np.nan,))
+    with pytest.raises(ValueError, match="aperture_mm must be a finite length > 0"):
+        tc.studies.prism_grid(aperture_mm=-1.0)
+    with pytest.raises(ValueError, match="look like micrometres"):
+        DoubleAmiciPrism.design(center_nm=0.57)
+    with pytest.raises(NoDesign, match="no φ3"):
+        DoubleAmiciPrism.design(phi1=90.0)
+    rows = tc.studies.prism_grid(phi1=(90.0,), glass_pairs=(("N-SK2", "SF4"),))
+    assert np.isnan(rows[0]["phi3"]) and rows[0]["note"].startswith("no φ3")

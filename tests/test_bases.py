@@ -132,3 +132,17 @@ def test_kronecker_basis_errors_and_update():
     x = np.random.default_rng(0).random((4, 5))
     np.testing.assert_allclose(b2.analysis(x), x)
     np.testing.assert_allclose(b.analysis(x), scipy.fft.dct(x, norm="ortho", axis=1), atol=1e-14)
+
+
+def test_a_dense_basis_refuses_values_it_cannot_apply():
+    from tensor_cosdi.bases import BlockDense, Dense, as_transform
+
+    with pytest.raises(ValueError, match="finite values"):
+        Dense(np.full((2, 2), np.nan))
+    with pytest.raises(ValueError, match="finite values"):
+        BlockDense([np.eye(2), np.full((1, 1), np.inf)])
+    with pytest.raises(ValueError, match="real numbers, got dtype complex128"):
+        Dense(np.eye(2, dtype=complex))
+    with pytest.raises(ValueError, match="matrix of size 3 given for a mode of size 4"):
+        as_transform(4, np.eye(3))
+    assert as_transform(3, np.eye(3)).n == 3

@@ -74,9 +74,14 @@ class Dense(ModeTransform):
     """A given orthonormal matrix (learned bases: SVD / HOSVD), applied as one GEMM."""
 
     def __init__(self, matrix):
-        m = np.asarray(B.to_numpy(matrix), dtype=np.float64)
+        m = np.asarray(B.to_numpy(matrix))
+        if m.dtype.kind not in "iuf":
+            raise ValueError(f"a basis matrix must hold real numbers, got dtype {m.dtype}")
+        m = m.astype(np.float64)
         if m.ndim != 2 or m.shape[0] != m.shape[1]:
             raise ValueError(f"a basis matrix must be square, got shape {m.shape}")
+        if not np.isfinite(m).all():
+            raise ValueError("a basis matrix must hold finite values (it holds NaN or inf)")
         super().__init__(m.shape[0])
         self._m = m
         self._typed_cache: dict = {}
@@ -154,7 +159,10 @@ def as_transform(n: int, spec) -> ModeTransform:
         if spec == "identity":
             return Dense(np.eye(n))
         return Wavelet(n, spec)
-    return Dense(spec)
+    out = Dense(spec)
+    if out.n != n:
+        raise ValueError(f"matrix of size {out.n} given for a mode of size {n}")
+    return out
 
 
 class BlockDense(Dense):

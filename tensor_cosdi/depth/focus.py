@@ -7,6 +7,8 @@ import numbers
 import numpy as np
 from scipy import ndimage
 
+from ..validate import number
+
 __all__ = ["focus_measure", "depth_from_focus"]
 
 
@@ -24,6 +26,9 @@ def focus_measure(image, *, window: int = 5, sigma: float = 0.0):
         raise ValueError(f"image must be (H, W) or (H, W, C), got {np.shape(image)}")
     if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")
+    number("sigma", sigma, low=0)
+    if not np.isfinite(x).all():
+        raise ValueError("image must hold finite values")
     out = np.zeros(x.shape[:2])
     for c in range(x.shape[2]):
         img = ndimage.gaussian_filter(x[..., c], sigma) if sigma > 0 else x[..., c]

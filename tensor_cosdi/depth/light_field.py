@@ -16,6 +16,8 @@ import numbers
 import numpy as np
 from scipy import ndimage
 
+from ..validate import number
+
 __all__ = [
     "disparity_from_views",
     "disparity_cost_volume",
@@ -203,6 +205,8 @@ def guided_filter(guide, src, *, radius: int = 4, eps: float = 1e-4):
         raise ValueError(f"radius must be an integer ≥ 0, got {radius!r}")
     if not (np.isfinite(eps) and eps > 0):
         raise ValueError(f"eps must be > 0, got {eps!r}")
+    if not (np.isfinite(I).all() and np.isfinite(p).all()):
+        raise ValueError("guide and src must hold finite values (NaN would spread over boxes)")
     if radius == 0:
         return p.copy()
     size = (1,) * (p.ndim - 2) + (2 * radius + 1,) * 2
@@ -294,6 +298,8 @@ def disparity_from_views(
         raise ValueError(f"max_disparity must be > 0, got {max_disparity!r}")
     if not (np.isfinite(step) and 0 < step <= max_disparity):
         raise ValueError(f"step must be in (0, max_disparity], got {step!r}")
+    if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
+        raise ValueError(f"window must be a positive integer, got {window!r}")  # every method
     n = int(np.floor(max_disparity / step + 1e-9))
     cand = step * np.arange(-n, n + 1)
     if method == "ssd":
@@ -327,6 +333,10 @@ def textured_mask(image, *, threshold: float = 0.05, sigma: float = 1.0):
         x = x.mean(axis=-1)
     if x.ndim != 2:
         raise ValueError(f"image must be (H, W) or (H, W, C), got {np.shape(image)}")
+    if not np.isfinite(x).all():
+        raise ValueError("image must hold finite values")
+    number("threshold", threshold, low=0, high=1)
+    number("sigma", sigma, low=0)
     g = ndimage.gaussian_gradient_magnitude(x, sigma)
     return g >= threshold * max(g.max(), np.finfo(float).tiny)
 

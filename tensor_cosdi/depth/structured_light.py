@@ -208,6 +208,8 @@ def decode_gray_code(frames, threshold=0.5, *, axis: int = -1):
     if not np.all(np.isfinite(x)):
         raise ValueError("Gray-code frames contain NaN or inf")
     t = np.asarray(threshold, dtype=np.float64)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("threshold must be finite (a number or a per-pixel map)")
     if t.ndim:
         if t.shape != x.shape[:-1]:
             raise ValueError(f"threshold map {t.shape} must match the frame shape {x.shape[:-1]}")
@@ -229,6 +231,8 @@ def unwrap_gray_code(wrapped, labels):
         raise ValueError(f"wrapped phase {w.shape} and labels {h.shape} must have the same shape")
     if not np.issubdtype(h.dtype, np.integer):
         raise ValueError(f"labels must be integers (from decode_gray_code), got dtype {h.dtype}")
+    if h.size and h.min() < 0:
+        raise ValueError(f"labels count half periods from 0, got a label {int(h.min())}")
     near = w + 2 * np.pi * ((h + 1) // 2)
     centre = 2 * np.pi * (h // 2) + np.pi
     far = w + 2 * np.pi * np.round((centre - w) / (2 * np.pi))
@@ -303,6 +307,8 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
         raise ValueError(
             f"phases must stack one map per height: got {P.shape} for {h.size} heights"
         )
+    if not np.all(np.isfinite(h)):
+        raise ValueError(f"calibration heights must be finite, got {h.tolist()}")
     if not np.any(h != 0):
         raise ValueError("at least one calibration height must be non-zero")
     d = P - np.asarray(reference_phase, dtype=np.float64)
@@ -310,4 +316,8 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
     if mask is not None:
         keep = ~np.broadcast_to(np.asarray(mask, dtype=bool), P.shape)
         d, H = d[keep], H[keep]
+    if not np.all(np.isfinite(d)):
+        raise ValueError(
+            "phases or reference_phase hold NaN or inf where they are used; mask those pixels"
+        )
     return float(np.sum(d * H) / np.sum(H * H))

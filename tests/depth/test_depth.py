@@ -292,3 +292,31 @@ def test_guided_filter_keeps_an_edge_of_the_guide():
     assert abs(out[:, :7].mean()) < 0.02 and abs(out[:, 9:].mean() - 1) < 0.02
     assert out[:, 7].mean() < 0.1 and out[:, 8].mean() > 0.9  # no blur across the edge
     assert np.std(out[:, :7]) < 0.5 * np.std(src[:, :7])  # smoothed within a side
+
+
+def test_values_that_would_give_a_meaningless_depth_are_errors():
+    rng = np.random.default_rng(0)
+    img = rng.random((8, 8))
+    with pytest.raises(ValueError, match="threshold must be finite"):
+        depth.decode_gray_code(rng.random((8, 8, 3)), threshold=np.nan)
+    with pytest.raises(ValueError, match="labels count half periods from 0"):
+        depth.unwrap_gray_code(img, -np.ones((8, 8), int))
+    with pytest.raises(ValueError, match="heights must be finite"):
+        depth.calibrate_phase_to_height([img], img, [np.nan])
+    bad = img.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="mask those pixels"):
+        depth.calibrate_phase_to_height([bad], img, [1.0])
+    mask = np.zeros((1, 8, 8), bool)
+    mask[0, 0, 0] = True  # the NaN pixel masked: a finite fit
+    assert np.isfinite(depth.calibrate_phase_to_height([bad], img, [1.0], mask=mask))
+    with pytest.raises(ValueError, match="finite values"):
+        depth.guided_filter(bad, img)
+    with pytest.raises(ValueError, match="threshold must be"):
+        depth.textured_mask(img, threshold=-1.0)
+    with pytest.raises(ValueError, match="finite values"):
+        depth.textured_mask(bad)
+    with pytest.raises(ValueError, match="sigma must be"):
+        depth.depth_from_focus(rng.random((8, 8, 3)), sigma=-1.0)
+    with pytest.raises(ValueError, match="window must be a positive integer"):
+        depth.disparity_from_views(rng.random((3, 3, 8, 8)), window=0)

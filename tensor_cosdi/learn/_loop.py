@@ -44,13 +44,17 @@ def check_out(out, force: bool) -> tuple[Path, Path]:
 
 def check_config(cfg, positive_ints) -> None:
     """The checks every training configuration shares: ``positive_ints`` are integers ≥ 1,
-    ``warmup`` an integer ≥ 0, ``lr`` finite, ``0 < lr_end ≤ lr``."""
+    ``warmup`` an integer ≥ 0, ``seed`` an integer ≥ 0, ``lr`` finite,
+    ``0 < lr_end ≤ lr``."""
     for name in positive_ints:
         v = getattr(cfg, name)
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
             raise ValueError(f"{name} must be a positive integer, got {v!r}")
     if isinstance(cfg.warmup, bool) or not isinstance(cfg.warmup, int) or cfg.warmup < 0:
         raise ValueError(f"warmup must be an integer ≥ 0, got {cfg.warmup!r}")
+    seed = getattr(cfg, "seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an integer ≥ 0, got {seed!r}")
     lr = cfg.lr
     if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < math.inf:
         raise ValueError(f"lr must be a finite positive number, got {lr!r}")

@@ -35,6 +35,7 @@ thread count).  The final weights (model, configuration, provenance) go to
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,7 +129,7 @@ class TrainConfig:
             integer(name, getattr(self, name), low=0 if name == "conv_rank" else 1, high=top)
         if not isinstance(self.init, str):
             raise ValueError(f"init must be '', 'shipped' or a weights file, got {self.init!r}")
-        if not 0 < self.sigma_min < self.sigma_max:
+        if not 0 < self.sigma_min < self.sigma_max < math.inf:
             raise ValueError(
                 f"need 0 < sigma_min < sigma_max, got {self.sigma_min}, {self.sigma_max}"
             )

@@ -570,3 +570,13 @@ def test_a_fortran_ordered_cube_comes_back_fortran_ordered_with_the_same_values(
     c_two, f_two = pair(c_in, 0.05), pair(f_in, 0.05)
     assert f_two.flags.f_contiguous and not f_two.flags.c_contiguous
     assert np.abs(f_two - c_two).max() <= 5e-5 * np.abs(c_two).max()  # measured 1.7e-5
+
+
+def test_a_training_seed_and_noise_range_are_checked():
+    from tensor_cosdi.learn.train import TrainConfig
+
+    for seed in (-1, 1.5, True):
+        with pytest.raises(ValueError, match="seed must be an integer ≥ 0"):
+            TrainConfig(seed=seed).check()
+    with pytest.raises(ValueError, match="sigma_max"):
+        TrainConfig(sigma_max=float("inf")).check()

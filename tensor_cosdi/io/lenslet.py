@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from ..validate import integer, number
+
 __all__ = ["LensletGrid", "calibrate_lenslet_grid"]
 
 
@@ -55,6 +57,19 @@ class LensletGrid:
     centres: np.ndarray = field(repr=False)
     indices: np.ndarray = field(repr=False)
     residuals: np.ndarray = field(repr=False)
+
+    def __post_init__(self):
+        number("pitch", self.pitch, low=1, low_open=False)
+        number("rotation", self.rotation)
+        try:
+            r, c = self.offset
+            rows, cols = self.shape
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"offset and shape must be (row, column) pairs, got {self.offset!r}, {self.shape!r}"
+            ) from None
+        number("offset row", r), number("offset column", c)
+        integer("shape rows", rows, low=1), integer("shape columns", cols, low=1)
 
     @property
     def basis(self) -> np.ndarray:
@@ -121,9 +136,16 @@ class LensletGrid:
                 f"raw frame shape {x.shape} differs from the calibration frame's "
                 f"{tuple(self.shape)}"
             )
-        n = int(np.floor(self.pitch)) if n_views is None else int(n_views)
-        if n % 2 == 0:
-            n -= 1
+        if not np.isfinite(x).all():
+            raise ValueError("the raw frame holds NaN or infinite pixels")
+        integer("order", order, low=0, high=5)  # scipy's spline orders
+        if n_views is None:  # the most whole pixels a pitch holds, made odd
+            n = int(np.floor(self.pitch))
+            n -= 1 - n % 2
+        else:
+            n = integer("n_views", n_views, low=1)
+            if n % 2 == 0:
+                raise ValueError(f"n_views must be odd (a centre view), got {n}")
         if n < 1 or n > self.pitch + 1e-9:
             raise ValueError(
                 f"n_views must be between 1 and the pitch ({self.pitch:.2f} px), got {n_views!r}"

@@ -68,6 +68,25 @@ def test_lenslet_errors():
     grid = io.calibrate_lenslet_grid(flat)
     with pytest.raises(ValueError, match="raw frame shape"):
         grid.views(np.zeros((10, 10)))
+    with pytest.raises(ValueError, match="n_views must be odd"):
+        grid.views(flat, n_views=8)  # was cut to 7 views without a word
+    with pytest.raises(ValueError, match="n_views must be an integer"):
+        grid.views(flat, n_views=3.7)
+    with pytest.raises(ValueError, match="order must be an integer"):
+        grid.views(flat, order=9)
+    bad = flat.copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        grid.views(bad)
+    assert grid.views(flat, n_views=3).shape[:2] == (3, 3)
+    none = np.zeros((0, 2))
+    fields = dict(pitch=10.0, offset=(40.0, 40.0), rotation=0.0, shape=(80, 80), centres=none,
+                  indices=none, residuals=np.zeros(0))  # fmt: skip
+    for change, match in (({"pitch": 0.0}, "pitch"), ({"rotation": np.nan}, "rotation"),
+                          ({"offset": (np.nan, 1.0)}, "offset row"),
+                          ({"shape": (-4, 4)}, "shape rows")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            io.LensletGrid(**{**fields, **change})
 
 
 SYSTEMS = [

@@ -7,6 +7,7 @@ import numbers
 import numpy as np
 
 from . import _backend as B
+from .validate import number
 
 __all__ = [
     "add_noise",
@@ -214,9 +215,8 @@ def frame_rank_sigma(x) -> float:
 
 def snr_db_from_sigma(power: float, sigma: float) -> float:
     """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``); ``power`` and ``σ`` finite and ≥ 0."""
-    for name, v in (("power", power), ("sigma", sigma)):
-        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not 0 <= v < np.inf:
-            raise ValueError(f"{name} must be a finite number ≥ 0, got {v!r}")
+    number("power", power, low=0)
+    number("sigma", sigma, low=0)
     return float("inf") if sigma == 0 else float(10.0 * np.log10(power / sigma**2))
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import training_scenes
+from ..validate import integer
 from . import require_torch
 
 
@@ -52,9 +53,7 @@ def check_config(cfg, positive_ints) -> None:
             raise ValueError(f"{name} must be a positive integer, got {v!r}")
     if isinstance(cfg.warmup, bool) or not isinstance(cfg.warmup, int) or cfg.warmup < 0:
         raise ValueError(f"warmup must be an integer ≥ 0, got {cfg.warmup!r}")
-    seed = getattr(cfg, "seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be an integer ≥ 0, got {seed!r}")
+    integer("seed", getattr(cfg, "seed", 0), low=0)
     lr = cfg.lr
     if isinstance(lr, bool) or not isinstance(lr, (int, float)) or not 0 < lr < math.inf:
         raise ValueError(f"lr must be a finite positive number, got {lr!r}")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validate import number
 from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism, NoDesign
 
 __all__ = ["prism_grid", "eq190_phi3", "THESIS_DESIGN"]
@@ -84,8 +85,7 @@ def prism_grid(
         raise ValueError(f"need 200 ≤ band_nm[0] < center_nm < band_nm[1] (nm), got {band_nm}")
     for name, v in (("distance_mm", distance_mm), ("pixel_um", pixel_um),
                     ("aperture_mm", aperture_mm)):  # fmt: skip
-        if isinstance(v, bool) or not (isinstance(v, (int, float, np.number)) and 0 < v < np.inf):
-            raise ValueError(f"{name} must be a finite length > 0, got {v!r}")
+        number(name, v, low=0, low_open=True)
     rows = []
     for g1, g2 in glass_pairs:
         for p1 in np.atleast_1d(np.asarray(phi1, dtype=np.float64)):

@@ -253,17 +253,13 @@ class DoubleAmiciPrism:
         from scipy.optimize import brentq
 
         from .._units import check_wavelengths_nm
+        from ..validate import number
 
         # the inputs first: an unknown glass or a NaN angle must not read as "no design"
         _glass(glass1), _glass(glass2)
-        if isinstance(phi1, bool) or not (
-            isinstance(phi1, (int, float, np.floating, np.integer)) and 0 < phi1 < 180
-        ):
-            raise ValueError(f"phi1 must be an angle in degrees in (0, 180), got {phi1!r}")
+        number("phi1", phi1, low=0, high=180, low_open=True, high_open=True)
         check_wavelengths_nm([center_nm], "center_nm")
-        if not (isinstance(field_deg, (int, float, np.floating, np.integer)) and
-                0 <= field_deg < 180):  # fmt: skip
-            raise ValueError(f"field_deg must be degrees in [0, 180), got {field_deg!r}")
+        number("field_deg", field_deg, low=0, high=180, high_open=True)
         try:
             lo, hi = (float(v) for v in phi3_range)
         except (TypeError, ValueError):

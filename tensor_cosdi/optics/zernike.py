@@ -7,6 +7,8 @@ from math import factorial
 
 import numpy as np
 
+from ..validate import integer
+
 __all__ = ["noll_to_nm", "zernike", "zernike_radial", "NAMES"]
 
 #: Common names of the first Noll terms.
@@ -51,11 +53,7 @@ def noll_to_nm(j: int) -> tuple[int, int]:
 def zernike_radial(n: int, m: int, rho):
     """The radial polynomial ``R_n^|m|(ρ)``: integers ``n ≥ 0`` and ``|m| ≤ n`` with ``n − |m|``
     even (the pairs :func:`noll_to_nm` gives); any other pair is a ``ValueError``."""
-    for name, v in (("n", n), ("m", m)):
-        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral):
-            raise ValueError(f"{name} must be an integer, got {v!r}")
-    m = abs(int(m))
-    n = int(n)
+    n, m = integer("n", n), abs(integer("m", m))
     if n < 0 or m > n or (n - m) % 2:
         raise ValueError(
             f"a Zernike radial polynomial needs n ≥ 0, |m| ≤ n and n − |m| even, got n={n}, m={m}"

@@ -60,9 +60,9 @@ def test_bad_inputs_are_errors_not_rows_without_a_design():
 
     with pytest.raises(ValueError, match="unknown glass 'X'"):
         tc.studies.prism_grid(glass_pairs=(("X", "SF4"),))
-    with pytest.raises(ValueError, match="phi1 must be an angle"):
+    with pytest.raises(ValueError, match="phi1 must be a finite number"):
         tc.studies.prism_grid(phi1=(np.nan,))
-    with pytest.raises(ValueError, match="aperture_mm must be a finite length > 0"):
+    with pytest.raises(ValueError, match="aperture_mm must be a finite number > 0"):
         tc.studies.prism_grid(aperture_mm=-1.0)
     with pytest.raises(ValueError, match="look like micrometres"):
         DoubleAmiciPrism.design(center_nm=0.57)

@@ -591,6 +591,81 @@ def depth_cases():
     return [Case("depth", label, call, words) for label, (call, words) in cases.items()]
 
 
+def plot_cases():
+    """The figures: cubes, points, traces and records a figure cannot honestly show."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from tensor_cosdi import plot
+
+    c = np.random.default_rng(8).random((6, 5, 4))
+    wl = np.linspace(450, 650, 4)
+    cases = {
+        "preview complex cube": (lambda: plot.preview(c + 1j, wl), ("real", "complex")),
+        "preview NaN cube": (lambda: plot.preview(c * np.nan, wl), ("nan",)),
+        "preview 2-D wavelengths": (lambda: plot.preview(c, wl.reshape(2, 2)), ("wavelengths",)),
+        "preview percentile='50'": (lambda: plot.preview(c, wl, percentile="50"),
+                                    ("percentile",)),
+        "preview ax=3": (lambda: plot.preview(c, wl, ax=3), ("ax",)),
+        "bands NaN cube": (lambda: plot.bands(c * np.nan, wl), ("nan",)),
+        "bands columns=0": (lambda: plot.bands(c, wl, columns=0), ("columns",)),
+        "bands max_bands=0": (lambda: plot.bands(c, wl, max_bands=0), ("max_bands",)),
+        "bands fig='x'": (lambda: plot.bands(c, wl, fig="x"), ("fig",)),
+        "spectra fractional point": (lambda: plot.spectra(c, wl, [(1.7, 2)]), ("point",)),
+        "spectra a lone pair": (lambda: plot.spectra(c, wl, (1, 2)), ("pair", "points")),
+        "spectra no points": (lambda: plot.spectra(c, wl, []), ("points",)),
+        "spectra NaN reference": (lambda: plot.spectra(c, wl, [(1, 1)], reference=c * np.nan),
+                                  ("reference",)),
+        "compare a list of cubes": (lambda: plot.compare(c, [c], wl), ("cubes", "dict")),
+        "depth complex map": (lambda: plot.depth(c[..., 0] + 1j), ("depth_map",)),
+        "convergence empty trace": (lambda: plot.convergence({"residual": []}), ("residual",)),
+        "convergence negative residual": (lambda: plot.convergence({"residual": [1, -1]}),
+                                          ("residual",)),
+        "convergence change of another length": (
+            lambda: plot.convergence({"residual": [1, 0.5], "change": [1]}), ("change",)),
+        "study text results": (lambda: plot.study([{"x": 1, "y": "a"}], "x", "y"), ("'y'",)),
+        "study logy with 0": (
+            lambda: plot.study([{"x": 1, "y": 1.0}, {"x": 2, "y": 0.0}], "x", "y", logy=True),
+            ("logy",)),
+        "study x of two kinds": (
+            lambda: plot.study([{"x": 1, "y": 1.0}, {"x": "a", "y": 2.0}], "x", "y"), ("'x'",)),
+        "study records not dicts": (lambda: plot.study([3], "x", "y"), ("record",)),
+        "to_srgb complex cube": (lambda: tc.colour.to_srgb(c + 1j, wl), ("real", "complex")),
+        "to_srgb band_axis=3": (lambda: tc.colour.to_srgb(c, wl, band_axis=3), ("band_axis",)),
+    }  # fmt: skip
+    return [Case("plot", label, call, words) for label, (call, words) in cases.items()]
+
+
+def parallel_cases():
+    """Tiled reconstruction and sweeps: what is checked before any tile or cell runs."""
+    p = tc.studies.make_problem("sd_cassi", "coffee", shape=(32, 32), n_bands=4, rng=0)
+    g = np.asarray(p.measurement)
+    nan_g = np.where(g > g.mean(), np.nan, g)
+
+    def tiled(m=g, **kw):
+        return tc.reconstruct_tiled(p.system, m, "gap_tv", tile=16, overlap=4, **kw)
+
+    def cell(x):
+        return {"v": x}
+
+    cases = {
+        "reconstruct_tiled client='local'": (lambda: tiled(client="local"), ("client",)),
+        "reconstruct_tiled client=3": (lambda: tiled(client=3), ("client",)),
+        "reconstruct_tiled progress='yes'": (lambda: tiled(progress="yes"), ("progress",)),
+        "reconstruct_tiled max_iter=-1": (lambda: tiled(max_iter=-1), ("max_iter",)),
+        "reconstruct_tiled complex capture": (lambda: tiled(g + 1j), ("real", "complex")),
+        "reconstruct_tiled boolean capture": (lambda: tiled(g > 0.5), ("real", "bool")),
+        "reconstruct_tiled NaN capture": (lambda: tiled(nan_g), ("nan",)),
+        "sweep client=3": (lambda: tc.studies.sweep({"x": [1]}, cell, client=3), ("client",)),
+        "sweep progress='no'": (lambda: tc.studies.sweep({"x": [1]}, cell, progress="no"),
+                                ("progress",)),
+        "sweep a dict as an axis": (lambda: tc.studies.sweep({"x": {"a": 1}}, cell), ("grid",)),
+        "sweep a set as an axis": (lambda: tc.studies.sweep({"x": {1, 2}}, cell), ("grid",)),
+        "sweep a number as a key": (lambda: tc.studies.sweep({3: [1]}, cell), ("grid", "key")),
+    }  # fmt: skip
+    return [Case("parallel", label, call, words) for label, (call, words) in cases.items()]
+
+
 class Worker:
     """Runs cases of ``cases`` by index in a forked child; a dead or stuck child is replaced."""
 
@@ -1090,6 +1165,8 @@ def catalogue(folder: Path, n_flips: int = 150):
         + option_cases()
         + lab_cases(folder)
         + reader_cases(folder)
+        + plot_cases()
+        + parallel_cases()
     )
 
 

@@ -62,8 +62,12 @@ def to_srgb(
     [1.0, 1.0, 1.0]
     """
     colour = colour_science()
-    c = np.moveaxis(np.asarray(B.to_numpy(cube), dtype=np.float64), band_axis, -1)
-    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    c = validate.real_array("cube", B.to_numpy(cube), finite=False)
+    band_axis = validate.integer("band_axis", band_axis, low=-c.ndim, high=c.ndim - 1)
+    c = np.moveaxis(c, band_axis, -1)
+    wl = validate.real_array("wavelengths", wavelengths, finite=False)
+    if wl.ndim != 1:
+        raise ValueError(f"wavelengths must be 1-D (one per band), got shape {wl.shape}")
     if wl.size != c.shape[-1]:
         raise ValueError(f"expected {c.shape[-1]} wavelengths (one per band), got {wl.size}")
     if not np.isfinite(c).all():

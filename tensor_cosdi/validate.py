@@ -21,7 +21,9 @@ import numbers
 
 import numpy as np
 
-__all__ = ["number", "integer", "flag", "precision", "option_types"]
+__all__ = [
+    "number", "integer", "flag", "precision", "option_types", "real_array", "increasing",
+]  # fmt: skip
 
 
 def _range_text(low, high, low_open, high_open) -> str:
@@ -114,3 +116,38 @@ def option_types(where: str, options: dict, defaults: dict) -> None:
             # another object (a random Generator for a seed, say) is the method's to judge
         elif isinstance(default, numbers.Real):
             number(label, value)
+
+
+def real_array(name: str, value, *, finite: bool = True) -> np.ndarray:
+    """``value`` as a float64 ndarray of real numbers, or a ``ValueError`` naming ``name``.
+
+    Complex, text and object arrays are errors (a cast would drop the imaginary part or fail
+    deep inside NumPy); with ``finite`` (default) so are NaN and ±inf, counted in the message.
+    Booleans and integers are numbers here (a mask, raw counts).
+    """
+    try:
+        a = np.asarray(value)
+    except (ValueError, TypeError) as e:  # ragged nested lists
+        raise ValueError(f"{name} must be an array of real numbers: {e}") from None
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{name} must hold real numbers, got dtype {a.dtype}")
+    a = a.astype(np.float64, copy=False)
+    if finite:
+        bad = a.size - int(np.count_nonzero(np.isfinite(a)))
+        if bad:
+            raise ValueError(f"{name} holds {bad} NaN or infinite values; expected finite numbers")
+    return a
+
+
+def increasing(name: str, value, *, size: int | None = None) -> np.ndarray:
+    """``value`` as a 1-D float64 array of finite, strictly increasing numbers (of ``size``
+    entries when given) — band centres, candidate depths — or a ``ValueError`` naming ``name``.
+    """
+    a = real_array(name, value)
+    if a.ndim != 1:
+        raise ValueError(f"{name} must be 1-D, got shape {a.shape}")
+    if size is not None and a.size != size:
+        raise ValueError(f"{name} must hold {size} values (one per band), got {a.size}")
+    if a.size == 0 or (np.diff(a) <= 0).any():
+        raise ValueError(f"{name} must be non-empty and strictly increasing, got {a.tolist()}")
+    return a

@@ -66,6 +66,12 @@ def test_band_axis_and_errors():
         to_srgb(np.ones((2, 2, 2)), [300, 550])
     with pytest.raises(ValueError, match="illuminant"):
         to_srgb(np.ones((2, 2, 2)), [450, 550], illuminant="D99")
+    with pytest.raises(ValueError, match="cube must hold real numbers, got dtype complex128"):
+        to_srgb(np.ones((2, 2, 2)) + 1j, [450, 550])  # not cast, imaginary part dropped
+    with pytest.raises(ValueError, match="wavelengths must be 1-D \\(one per band\\)"):
+        to_srgb(np.ones((2, 2, 4)), [[450, 500], [550, 600]])  # not flattened
+    with pytest.raises(ValueError, match="band_axis must be an integer ≥ -3 and ≤ 2, got 3"):
+        to_srgb(np.ones((2, 2, 2)), [450, 550], band_axis=3)
 
 
 def test_colour_science_leaves_numpys_print_options_alone():

@@ -53,7 +53,7 @@ def test_spectra_plot_the_cube_values_and_the_reference():
     np.testing.assert_allclose(lines[0].get_ydata(), cube[1, 2])
     np.testing.assert_allclose(lines[1].get_ydata(), ref[1, 2])
     np.testing.assert_allclose(lines[2].get_xdata(), WL)
-    with pytest.raises(ValueError, match="not a \\(row, column\\) inside"):
+    with pytest.raises(ValueError, match="point row must be an integer ≥ 0 and ≤ 11, got 50"):
         plot.spectra(cube, WL, [(50, 0)])
 
 
@@ -124,3 +124,59 @@ def test_study_draws_one_line_per_group_averaging_repeats():
         plot.study(recs, "n_filters", "depth")
     with pytest.raises(ValueError, match="at least one record"):
         plot.study([], "a", "b")
+
+
+_C = np.random.default_rng(1).random((6, 5, 4))
+_W = np.linspace(450, 650, 4)
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: plot.preview(_C + 1j, _W), "cube must hold real numbers, got dtype complex128"),
+        (lambda: plot.preview(np.where(_C > 0.9, np.nan, _C), _W), "cube holds 9 NaN or inf"),
+        (lambda: plot.preview(_C, _W.reshape(2, 2)), "wavelengths must be 1-D, got shape"),
+        (lambda: plot.preview(_C, _W[::-1]), "wavelengths must be non-empty and strictly inc"),
+        (lambda: plot.preview(_C, _W, percentile="50"), "percentile must be a finite number"),
+        (lambda: plot.preview(_C, _W, ax=3), "ax must be a matplotlib Axes"),
+        (lambda: plot.bands(np.where(_C > 0.5, np.inf, _C), _W), "NaN or infinite values"),
+        (lambda: plot.bands(_C, _W, columns=0), "columns must be an integer ≥ 1, got 0"),
+        (lambda: plot.bands(_C, _W, max_bands=2.5), "max_bands must be an integer ≥ 1"),
+        (lambda: plot.bands(_C, _W, fig="x"), "fig must be a matplotlib Figure or SubFigure"),
+        (lambda: plot.spectra(_C, _W, [(1.7, 2)]), "point row must be an integer"),
+        (lambda: plot.spectra(_C, _W, [(1, True)]), "point column must be an integer"),
+        (lambda: plot.spectra(_C, _W, (1, 2)), "point 1 is not a \\(row, column\\) pair"),
+        (lambda: plot.spectra(_C, _W, []), "got none"),
+        (lambda: plot.spectra(_C, _W, [(1, 2)], reference=_C * np.nan), "reference holds 120"),
+        (lambda: plot.compare(_C, [_C], _W), "cubes must be a dict of name"),
+        (lambda: plot.compare(_C, {"a": _C * np.nan}, _W), "reconstruction 'a' holds 120"),
+        (lambda: plot.depth(np.zeros((4, 4)) + 1j), "depth_map must hold real numbers"),
+        (lambda: plot.convergence({"residual": []}), "must be a non-empty 1-D sequence"),
+        (lambda: plot.convergence({"residual": [0.5, -1]}), "must be ≥ 0 \\(a relative norm\\)"),
+        (
+            lambda: plot.convergence({"residual": [1, 0.5], "change": [1]}),
+            "history\\['change'\\] has 1 entries for 2 residuals",
+        ),
+        (lambda: plot.study([{"x": 1, "y": "a"}], "x", "y"), "record 0: 'y' must be a number"),
+        (
+            lambda: plot.study([{"x": 1, "y": 1.0}, {"x": 2, "y": 0.0}], "x", "y", logy=True),
+            "record 1: 'y' must be a number > 0 \\(logy\\)",
+        ),
+        (
+            lambda: plot.study([{"x": 1, "y": 1.0}, {"x": "a", "y": 2.0}], "x", "y"),
+            "the 'x' values cannot be ordered: they mix \\['int', 'str'\\]",
+        ),
+        (lambda: plot.study([3], "x", "y"), "record 0 must be a dict, got int"),
+        (lambda: plot.study("xy", "x", "y"), "records must be a sequence of dicts, got str"),
+    ],
+)
+def test_bad_input_is_a_one_line_error_naming_it(call, message):
+    with pytest.raises(ValueError, match=message) as err:
+        call()
+    assert "\n" not in str(err.value)
+
+
+def test_a_diverged_run_is_still_drawn():
+    """NaN and inf in a trace are what a diverged run looks like: drawn, not refused."""
+    ax = plot.convergence({"residual": [1.0, np.inf, np.nan]})
+    assert np.isinf(ax.get_lines()[0].get_ydata()[1])

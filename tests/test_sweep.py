@@ -44,6 +44,18 @@ def test_sweep_errors_and_csv(tmp_path):
         studies.sweep({"x": [1], "value": [2]}, lambda x, value: {"value": 3}, progress=False)
     with pytest.raises(TypeError, match="must return a dict"):
         studies.sweep({"x": [1]}, lambda x: x, progress=False)
+    for grid, kw, message in (
+        ({"x": {"a": 1}}, {}, "grid\\['x'\\] must be a sequence of values"),  # not its keys
+        ({"x": {1, 2}}, {}, "must be a sequence of values"),  # a set has no fixed order
+        ({3: [1]}, {}, "grid keys must be parameter names \\(identifiers\\), got 3"),
+        ({"x": [1]}, {"progress": "no"}, "progress must be True or False"),
+        ({"x": [1]}, {"client": 3}, 'client must be None, "local", a scheduler address'),
+    ):
+        with pytest.raises(ValueError, match=message):
+            studies.sweep(grid, lambda x: {"v": x}, **kw)
+    # an iterator's values are read once: the sweep runs them, not nothing
+    rows = studies.sweep({"x": iter([1, 2]), "y": [0]}, _square, progress=False)
+    assert [r["value"] for r in rows] == [1, 4]
     rows = studies.sweep({"x": [1, 2], "y": [5]}, _square, progress=False)
     path = studies.write_csv(rows, tmp_path / "t.csv")
     with open(path) as f:

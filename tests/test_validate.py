@@ -7,7 +7,15 @@ import pytest
 import tensor_cosdi as tc
 from tensor_cosdi.io.triggers import AcquisitionPlan
 from tensor_cosdi.solvers import denoisers
-from tensor_cosdi.validate import flag, integer, number, option_types, precision
+from tensor_cosdi.validate import (
+    flag,
+    increasing,
+    integer,
+    number,
+    option_types,
+    precision,
+    real_array,
+)
 
 
 @pytest.mark.parametrize("bad", [True, np.bool_(False), "0.5", None, float("inf"), np.nan, 1j])
@@ -42,6 +50,31 @@ def test_integer_and_flag():
     for bad in (1, "yes", None):
         with pytest.raises(ValueError, match="f must be True or False"):
             flag("f", bad)
+
+
+def test_real_array_and_increasing():
+    np.testing.assert_array_equal(real_array("a", [[1, 2]], finite=True), [[1.0, 2.0]])
+    assert real_array("m", np.array([True, False])).dtype == np.float64  # a mask is numbers
+    for bad, message in (
+        (np.ones(2) + 1j, "a must hold real numbers, got dtype complex128"),
+        (np.array(["1", "2"]), "a must hold real numbers, got dtype <U1"),
+        ([[1, 2], [3]], "a must be an array of real numbers"),
+        ([1.0, np.nan, np.inf], "a holds 2 NaN or infinite values; expected finite numbers"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            real_array("a", bad)
+    assert np.isnan(real_array("a", [np.nan], finite=False)[0])
+    np.testing.assert_array_equal(increasing("wl", [450, 500], size=2), [450.0, 500.0])
+    for bad, message in (
+        ([[450, 500]], "wl must be 1-D, got shape \\(1, 2\\)"),
+        ([450, 500, 600], "wl must hold 2 values \\(one per band\\), got 3"),
+        ([500, 450], "wl must be non-empty and strictly increasing, got \\[500.0, 450.0\\]"),
+        ([450, 450], "strictly increasing"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            increasing("wl", bad, size=2)
+    with pytest.raises(ValueError, match="non-empty"):
+        increasing("wl", [])
 
 
 def test_option_types_follows_the_defaults():

@@ -282,6 +282,25 @@ def _warn_if_solves_are_slow(system, method: str) -> None:
     )
 
 
+def check_call(system, method: str, options: dict):
+    """The registry entry of ``method`` once its name, its options' names and kinds, and the
+    system fit it (what :func:`reconstruct` checks before it reads the measurement); an error
+    naming what does not fit otherwise."""
+    entry = METHODS[method]  # an unknown name lists the registered ones
+    unknown = sorted(set(options) - set(entry.defaults))
+    if unknown:
+        raise ValueError(
+            f"unknown option(s) {unknown} for method {method!r}; valid options: "
+            f"{sorted(entry.defaults)}"
+        )
+    require_system(method, system)
+    for opt, what in entry.needs.items():
+        if options.get(opt) is None:
+            raise ValueError(f"method {method!r} needs {opt}=: {what}")
+    option_types(f"method {method!r}", options, entry.defaults)
+    return entry
+
+
 def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     """Reconstruct a cube from ``measurement`` of ``system`` with a registered ``method``.
 
@@ -316,18 +335,7 @@ def reconstruct(system, measurement, method: str = "otd", **options) -> Result:
     measurement, NaN out of a method, or a cube that overflows when scaled
     back raise errors that say so.
     """
-    entry = METHODS[method]  # an unknown name lists the registered ones
-    unknown = sorted(set(options) - set(entry.defaults))
-    if unknown:
-        raise ValueError(
-            f"unknown option(s) {unknown} for method {method!r}; valid options: "
-            f"{sorted(entry.defaults)}"
-        )
-    require_system(method, system)
-    for opt, what in entry.needs.items():
-        if options.get(opt) is None:
-            raise ValueError(f"method {method!r} needs {opt}=: {what}")
-    option_types(f"method {method!r}", options, entry.defaults)
+    entry = check_call(system, method, options)
     if entry.solves:
         _warn_if_solves_are_slow(system, method)
     opts = {**entry.defaults, **options}

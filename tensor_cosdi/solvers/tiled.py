@@ -19,7 +19,8 @@ import numpy as np
 
 from .. import _backend as B
 from ..bases import block_sizes
-from ._base import Result, reconstruct
+from ..validate import flag
+from ._base import Result, check_call, reconstruct
 
 __all__ = ["reconstruct_tiled", "TILED_SYSTEMS"]
 
@@ -116,21 +117,34 @@ def reconstruct_tiled(
             f"reconstruct_tiled supports {TILED_SYSTEMS}, got {getattr(system, 'name', system)!r}"
         )
     tile, overlap = check_int("tile", tile, 8), check_int("overlap", overlap, 0)
+    progress = flag("progress", progress)
+    # the method and its options are checked here, once, not by every tile (on a cluster, after
+    # every sub-problem was built and sent)
+    check_call(system, method, options)
+    if client is not None and not all(
+        callable(getattr(client, a, None)) for a in ("scatter", "map", "submit")
+    ):
+        raise ValueError(
+            f"client must be a dask.distributed.Client (tensor_cosdi.studies.local_client() "
+            f"starts one on this machine) or None, got {client!r}"
+        )
     t0 = time.perf_counter()
     lazy = hasattr(measurement, "__dask_graph__")
-    if lazy:  # a dask array: each tile's window is computed when its tile is solved
-        g = measurement
-        if not np.issubdtype(np.dtype(g.dtype), np.number) or np.issubdtype(
-            np.dtype(g.dtype), np.complexfloating
-        ):
-            raise ValueError(f"measurement must hold real numbers, got dtype {g.dtype}")
-    else:
-        g = np.asarray(B.to_numpy(measurement))
+    # a dask array stays lazy: each tile's window is computed when its tile is solved
+    g = measurement if lazy else np.asarray(B.to_numpy(measurement))
+    if np.dtype(g.dtype).kind not in "iuf":  # complex, text, objects, booleans: not a capture
+        raise ValueError(f"measurement must hold real numbers, got dtype {g.dtype}")
     if np.dtype(g.dtype) not in (np.float32, np.float64):  # raw counts: blend in float64
         g = g.astype(np.float64)
     if tuple(g.shape) != tuple(system.measurement_shape):
         raise ValueError(
             f"measurement has shape {g.shape}; {system.name} expects {system.measurement_shape}"
+        )
+    if not lazy and not B.all_finite(g):  # (a lazy window is checked by its tile's reconstruct)
+        bad = g.size - int(np.count_nonzero(np.isfinite(g)))
+        raise ValueError(
+            f"reconstruct_tiled: the measurement holds {bad} NaN or infinite values; "
+            "expected finite numbers"
         )
     nx, ny, nl = system.cube_shape
     s = system.window_spill

@@ -60,17 +60,31 @@ def sweep(grid: dict, run, *, client=None, progress: bool = True) -> list[dict]:
     list of dict — the parameters and the results of each combination, ready
     for :func:`write_csv` (or ``pandas.DataFrame``).
     """
+    from ..validate import flag
+
     if not isinstance(grid, dict) or not grid:
         raise ValueError("grid must be a non-empty dict of name → sequence of values")
+    values = {}
     for k, v in grid.items():
-        if isinstance(v, (str, bytes)) or not hasattr(v, "__iter__"):
+        if not isinstance(k, str) or not k.isidentifier():
+            raise ValueError(f"grid keys must be parameter names (identifiers), got {k!r}")
+        if isinstance(v, (str, bytes, dict, set, frozenset)) or not hasattr(v, "__iter__"):
+            # a dict would sweep its keys, a set in no fixed order
             raise ValueError(f"grid[{k!r}] must be a sequence of values, got {v!r}")
-        if not list(v):
+        values[k] = list(v)  # once: an iterator's values are read a single time
+        if not values[k]:
             raise ValueError(f"grid[{k!r}] holds no values: the sweep would run nothing")
     if not callable(run):
         raise ValueError(f"run must be callable, got {run!r}")
-    keys = list(grid)
-    combos = [dict(zip(keys, vals)) for vals in itertools.product(*(list(grid[k]) for k in keys))]
+    progress = flag("progress", progress)
+    keys = list(values)
+    combos = [dict(zip(keys, vals)) for vals in itertools.product(*(values[k] for k in keys))]
+    if client is not None and not isinstance(client, str):
+        if not all(callable(getattr(client, a, None)) for a in ("map", "gather")):
+            raise ValueError(
+                'client must be None, "local", a scheduler address ("tcp://host:8786") or a '
+                f"dask.distributed.Client, got {client!r}"
+            )
     if client is None:
         from tqdm import tqdm
 

@@ -89,3 +89,25 @@ def test_tiled_errors():
         tc.reconstruct_tiled(s, g[:, :-1])
     with pytest.raises(ValueError, match="unknown|nope"):
         tc.reconstruct_tiled(s, g, "gap_tv", nope=1)
+
+
+def test_tiled_refuses_before_any_tile_is_solved():
+    """Method, options, client, progress and the measurement's values are checked once, up
+    front: on a cluster a bad option would otherwise surface only after every sub-problem
+    was built and sent, and a NaN would be reported in one tile's shape."""
+    s, cube, g = problem("sd", n=32)
+    g = np.asarray(g)
+    for call, message in (
+        (lambda: tc.reconstruct_tiled(s, g, "gap_tv", max_iter=-1), "max_iter must be an integ"),
+        (lambda: tc.reconstruct_tiled(s, g, "gap_tv", progress="yes"), "progress must be True"),
+        (lambda: tc.reconstruct_tiled(s, g, "gap_tv", client="local"), "client must be a dask"),
+        (lambda: tc.reconstruct_tiled(s, g, "gap_tv", client=3), "local_client\\(\\) starts"),
+        (lambda: tc.reconstruct_tiled(s, g + 1j), "real numbers, got dtype complex"),
+        (lambda: tc.reconstruct_tiled(s, g > 0.5), "real numbers, got dtype bool"),
+        (
+            lambda: tc.reconstruct_tiled(s, np.where(g > g.mean(), np.nan, g)),
+            "reconstruct_tiled: the measurement holds [0-9]+ NaN or infinite values",
+        ),
+    ):
+        with pytest.raises(ValueError, match=message):
+            call()

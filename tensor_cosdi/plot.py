@@ -13,6 +13,8 @@ is reported in the title when it is not 1.
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 
 from . import _backend as B
@@ -283,7 +285,8 @@ def study(records, x: str, y: str, *, by: str | None = None, ax=None, logy: bool
             raise ValueError(f"record {missing[0]} has no {key!r}; it has {sorted(recs[0])}")
     for i, r in enumerate(recs):
         v = r[y]
-        if not validate._is_real(v) or (logy and not v > 0):
+        real = isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+        if not real or (logy and not v > 0):
             want = "a number > 0 (logy)" if logy else "a number"
             raise ValueError(f"record {i}: {y!r} must be {want}, got {v!r}")
     if _target("ax", ax) is None:

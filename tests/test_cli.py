@@ -18,9 +18,10 @@ def _rows(text):
     )
 
 
-def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
+def test_demo_prints_table_writes_pngs_and_refuses_to_overwrite(tmp_path, capsys):
     out = tmp_path / "demo"
-    assert main(ARGS + ["--out", str(out)]) == 0
+    args = ARGS + ["--out", str(out)]
+    assert main(args) == 0
     text = capsys.readouterr().out
     rows = _rows(text)
     assert [(r[0], r[3]) for r in rows] == [
@@ -41,14 +42,10 @@ def test_demo_prints_table_and_writes_pngs(tmp_path, capsys):
         and "cassdi_dfa_depth.png" in names
     )
     assert str(out.resolve()) in text
-
-
-def test_demo_refuses_to_overwrite(tmp_path, capsys):
-    out = tmp_path / "demo"
-    args = ARGS + ["--out", str(out)]
-    assert main(args) == 0
+    # a second run into the same folder (one file gone, as after a partial earlier run)
+    # touches nothing without --force
     before = (out / "sd_cassi_otd.png").read_bytes()
-    (out / "sd_cassi_truth.png").unlink()  # a partial earlier run: still nothing is touched
+    (out / "sd_cassi_truth.png").unlink()
     assert main(args) == 2
     assert "--force" in capsys.readouterr().err
     assert (out / "sd_cassi_otd.png").read_bytes() == before

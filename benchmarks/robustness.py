@@ -666,6 +666,34 @@ def parallel_cases():
     return [Case("parallel", label, call, words) for label, (call, words) in cases.items()]
 
 
+def complex_cases():
+    """Complex arrays where real numbers are due: a cast would keep the real part only."""
+    from tensor_cosdi import colour, scenes
+    from tensor_cosdi.solvers.denoisers import denoise as run_denoiser
+
+    x = np.random.default_rng(9).random((8, 8, 3))
+    z = x + 1j
+    wl = [450.0, 550.0, 650.0]
+    cases = [
+        ("metrics", "psnr complex estimate", lambda: metrics.psnr(x, z), ("real", "complex")),
+        ("metrics", "ssim complex estimate", lambda: metrics.ssim(x, z, data_range=1.0),
+         ("real", "complex")),
+        ("metrics", "sam complex truth", lambda: metrics.sam(z, x), ("real", "complex")),
+        ("noise", "add_noise complex", lambda: noise.add_noise(z, 30.0, rng=0),
+         ("real", "complex")),
+        ("noise", "estimate_sigma complex", lambda: noise.estimate_sigma(z), ("real", "complex")),
+        ("denoisers", "denoise tv complex", lambda: run_denoiser("tv", z, 0.1),
+         ("real", "complex")),
+        ("colour", "rgb_to_cube complex", lambda: colour.rgb_to_cube(x * 0.5 + 1j, wl),
+         ("real", "complex")),
+        ("colour", "rgb_to_cube 2-D wavelengths",
+         lambda: colour.rgb_to_cube(x * 0.5, [[450, 500], [550, 600]]), ("wavelengths",)),
+        ("scenes", "scene_cube complex wavelengths",
+         lambda: scenes.scene_cube("coffee", (8, 8), np.array(wl) + 1j), ("wavelengths",)),
+    ]  # fmt: skip
+    return [Case(m, label, call, words) for m, label, call, words in cases]
+
+
 class Worker:
     """Runs cases of ``cases`` by index in a forked child; a dead or stuck child is replaced."""
 
@@ -1167,6 +1195,7 @@ def catalogue(folder: Path, n_flips: int = 150):
         + reader_cases(folder)
         + plot_cases()
         + parallel_cases()
+        + complex_cases()
     )
 
 

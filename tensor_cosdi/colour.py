@@ -124,7 +124,7 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
     [1.0, 1.0, 1.0]
     """
     colour = colour_science()
-    x = np.asarray(B.to_numpy(rgb), dtype=np.float64)
+    x = validate.real_array("rgb", B.to_numpy(rgb), finite=False)
     if x.ndim == 0 or x.shape[-1] != 3:
         raise ValueError(f"rgb must have a last axis of 3 (R, G, B), got shape {x.shape}")
     if not np.isfinite(x).all():
@@ -134,7 +134,9 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
             f"rgb must lie in [0, 1] (divide uint8 images by 255), got values in [{x.min():g}, "
             f"{x.max():g}]"
         )
-    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    wl = validate.real_array("wavelengths", wavelengths, finite=False)
+    if wl.ndim != 1:
+        raise ValueError(f"wavelengths must be 1-D (one per band), got shape {wl.shape}")
     if wl.size == 0 or not np.isfinite(wl).all() or wl.min() < 380 or wl.max() > 780:
         raise ValueError(f"wavelengths must be finite nm within 380–780, got {wl.tolist()}")
     linear = colour.cctf_decoding(x, function="sRGB") if encoded else x

@@ -14,7 +14,7 @@ import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from . import _backend as B
-from .validate import integer
+from .validate import integer, real_array
 
 __all__ = ["psnr", "ssim", "rmse", "sam", "combined_error"]
 
@@ -71,8 +71,8 @@ def psnr(
 
 
 def _pair(image_true, image_test, data_range=None):
-    t = np.asarray(B.to_numpy(image_true), dtype=np.float64)
-    e = np.asarray(B.to_numpy(image_test), dtype=np.float64)
+    t = real_array("image_true", B.to_numpy(image_true), finite=False)
+    e = real_array("image_test", B.to_numpy(image_test), finite=False)
     if t.shape != e.shape:
         raise ValueError(f"image_true has shape {t.shape} but image_test has shape {e.shape}")
     if not (np.isfinite(t).all() and np.isfinite(e).all()):

@@ -7,7 +7,7 @@ import numbers
 import numpy as np
 
 from . import _backend as B
-from .validate import number
+from .validate import number, real_array
 
 __all__ = [
     "add_noise",
@@ -67,7 +67,7 @@ def add_noise(measurement, snr_db: float | None, *, rng=None):
     if snr_db is None:
         return measurement
     snr_db = check_snr_db(snr_db)
-    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    g = real_array("measurement", B.to_numpy(measurement), finite=False)
     if not np.isfinite(g).all():
         raise ValueError("the measurement holds NaN or inf; cannot set an SNR on it")
     power = float(np.mean(g * g))
@@ -97,7 +97,7 @@ def estimate_sigma(measurement) -> float:
 def _frames(x, who: str) -> np.ndarray:
     """``x`` as float64 frames ``(rows, columns, K)`` (axes after the first two folded), checked:
     frames of at least 4×4 pixels, finite."""
-    g = np.asarray(B.to_numpy(x), dtype=np.float64)
+    g = real_array(f"{who}: the input", B.to_numpy(x), finite=False)
     if g.ndim < 2 or min(g.shape[:2]) < 4:
         raise ValueError(f"{who} needs frames of at least 4×4 pixels, got shape {g.shape}")
     if not np.isfinite(g).all():

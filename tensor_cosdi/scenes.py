@@ -36,6 +36,7 @@ from . import _backend as B
 from ._registry import Registry
 from ._units import check_wavelengths_nm
 from .operators import validate_shape
+from .validate import real_array
 
 __all__ = [
     "default_wavelengths",
@@ -70,9 +71,14 @@ def default_wavelengths(n_bands: int = 28, start: float = 450.0, stop: float = 6
 
 
 def _wavelengths(wavelengths) -> np.ndarray:
-    wl = default_wavelengths() if wavelengths is None else np.asarray(wavelengths, dtype=float)
+    if wavelengths is None:
+        wl = default_wavelengths()
+    else:
+        wl = real_array("wavelengths", wavelengths, finite=False)
     if wl.ndim != 1 or wl.size == 0 or not np.isfinite(wl).all():
-        raise ValueError(f"wavelengths must be a non-empty 1-D array of finite nm, got {wl!r}")
+        raise ValueError(
+            f"wavelengths must be a non-empty 1-D array of finite nm, got {wl.tolist()}"
+        )
     if wl.min() < 380 or wl.max() > 780:
         raise ValueError(
             f"wavelengths must lie within the measured 380–780 nm, got {wl.min():g}–{wl.max():g} nm"

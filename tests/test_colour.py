@@ -5,7 +5,8 @@ import warnings
 import numpy as np
 import pytest
 
-from tensor_cosdi.colour import to_srgb
+import tensor_cosdi as tc
+from tensor_cosdi.colour import rgb_to_cube, to_srgb
 from tensor_cosdi.scenes import colorchecker, default_wavelengths
 
 
@@ -72,6 +73,12 @@ def test_band_axis_and_errors():
         to_srgb(np.ones((2, 2, 4)), [[450, 500], [550, 600]])  # not flattened
     with pytest.raises(ValueError, match="band_axis must be an integer ≥ -3 and ≤ 2, got 3"):
         to_srgb(np.ones((2, 2, 2)), [450, 550], band_axis=3)
+    with pytest.raises(ValueError, match="rgb must hold real numbers, got dtype complex128"):
+        rgb_to_cube(np.full((2, 3), 0.5) + 1j, [450, 550])
+    with pytest.raises(ValueError, match="wavelengths must be 1-D \\(one per band\\)"):
+        rgb_to_cube(np.full((2, 3), 0.5), [[450, 500], [550, 600]])
+    with pytest.raises(ValueError, match="wavelengths must hold real numbers"):
+        tc.scenes.scene_cube("coffee", (8, 8), np.array([450, 550]) + 1j)
 
 
 def test_colour_science_leaves_numpys_print_options_alone():

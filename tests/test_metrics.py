@@ -86,6 +86,10 @@ def test_metric_input_errors():
         sam(np.ones((2, 2, 2)), np.full((2, 2, 2), np.nan))
     with pytest.raises(ValueError, match="data_range"):
         psnr(np.ones((2, 2, 2)), np.zeros((2, 2, 2)))
+    # a complex estimate is refused, not scored on its real part
+    for metric in (psnr, ssim, sam, rmse):
+        with pytest.raises(ValueError, match="image_test must hold real numbers, got dtype compl"):
+            metric(np.ones((8, 8, 2)), np.ones((8, 8, 2)) + 1j)
 
 
 def test_channel_axis_is_scikit_image_s_name_and_band_axis_still_works():

@@ -39,6 +39,13 @@ def test_errors():
         noise.estimate_sigma(np.full((8, 8), np.nan))
     with pytest.raises(ValueError, match="at least 4×4"):
         noise.estimate_sigma(np.ones((2, 9)))
+    # complex data are refused, not cast to their real part
+    with pytest.raises(ValueError, match="estimate_sigma: the input must hold real numbers"):
+        noise.estimate_sigma(np.ones((8, 8)) + 1j)
+    with pytest.raises(ValueError, match="measurement must hold real numbers, got dtype complex"):
+        noise.add_noise(np.ones((8, 8)) + 1j, 30.0, rng=0)
+    with pytest.raises(ValueError, match="denoise: x must hold real numbers, got dtype complex"):
+        tc.solvers.denoisers.denoise("tv", np.ones((8, 8, 2)) + 1j, 0.1)
     p = tc.studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=6)
     with pytest.raises(ValueError, match="lam must be a number > 0 or 'auto'"):
         tc.reconstruct(p.system, p.measurement, "otd", lam="big")

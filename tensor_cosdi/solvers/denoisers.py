@@ -409,8 +409,13 @@ def denoisers() -> tuple[str, ...]:
 
 
 def denoise(name_or_callable, x, sigma):
-    """Apply a registered denoiser by name, or a callable ``(x, sigma) -> x``."""
-    return resolve(name_or_callable)(x, sigma)
+    """Apply a registered denoiser by name, or a callable ``(x, sigma) -> x``; ``x`` holds real
+    numbers (a complex one is an error, not cast)."""
+    f = resolve(name_or_callable)
+    dtype = B.real_dtype_name(x) if hasattr(x, "dtype") else "float64"
+    if dtype.startswith(("complex", "bool", "object", "<U", "str")):
+        raise ValueError(f"denoise: x must hold real numbers, got dtype {dtype}")
+    return f(x, sigma)
 
 
 def resolve(name_or_callable) -> Callable:

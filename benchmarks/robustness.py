@@ -674,6 +674,7 @@ def complex_cases():
     x = np.random.default_rng(9).random((8, 8, 3))
     z = x + 1j
     wl = [450.0, 550.0, 650.0]
+    wl2d = [[450.0, 500.0], [550.0, 600.0]]
     cases = [
         ("metrics", "psnr complex estimate", lambda: metrics.psnr(x, z), ("real", "complex")),
         ("metrics", "ssim complex estimate", lambda: metrics.ssim(x, z, data_range=1.0),
@@ -690,6 +691,24 @@ def complex_cases():
          lambda: colour.rgb_to_cube(x * 0.5, [[450, 500], [550, 600]]), ("wavelengths",)),
         ("scenes", "scene_cube complex wavelengths",
          lambda: scenes.scene_cube("coffee", (8, 8), np.array(wl) + 1j), ("wavelengths",)),
+        ("scenes", "light_field complex cube", lambda: scenes.light_field(z, 0.5), ("cube",)),
+        ("bases", "svd_basis complex", lambda: tc.bases.svd_basis(z[..., 0]), ("matrix",)),
+        ("bases", "tucker_bases complex", lambda: tc.bases.tucker_bases(z), ("tensor",)),
+        ("colour", "reflectance complex", lambda: colour.reflectance(z, x), ("cube",)),
+        ("noise", "snr_db complex", lambda: noise.snr_db(x, z), ("noisy",)),
+        ("depth", "wrapped_phase complex", lambda: tc.depth.wrapped_phase(z), ("frames",)),
+        ("depth", "disparity_from_views complex", lambda: tc.depth.disparity_from_views(z),
+         ("views",)),
+        ("io.frames", "bin_frame complex", lambda: tc.io.bin_frame(z[..., 0], 2), ("frame",)),
+        ("optics", "psf_width complex", lambda: tc.optics.psf_width(z[..., 0]), ("psf",)),
+        ("systems", "SDCASSI complex wavelengths",
+         lambda: tc.systems.SDCASSI(np.ones((8, 8)), n_bands=3, wavelengths=np.array(wl) + 1j),
+         ("wavelengths",)),
+        ("systems", "SDCASSI 2-D wavelengths",
+         lambda: tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4, wavelengths=wl2d),
+         ("wavelengths",)),
+        ("solvers", "train_dictionary complex", lambda: tc.solvers.train_dictionary([z], patch=4),
+         ("training cube",)),
     ]  # fmt: skip
     return [Case(m, label, call, words) for m, label, call, words in cases]
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .validate import real_array
+
 #: Plausible band centres in nm (200 nm UV to 20 µm thermal infrared); outside is a unit error.
 WAVELENGTH_RANGE_NM = (200.0, 20000.0)
 
@@ -14,7 +16,7 @@ def check_wavelengths_nm(values, what: str = "wavelengths") -> np.ndarray:
     Values must be finite and lie in :data:`WAVELENGTH_RANGE_NM`; values
     below 30 are called out as micrometres (the usual slip).
     """
-    wl = np.asarray(values, dtype=np.float64)
+    wl = real_array(what, values, finite=False)
     lo, hi = WAVELENGTH_RANGE_NM
     if wl.size == 0:
         raise ValueError(f"{what}: no values")

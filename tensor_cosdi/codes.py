@@ -22,6 +22,7 @@ import numbers
 import numpy as np
 
 from . import _backend as B
+from .validate import real_array
 
 __all__ = [
     "random_binary",
@@ -232,5 +233,5 @@ def is_complementary(codes, *, axis: int = -1, atol: float = 1e-9) -> bool:
     >>> is_complementary(np.full((3, 3, 4, 2), 0.4))
     False
     """
-    s = np.sum(np.asarray(B.to_numpy(codes), dtype=np.float64), axis=axis)
+    s = np.sum(real_array("codes", B.to_numpy(codes), finite=False), axis=axis)
     return bool(np.all(np.abs(s - 1.0) <= atol))

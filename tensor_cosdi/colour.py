@@ -8,6 +8,7 @@ import numpy as np
 
 from . import _backend as B
 from . import validate
+from .validate import real_array
 
 __all__ = ["to_srgb", "rgb_to_cube", "reflectance", "radiance"]
 
@@ -92,7 +93,7 @@ def to_srgb(
         rgb = colour.cctf_encoding(np.clip(linear, 0.0, 1.0), function="sRGB")
     else:
         rgb = colour.XYZ_to_sRGB(xyz)
-    return np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
+    return np.clip(real_array("rgb", rgb, finite=False), 0.0, 1.0)
 
 
 def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
@@ -144,7 +145,7 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
     b = np.stack(
         [np.interp(wl, basis.wavelengths, basis.values[:, i]) for i in range(3)]
     )  # (3, Nλ)
-    return np.asarray(linear, dtype=np.float64) @ b
+    return real_array("linear", linear, finite=False) @ b
 
 
 def reflectance(cube, white, dark=0.0):
@@ -172,9 +173,9 @@ def reflectance(cube, white, dark=0.0):
     >>> reflectance(np.array([3.0, 5.0]), np.array([5.0, 9.0]), dark=1.0).tolist()
     [0.5, 0.5]
     """
-    x = np.asarray(B.to_numpy(cube), dtype=np.float64)
-    w = np.asarray(B.to_numpy(white), dtype=np.float64)
-    d = np.asarray(B.to_numpy(dark), dtype=np.float64)
+    x = real_array("cube", B.to_numpy(cube), finite=False)
+    w = real_array("white", B.to_numpy(white), finite=False)
+    d = real_array("dark", B.to_numpy(dark), finite=False)
     try:
         denom = np.broadcast_to(w - d, np.broadcast_shapes(x.shape, w.shape, d.shape))
     except ValueError:
@@ -224,13 +225,13 @@ def radiance(cube, wavelengths, illuminant: str = "D65", *, band_axis: int = 2):
     [0.2, 0.563, 1.0]
     """
     colour = colour_science()
-    c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    c = real_array("cube", B.to_numpy(cube), finite=False)
     if c.ndim == 0:
         raise ValueError("cube must have a band axis, got a scalar")
     if c.size == 0:
         raise ValueError(f"cube is empty (shape {c.shape}): nothing to light")
     axis = validate.integer("band_axis", band_axis, low=-c.ndim, high=c.ndim - 1) % c.ndim
-    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    wl = real_array("wavelengths", wavelengths, finite=False).reshape(-1)
     if wl.size != c.shape[axis]:
         raise ValueError(
             f"expected {c.shape[axis]} wavelengths (one per band of axis {axis}), got {wl.size}"

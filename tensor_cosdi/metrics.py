@@ -189,9 +189,9 @@ def combined_error(psnr_values, ssim_values, rmse_values, sam_values) -> np.ndar
     >>> combined_error([[30, 20]], [[0.9, 0.45]], [[0.1, 0.2]], [[5, 10]]).round(2).tolist()
     [0.0, 70.83]
     """
-    arrays = [
-        np.asarray(a, dtype=np.float64) for a in (psnr_values, ssim_values, rmse_values, sam_values)
-    ]
+    named = {"psnr_values": psnr_values, "ssim_values": ssim_values, "rmse_values": rmse_values,
+             "sam_values": sam_values}  # fmt: skip
+    arrays = [real_array(k, v, finite=False) for k, v in named.items()]
     shape = arrays[0].shape
     if len(shape) != 2 or any(a.shape != shape for a in arrays):
         raise ValueError(

@@ -25,8 +25,8 @@ __all__ = [
 
 def snr_db(clean, noisy) -> float:
     """``10 log10(Σ g² / Σ (noisy − g)²)`` in dB (``inf`` when equal)."""
-    g = np.asarray(B.to_numpy(clean), dtype=np.float64)
-    n = np.asarray(B.to_numpy(noisy), dtype=np.float64)
+    g = real_array("clean", B.to_numpy(clean), finite=False)
+    n = real_array("noisy", B.to_numpy(noisy), finite=False)
     if g.shape != n.shape:
         raise ValueError(f"clean {g.shape} and noisy {n.shape} must have the same shape")
     if not (np.isfinite(g).all() and np.isfinite(n).all()):
@@ -227,7 +227,7 @@ def estimate_snr_db(measurement) -> float:
     the system at hand, :func:`tensor_cosdi.solvers.snr.estimate_snr` also
     reads the residual of a fit through it.
     """
-    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    g = real_array("measurement", B.to_numpy(measurement), finite=False)
     power = float(np.mean(g * g))
     if power == 0.0:
         raise ValueError("the measurement is all zero: there is no signal to reconstruct")

@@ -213,7 +213,7 @@ def motorcycle(shape=(64, 96), wavelengths=None, *, dtype="float64"):
     nx, ny = validate_shape(shape, "shape")
     wl = _wavelengths(wavelengths)
     left, _, disp = data.stereo_motorcycle()
-    disp = np.asarray(disp, dtype=np.float64)
+    disp = real_array("disp", disp, finite=False)
     invalid = ~np.isfinite(disp) | (disp <= 0)
     if invalid.any():
         idx = ndimage.distance_transform_edt(invalid, return_distances=False, return_indices=True)
@@ -237,7 +237,7 @@ def depth_planes(depth, n_planes: int, *, near_is_large: bool = True) -> np.ndar
     >>> depth_planes([[10.0, 7.0], [1.0, 2.0]], 2).tolist()
     [[0, 0], [1, 1]]
     """
-    d = np.asarray(B.to_numpy(depth), dtype=np.float64)
+    d = real_array("depth", B.to_numpy(depth), finite=False)
     (n_planes,) = validate_shape((n_planes,), "n_planes")
     if d.ndim != 2 or not np.isfinite(d).all():
         raise ValueError(f"depth must be a finite 2-D map, got shape {d.shape}")
@@ -306,11 +306,11 @@ def light_field(cube, disparity, views=(5, 5)):
     """
     from scipy import ndimage
 
-    c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    c = real_array("cube", B.to_numpy(cube), finite=False)
     if c.ndim != 3:
         raise ValueError(f"cube must have shape (Nx, Ny, Nλ), got {c.shape}")
     U, V = validate_shape(views, "views")
-    d = np.broadcast_to(np.asarray(disparity, dtype=np.float64), c.shape[:2])
+    d = np.broadcast_to(real_array("disparity", disparity, finite=False), c.shape[:2])
     if not np.isfinite(d).all():
         raise ValueError("disparity contains NaN or inf")
     xx, yy = np.meshgrid(np.arange(c.shape[0]), np.arange(c.shape[1]), indexing="ij")

@@ -115,3 +115,42 @@ def test_denoisers_and_plans_validate_too():
         denoisers.wavelet(np.ones((4, 4, 2)), float("nan"))
     with pytest.raises(ValueError, match="frames in a plan must be an integer ≥ 1 and ≤ 100000"):
         AcquisitionPlan.snapshots(10**8)
+
+
+_Z = np.random.default_rng(0).random((8, 8, 4)) + 0.5j
+_WL = np.linspace(450, 650, 4)
+
+
+@pytest.mark.parametrize(
+    "call, name",
+    [
+        (lambda: tc.bases.svd_basis(_Z[..., 0]), "matrix"),
+        (lambda: tc.bases.tucker_bases(_Z), "tucker_bases: the tensor"),
+        (lambda: tc.colour.reflectance(_Z, _Z.real), "cube"),
+        (lambda: tc.colour.radiance(_Z, _WL), "cube"),
+        (lambda: tc.noise.snr_db(_Z.real, _Z), "noisy"),
+        (lambda: tc.noise.estimate_snr_db(_Z[..., 0]), "measurement"),
+        (lambda: tc.depth.wrapped_phase(_Z), "frames"),
+        (lambda: tc.depth.guided_filter(_Z[..., 0], _Z[..., 0].real), "guide"),
+        (lambda: tc.depth.focus_measure(_Z[..., 0]), "image"),
+        (lambda: tc.depth.disparity_from_views(_Z), "views"),
+        (lambda: tc.io.bin_frame(_Z[..., 0], 2), "frame"),
+        (lambda: tc.optics.psf_width(_Z[..., 0]), "the PSF"),
+        (lambda: tc.optics.phase_shift_patterns(_Z[..., 0]), "phase"),
+        (lambda: tc.scenes.light_field(_Z, 0.5), "cube"),
+        (lambda: tc.scenes.depth_planes(_Z[..., 0], 3), "depth"),
+        (lambda: tc.solvers.train_dictionary([_Z], patch=4), "a training cube"),
+        (
+            lambda: tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4, wavelengths=_WL + 1j),
+            "wavelengths",
+        ),
+    ],  # fmt: skip
+)
+def test_a_complex_array_is_refused_not_cast_to_its_real_part(call, name):
+    with pytest.raises(ValueError, match=f"^{name} must hold real numbers, got dtype complex128$"):
+        call()
+
+
+def test_system_wavelengths_must_be_one_dimensional():
+    with pytest.raises(ValueError, match="wavelengths must be 1-D \\(one per band\\), got shape"):
+        tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4, wavelengths=_WL.reshape(2, 2))

@@ -6,6 +6,7 @@ import numpy as np
 
 from .. import _backend as B
 from ..operators import ModeProduct, validate_shape
+from ..validate import real_array
 from .matrices import is_orthonormal
 from .transforms import Dense, ModeTransform, _memory_view, as_transform
 
@@ -50,7 +51,7 @@ class KroneckerBasis:
             mode %= len(self.shape)
             n = self.shape[mode]
             if not isinstance(m, (ModeTransform, str)):
-                m = np.asarray(B.to_numpy(m), dtype=np.float64)
+                m = real_array(f"the mode-{mode} matrix", B.to_numpy(m), finite=False)
                 if m.shape != (n, n):
                     raise ValueError(
                         f"basis of mode {mode} must be {n} × {n} (square), got {m.shape}"

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _backend as B
+from ..validate import real_array
 from .matrices import _polish, dct
 from .transforms import BlockDense
 
@@ -32,7 +33,7 @@ def svd_basis(matrix) -> np.ndarray:
     image ``Z`` are ``svd_basis(Z)`` and ``svd_basis(Z.T)``.  Computed from the
     small Gram ``M Mᵀ`` (``eigh``), which is complete even where ``k < m``.
     """
-    m = np.asarray(B.to_numpy(matrix), dtype=np.float64)
+    m = real_array("matrix", B.to_numpy(matrix), finite=False)
     if m.ndim != 2:
         raise ValueError(f"svd_basis needs a 2-D matrix, got shape {m.shape}")
     return _gram_basis(m @ m.T, "svd_basis: the matrix contains NaN or inf")
@@ -124,6 +125,9 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
     ((4, 4), True)
     """
     shape = np.shape(tensor)  # the tensor stays where it is (a GPU, say): see unfolding_gram
+    dtype = str(getattr(tensor, "dtype", np.asarray(tensor).dtype))
+    if "complex" in dtype or "bool" in dtype:
+        raise ValueError(f"tucker_bases: the tensor must hold real numbers, got dtype {dtype}")
     modes = range(len(shape)) if modes is None else modes
     out = {}
     for m in modes:

@@ -10,6 +10,7 @@ import numpy as np
 import scipy.fft
 
 from .. import _backend as B
+from ..validate import real_array
 
 __all__ = ["is_orthonormal", "identity", "dct", "wavelet", "wavelet_level", "AUTO_COARSEST"]
 
@@ -22,7 +23,7 @@ def _size(n) -> int:
 
 def is_orthonormal(psi, *, atol: float = 1e-10) -> bool:
     """True when ``psi`` is square with ``ΨᵀΨ = I`` within ``atol``."""
-    m = np.asarray(B.to_numpy(psi), dtype=np.float64)
+    m = real_array("psi", B.to_numpy(psi), finite=False)
     return bool(
         m.ndim == 2
         and m.shape[0] == m.shape[1]

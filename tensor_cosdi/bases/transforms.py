@@ -9,6 +9,7 @@ import numpy as np
 import scipy.fft
 
 from .. import _backend as B
+from ..validate import real_array
 from .matrices import _size, dct, wavelet, wavelet_level
 
 __all__ = ["ModeTransform", "Dense", "BlockDense", "DCT", "Wavelet", "as_transform"]
@@ -185,7 +186,7 @@ class BlockDense(Dense):
     def __init__(self, blocks):
         from scipy.linalg import block_diag
 
-        mats = [np.asarray(B.to_numpy(b), dtype=np.float64) for b in blocks]
+        mats = [real_array("a block", B.to_numpy(b), finite=False) for b in blocks]
         if not mats or any(m.ndim != 2 or m.shape[0] != m.shape[1] for m in mats):
             raise ValueError(
                 f"BlockDense needs square blocks, got shapes {[m.shape for m in mats]}"

@@ -7,7 +7,7 @@ import numbers
 import numpy as np
 from scipy import ndimage
 
-from ..validate import number
+from ..validate import number, real_array
 
 __all__ = ["focus_measure", "depth_from_focus"]
 
@@ -19,7 +19,7 @@ def focus_measure(image, *, window: int = 5, sigma: float = 0.0):
     smooths the image first (noise robustness).  Channels of an
     ``(H, W, C)`` image are summed.
     """
-    x = np.asarray(image, dtype=np.float64)
+    x = real_array("image", image, finite=False)
     if x.ndim == 2:
         x = x[..., None]
     if x.ndim != 3:
@@ -72,7 +72,7 @@ def depth_from_focus(
     >>> bool(np.mean(np.round(depth_from_focus(stack)) == 1) > 0.95)
     True
     """
-    x = np.moveaxis(np.asarray(stack, dtype=np.float64), axis, -1)
+    x = np.moveaxis(real_array("stack", stack, finite=False), axis, -1)
     if x.ndim not in (3, 4):
         raise ValueError(
             f"stack must be (H, W, Nz) or (H, W, C, Nz) along axis={axis}, got {np.shape(stack)}"

@@ -16,7 +16,7 @@ import numbers
 import numpy as np
 from scipy import ndimage
 
-from ..validate import number
+from ..validate import number, real_array
 
 __all__ = [
     "disparity_from_views",
@@ -45,7 +45,7 @@ DISPARITY_METHODS = ("occlusion", "ssd")
 
 
 def _views(views):
-    L = np.asarray(views, dtype=np.float64)
+    L = real_array("views", views, finite=False)
     if L.ndim == 4:
         L = L[..., None]
     if L.ndim != 5:
@@ -92,7 +92,7 @@ def disparity_cost_volume(
 
 
 def _check_candidates(disparities):
-    d = np.asarray(disparities, dtype=np.float64).reshape(-1)
+    d = real_array("disparities", disparities, finite=False).reshape(-1)
     if d.size < 3 or not np.all(np.isfinite(d)) or np.any(np.diff(d) <= 0):
         raise ValueError("disparities must be ≥ 3 finite, strictly increasing candidates")
     return d
@@ -197,8 +197,8 @@ def guided_filter(guide, src, *, radius: int = 4, eps: float = 1e-4):
     guide, so costs are not averaged over a depth edge that is also a
     colour edge.
     """
-    I = np.asarray(guide, dtype=np.float64)
-    p = np.asarray(src, dtype=np.float64)
+    I = real_array("guide", guide, finite=False)
+    p = real_array("src", src, finite=False)
     if I.ndim != 2 or p.shape[-2:] != I.shape:
         raise ValueError(f"guide must be (H, W) and src (…, H, W); got {I.shape} and {p.shape}")
     if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
@@ -328,7 +328,7 @@ def textured_mask(image, *, threshold: float = 0.05, sigma: float = 1.0):
     ``image`` (H, W) or (H, W, C) (channels averaged); Gaussian-smoothed
     gradient of scale ``sigma``.
     """
-    x = np.asarray(image, dtype=np.float64)
+    x = real_array("image", image, finite=False)
     if x.ndim == 3:
         x = x.mean(axis=-1)
     if x.ndim != 2:
@@ -353,6 +353,6 @@ def depth_from_disparity(disparity, *, baseline_mm: float, focal_px: float, offs
     for name, v in (("baseline_mm", baseline_mm), ("focal_px", focal_px)):
         if not (np.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be > 0, got {v!r}")
-    d = np.asarray(disparity, dtype=np.float64) - offset
+    d = real_array("disparity", disparity, finite=False) - offset
     with np.errstate(divide="ignore"):
         return np.where(d > 0, focal_px * baseline_mm / np.where(d > 0, d, 1.0), np.inf)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validate import real_array
+
 __all__ = [
     "wrapped_phase",
     "fringe_modulation",
@@ -28,13 +30,13 @@ __all__ = [
 
 def wrap(phase):
     """Wrap to ``(−π, π]``."""
-    p = np.asarray(phase, dtype=np.float64)
+    p = real_array("phase", phase, finite=False)
     w = np.mod(p + np.pi, 2 * np.pi) - np.pi
     return np.where(w == -np.pi, np.pi, w)
 
 
 def _frames(frames, axis, what="frames"):
-    x = np.asarray(frames, dtype=np.float64)
+    x = real_array("frames", frames, finite=False)
     if x.ndim < 1:
         raise ValueError(f"{what} must be an array with a step axis, got a scalar")
     x = np.moveaxis(x, axis, -1)
@@ -105,8 +107,8 @@ def temporal_unwrap(wrapped, reference, ratio):
     ``Φ = φ + 2π·round((ratio·Φ_ref − φ) / 2π)`` — the fringe order of Eq. 20/24
     (``ratio = ν_h / ν_l``).  Correct where ``|ratio·(Φ_ref error)| < π``.
     """
-    w = np.asarray(wrapped, dtype=np.float64)
-    r = np.asarray(reference, dtype=np.float64)
+    w = real_array("wrapped", wrapped, finite=False)
+    r = real_array("reference", reference, finite=False)
     if w.shape != r.shape:
         raise ValueError(
             f"wrapped phase {w.shape} and reference {r.shape} must have the same shape"
@@ -155,8 +157,8 @@ def heterodyne_unwrap(wrapped, frequencies):
     >>> bool(np.allclose(heterodyne_unwrap(wrap(Phi), [8.0, 7.2]), Phi[..., 0]))
     True
     """
-    w = np.asarray(wrapped, dtype=np.float64)
-    f = np.asarray(frequencies, dtype=np.float64).reshape(-1)
+    w = real_array("wrapped", wrapped, finite=False)
+    f = real_array("frequencies", frequencies, finite=False).reshape(-1)
     if w.shape[-1:] != f.shape:
         raise ValueError(
             f"wrapped has {w.shape[-1] if w.ndim else 0} phases on its last axis but {f.size} "
@@ -204,10 +206,10 @@ def decode_gray_code(frames, threshold=0.5, *, axis: int = -1):
     """
     from ..optics.fringes import gray_to_binary
 
-    x = np.moveaxis(np.asarray(frames, dtype=np.float64), axis, -1)
+    x = np.moveaxis(real_array("frames", frames, finite=False), axis, -1)
     if not np.all(np.isfinite(x)):
         raise ValueError("Gray-code frames contain NaN or inf")
-    t = np.asarray(threshold, dtype=np.float64)
+    t = real_array("threshold", threshold, finite=False)
     if not np.all(np.isfinite(t)):
         raise ValueError("threshold must be finite (a number or a per-pixel map)")
     if t.ndim:
@@ -225,7 +227,7 @@ def unwrap_gray_code(wrapped, labels):
     — so a label that is off by one at a stripe edge never changes the
     result (see :func:`~tensor_cosdi.optics.gray_code_patterns`).
     """
-    w = np.asarray(wrapped, dtype=np.float64)
+    w = real_array("wrapped", wrapped, finite=False)
     h = np.asarray(labels)
     if w.shape != h.shape:
         raise ValueError(f"wrapped phase {w.shape} and labels {h.shape} must have the same shape")
@@ -249,7 +251,7 @@ def spatial_unwrap(wrapped, *, mask=None, reference=None):
     """
     from skimage.restoration import unwrap_phase
 
-    w = np.asarray(wrapped, dtype=np.float64)
+    w = real_array("wrapped", wrapped, finite=False)
     if w.ndim not in (1, 2, 3):
         raise ValueError(f"spatial_unwrap handles 1-D to 3-D phase maps, got shape {w.shape}")
     bad = ~np.isfinite(w)  # scikit-image's unwrapper never returns on NaN: mask them
@@ -285,8 +287,8 @@ def phase_to_height(phase, reference_phase, *, phase_per_height: float):
         raise ValueError(
             f"phase_per_height must be a finite non-zero number, got {phase_per_height!r}"
         )
-    p = np.asarray(phase, dtype=np.float64)
-    r = np.asarray(reference_phase, dtype=np.float64)
+    p = real_array("phase", phase, finite=False)
+    r = real_array("reference_phase", reference_phase, finite=False)
     try:
         return (p - r) / phase_per_height
     except ValueError:
@@ -301,8 +303,8 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
     ``phases`` (n, H, W) measured on ``n`` flat targets at ``heights`` (n,);
     fits ``Φ_i − Φ_ref = k·h_i`` over all (unmasked) pixels.
     """
-    P = np.asarray(phases, dtype=np.float64)
-    h = np.asarray(heights, dtype=np.float64).reshape(-1)
+    P = real_array("phases", phases, finite=False)
+    h = real_array("heights", heights, finite=False).reshape(-1)
     if P.ndim < 2 or P.shape[0] != h.size:
         raise ValueError(
             f"phases must stack one map per height: got {P.shape} for {h.size} heights"
@@ -311,7 +313,7 @@ def calibrate_phase_to_height(phases, reference_phase, heights, *, mask=None) ->
         raise ValueError(f"calibration heights must be finite, got {h.tolist()}")
     if not np.any(h != 0):
         raise ValueError("at least one calibration height must be non-zero")
-    d = P - np.asarray(reference_phase, dtype=np.float64)
+    d = P - real_array("reference_phase", reference_phase, finite=False)
     H = np.broadcast_to(h.reshape((-1,) + (1,) * (P.ndim - 1)), P.shape)
     if mask is not None:
         keep = ~np.broadcast_to(np.asarray(mask, dtype=bool), P.shape)

@@ -29,6 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from ..validate import real_array
+
 __all__ = [
     "shifts_from_line_frames",
     "code_from_monochromator",
@@ -43,7 +45,7 @@ DIRECTION_MODES = ("keep", "search")
 
 
 def _stack(frames, what):
-    a = np.asarray(frames, dtype=np.float64)
+    a = real_array("frames", frames, finite=False)
     if a.ndim != 3 or a.shape[2] < 1:
         raise ValueError(
             f"{what} must be a (H, W, Nλ) stack, one frame per band, got shape {a.shape}"
@@ -67,7 +69,7 @@ def shifts_from_line_frames(frames, *, dark=None, upsample: int = 20, max_rows_s
 
     a = _stack(frames, "calibration frames")
     if dark is not None:
-        a = a - np.asarray(dark, dtype=np.float64)[..., None]
+        a = a - real_array("dark", dark, finite=False)[..., None]
     ref = a[..., 0]
     out = np.zeros(a.shape[2])
     for l in range(1, a.shape[2]):
@@ -117,11 +119,11 @@ def code_from_monochromator(frames, *, shifts, ny: int | None = None, dark=None,
         The code each band sees (for per-band models, e.g. CS2LI's 3-D code).
     """
     a = _stack(frames, "monochromator frames")
-    s = np.asarray(shifts, dtype=np.float64).reshape(-1)
+    s = real_array("shifts", shifts, finite=False).reshape(-1)
     if s.size != a.shape[2]:
         raise ValueError(f"{s.size} shifts for {a.shape[2]} frames: one shift per band")
     if dark is not None:
-        d = np.asarray(dark, dtype=np.float64)
+        d = real_array("dark", dark, finite=False)
         if d.shape != a.shape[:2]:
             raise ValueError(f"dark frame {d.shape} does not match the frames {a.shape[:2]}")
         a = a - d[..., None]
@@ -247,7 +249,7 @@ def mirror_symmetric(shifts, tol: float = 0.05) -> bool:
     (True, False)
     """
     try:
-        s = np.asarray(shifts, dtype=np.float64).ravel()
+        s = real_array("shifts", shifts, finite=False).ravel()
     except (TypeError, ValueError):
         s = np.array([np.nan])
     if s.size == 0 or not np.all(np.isfinite(s)):
@@ -268,7 +270,10 @@ def _peak(positions, values, half_width: float = 0.5) -> float:
     dispersion the score is flat-topped and the argmax alone wanders; across it the peak is
     sharp and the argmax is kept (``benchmarks/registration.py`` measures both on tuning
     scenes)."""
-    pos, val = np.asarray(positions, dtype=np.float64), np.asarray(values, dtype=np.float64)
+    pos, val = (
+        real_array("positions", positions, finite=False),
+        real_array("values", values, finite=False),
+    )
     best = float(pos[int(np.argmax(val))])
     near = np.abs(pos - best) <= half_width + 1e-9
     if near.sum() >= 3:

@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
+from ..validate import real_array
 from ._atomic import atomic_write, atomic_write_folder
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
@@ -149,7 +150,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
 
 
 def _check_wavelengths(path, wl, n_bands):
-    wl = np.asarray(wl, dtype=np.float64).reshape(-1)
+    wl = real_array(f"{path}: wavelengths", wl, finite=False).reshape(-1)
     if wl.size != n_bands:
         raise ValueError(f"{path}: {wl.size} wavelengths for a cube of {n_bands} bands")
     return check_wavelengths_nm(wl, f"{path}: wavelengths")

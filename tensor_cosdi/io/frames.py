@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..validate import real_array
 from ._atomic import atomic_write_many
 
 __all__ = [
@@ -166,7 +167,7 @@ def bin_frame(frame, binning: int):
     The frame's size must be a multiple of ``binning`` (crop with ``roi``
     first): nothing is silently dropped.
     """
-    a = np.asarray(frame, dtype=np.float64)
+    a = real_array("frame", frame, finite=False)
     if isinstance(binning, bool) or not isinstance(binning, (int, np.integer)) or binning < 1:
         raise ValueError(f"binning must be a positive integer, got {binning!r}")
     if binning == 1:
@@ -289,7 +290,7 @@ def load_frames(
             return None, None
         if isinstance(x, (str, Path)):
             return read_frame(x, key=key).astype(np.float64), str(x)
-        a = np.asarray(x, dtype=np.float64)
+        a = real_array(f"the {what} frame", x, finite=False)
         if a.ndim != 2 or not np.all(np.isfinite(a)):
             raise ValueError(f"{what} must be a finite 2-D frame, got shape {a.shape}")
         return a, what

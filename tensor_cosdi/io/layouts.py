@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validate import real_array
+
 __all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count", "dual_camera_frames"]
 
 
@@ -49,8 +51,8 @@ def measurement_to_frames(system, measurement) -> np.ndarray:
 
 def dual_camera_frames(cassi_frame, pan_frame) -> np.ndarray:
     """The two frames of a dual-camera CASSI as one ``(Nx, Ny + S, 2)`` stack (pan zero-padded)."""
-    c = np.asarray(cassi_frame, dtype=np.float64)
-    p = np.asarray(pan_frame, dtype=np.float64)
+    c = real_array("cassi_frame", cassi_frame, finite=False)
+    p = real_array("pan_frame", pan_frame, finite=False)
     if c.ndim != 2 or p.ndim != 2 or p.shape[0] != c.shape[0] or p.shape[1] > c.shape[1]:
         raise ValueError(
             f"need a CASSI frame (Nx, Ny + S) and a panchromatic frame (Nx, Ny); got {c.shape}, "

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from ..validate import integer, number
+from ..validate import integer, number, real_array
 
 __all__ = ["LensletGrid", "calibrate_lenslet_grid"]
 
@@ -80,8 +80,8 @@ class LensletGrid:
     def centre(self, i, j) -> np.ndarray:
         """(row, column) of lenslet ``(i, j)`` (broadcasts)."""
         a, b = self.basis
-        i = np.asarray(i, dtype=np.float64)[..., None]
-        j = np.asarray(j, dtype=np.float64)[..., None]
+        i = real_array("lenslet row i", i, finite=False)[..., None]
+        j = real_array("lenslet column j", j, finite=False)[..., None]
         return np.asarray(self.offset) + i * a + j * b
 
     def lenslet_range(self, margin: float | None = None):
@@ -130,7 +130,7 @@ class LensletGrid:
         ``order``; ``n_views`` (default ``floor(pitch)``, odd) views per axis.
         Lenslets whose disc is not fully inside the frame are left out.
         """
-        x = np.asarray(raw, dtype=np.float64)
+        x = real_array("raw", raw, finite=False)
         if x.shape != tuple(self.shape):
             raise ValueError(
                 f"raw frame shape {x.shape} differs from the calibration frame's "
@@ -251,13 +251,13 @@ def calibrate_lenslet_grid(
     >>> round(grid.pitch, 2), round(grid.rotation, 3)
     (9.7, 0.01)
     """
-    img = np.asarray(white_frame, dtype=np.float64)
+    img = real_array("white_frame", white_frame, finite=False)
     if img.ndim != 2:
         raise ValueError(f"white_frame must be a 2-D frame, got shape {img.shape}")
     if not np.all(np.isfinite(img)):
         raise ValueError("white_frame contains NaN or inf")
     if dark is not None:
-        d = np.asarray(dark, dtype=np.float64)
+        d = real_array("dark", dark, finite=False)
         if d.shape != img.shape:
             raise ValueError(
                 f"dark frame shape {d.shape} differs from the white frame's {img.shape}"

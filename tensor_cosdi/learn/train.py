@@ -40,6 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..validate import real_array
+
 __all__ = [
     "TrainConfig", "magnify", "nullspace_noise", "sample_batch", "train_denoiser", "training_data",
 ]  # fmt: skip
@@ -233,7 +235,7 @@ def _illuminate(rng, patch, position, probability):
     positive, so the denoiser meets more spectral shapes without leaving real
     reflectance behind.  The random stream is drawn from either way.
     """
-    t = 2.0 * np.asarray(position, dtype=np.float64) - 1.0
+    t = 2.0 * real_array("position", position, finite=False) - 1.0
     a, b = rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4)
     sx, sy = rng.uniform(-0.6, 0.6, 2)
     tilt, shade = rng.random() < probability, rng.random() < probability

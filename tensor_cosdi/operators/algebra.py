@@ -22,7 +22,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
-from ..validate import integer, number
+from ..validate import integer, number, real_array
 from .gram import MAX_BANDWIDTH, Pattern, pattern_from_terms, probe_structure
 from .routing import Routing
 from .woodbury import conjugate_gradient, gram_eigenvalues
@@ -451,10 +451,10 @@ class TensorOperator:
         n_in, n_out = int(np.prod(self.input_shape)), int(np.prod(self.output_shape))
 
         def apply(v, shape_in, fn):
-            x = np.asarray(v, dtype=np.float64).reshape(shape_in, order="F")
+            x = real_array("the solver's vector", v, finite=False).reshape(shape_in, order="F")
             with tl.backend_context("numpy"):
                 out = fn(x)
-            return np.asarray(B.to_numpy(out), dtype=np.float64).reshape(-1, order="F")
+            return real_array("out", B.to_numpy(out), finite=False).reshape(-1, order="F")
 
         return LinearOperator(
             (n_out, n_in),

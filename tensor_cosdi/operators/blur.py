@@ -8,6 +8,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
+from ..validate import real_array
 from .algebra import TensorOperator, _normalize_axis, validate_shape, vec_index
 from .integrate import Replicate, SumAxis
 
@@ -47,7 +48,7 @@ class Blur(TensorOperator):
         axes = tuple(_normalize_axis(a, len(shape), "blur axis") for a in axes)
         if len(axes) != 2 or axes[0] == axes[1]:
             raise ValueError(f"axes must be two distinct axes, got {axes}")
-        psfs = np.asarray(B.to_numpy(psfs), dtype=np.float64)
+        psfs = real_array("psfs", B.to_numpy(psfs), finite=False)
         rest_axes = [a for a in range(len(shape)) if a not in axes]
         if psfs.ndim < 2 or psfs.ndim > 2 + len(rest_axes):
             raise ValueError(
@@ -244,7 +245,7 @@ class BlurSum(TensorOperator):
         shape = validate_shape(input_shape, "input_shape")
         if len(shape) < 3:
             raise ValueError(f"BlurSum needs at least 3 axes, got input shape {shape}")
-        psfs = np.asarray(B.to_numpy(psfs), dtype=np.float64)
+        psfs = real_array("psfs", B.to_numpy(psfs), finite=False)
         if psfs.ndim != len(shape) + 1:
             raise ValueError(
                 f"psfs must have shape (h, w, *rest, K) with {len(shape) - 2} rest axes for "

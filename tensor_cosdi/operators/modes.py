@@ -9,6 +9,7 @@ import scipy.sparse as sp
 from tensorly import tenalg
 
 from .. import _backend as B
+from ..validate import real_array
 from .algebra import TensorOperator, _normalize_axis, validate_shape
 
 __all__ = ["ModeProduct"]
@@ -60,7 +61,7 @@ class ModeProduct(TensorOperator):
         mats = []
         out = list(shape)
         for m, M in zip(modes, matrices):
-            M = np.asarray(B.to_numpy(M), dtype=np.float64)
+            M = real_array(f"the mode-{m} matrix", B.to_numpy(M), finite=False)
             if M.ndim != 2 or M.shape[1] != shape[m]:
                 raise ValueError(
                     f"matrix for mode {m} must have shape (rows, {shape[m]}) to act on input "

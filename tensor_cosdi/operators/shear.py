@@ -9,6 +9,7 @@ import scipy.sparse as sp
 import tensorly as tl
 
 from .. import _backend as B
+from ..validate import real_array
 from .algebra import Routing, TensorOperator, _normalize_axis, validate_shape, vec_index
 
 __all__ = ["Shear", "parse_shifts", "shear_bands", "unshear_bands"]
@@ -41,7 +42,7 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
             raise ValueError(f"shift step must be a finite number ≥ 0, got {shifts!r}")
         s = step * np.arange(n_bands)
     else:
-        s = np.asarray(shifts, dtype=np.float64).reshape(-1)
+        s = real_array("shifts", shifts, finite=False).reshape(-1)
         if s.size != n_bands:
             raise ValueError(f"expected {n_bands} per-band shifts (one per band), got {s.size}")
     if not np.isfinite(s).all():

@@ -27,6 +27,7 @@ import scipy.linalg
 import tensorly as tl
 
 from .. import _backend as B
+from ..validate import real_array
 
 __all__ = [
     "Diagonal",
@@ -66,7 +67,7 @@ class Diagonal(_Structure):
 
     def __init__(self, d: np.ndarray):
         super().__init__()
-        self.d = np.asarray(d, dtype=np.float64)
+        self.d = real_array("the diagonal", d, finite=False)
 
     def solve(self, b, mu):
         denom = self._cached(("den", mu) + B.context_key(b), lambda: B.tensor_like(self.d + mu, b))
@@ -95,7 +96,7 @@ class PixelBlocks(_Structure):
 
     def __init__(self, Q: np.ndarray, axis: int):
         super().__init__()
-        self.Q = np.asarray(Q, dtype=np.float64)
+        self.Q = real_array("the pixel blocks", Q, finite=False)
         self.axis = axis
 
     @property
@@ -150,7 +151,7 @@ class RowBanded(_Structure):
 
     def __init__(self, bands: np.ndarray, axis: int):
         super().__init__()
-        self.bands = np.asarray(bands, dtype=np.float64)
+        self.bands = real_array("bands", bands, finite=False)
         self.axis = axis
 
     @property
@@ -177,11 +178,15 @@ class RowBanded(_Structure):
         return out
 
     def solve(self, b, mu):
-        return B.tensor_like(self._solve_host(np.asarray(B.to_numpy(b), dtype=np.float64), mu), b)
+        return B.tensor_like(
+            self._solve_host(real_array("the right-hand side", B.to_numpy(b), finite=False), mu), b
+        )
 
     def matvec(self, b):
         """``(A Aᵀ) b`` from the stored bands (host computation)."""
-        return B.tensor_like(self._matvec_host(np.asarray(B.to_numpy(b), dtype=np.float64)), b)
+        return B.tensor_like(
+            self._matvec_host(real_array("the right-hand side", B.to_numpy(b), finite=False)), b
+        )
 
     def _solve_host(self, b: np.ndarray, mu) -> np.ndarray:
         factors = self._cached(("chol", mu), lambda: self._factors(mu))
@@ -259,7 +264,7 @@ class FoldedBanded(RowBanded):
         super().__init__(bands, len(self.fold.folded_shape) - 1)
 
     def _host(self, b) -> np.ndarray:
-        return self.fold.fold(np.asarray(B.to_numpy(b), dtype=np.float64))
+        return self.fold.fold(real_array("the right-hand side", B.to_numpy(b), finite=False))
 
     def solve(self, b, mu):  # on the host, as RowBanded; back on b's backend and device
         return B.tensor_like(self.fold.unfold(self._solve_host(self._host(b), mu)), b)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validate import number
+from ..validate import number, real_array
 from .prism import THESIS_FIELD_DEG, DoubleAmiciPrism, NoDesign
 
 __all__ = ["prism_grid", "eq190_phi3", "THESIS_DESIGN"]
@@ -25,7 +25,7 @@ def eq190_phi3(phi1):
     and the built prism have 73.7-73.8°; see :func:`prism_grid`'s ``eq190``
     column.
     """
-    return 0.3544 * (np.asarray(phi1, dtype=np.float64) - 50.0) + 77.5
+    return 0.3544 * (real_array("phi1", phi1, finite=False) - 50.0) + 77.5
 
 
 def prism_grid(
@@ -88,7 +88,7 @@ def prism_grid(
         number(name, v, low=0, low_open=True)
     rows = []
     for g1, g2 in glass_pairs:
-        for p1 in np.atleast_1d(np.asarray(phi1, dtype=np.float64)):
+        for p1 in np.atleast_1d(real_array("phi1", phi1, finite=False)):
             row = {"glass1": g1, "glass2": g2, "phi1": float(p1), "eq190": float(eq190_phi3(p1))}
             try:
                 prism = DoubleAmiciPrism.design(

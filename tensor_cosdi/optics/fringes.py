@@ -16,6 +16,8 @@ import numbers
 
 import numpy as np
 
+from ..validate import real_array
+
 __all__ = [
     "projector_phase",
     "phase_shift_patterns",
@@ -64,7 +66,7 @@ def projector_phase(shape, frequencies, *, axis: int = 1) -> np.ndarray:
         raise ValueError(f"shape must be (H, W) with positive sizes, got {shape!r}")
     if axis not in (0, 1):
         raise ValueError(f"axis must be 0 or 1, got {axis!r}")
-    f = np.atleast_1d(np.asarray(frequencies, dtype=np.float64))
+    f = np.atleast_1d(real_array("frequencies", frequencies, finite=False))
     if f.ndim != 1 or not f.size or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise ValueError(f"frequencies must be positive numbers, got {frequencies!r}")
     h, w = (int(s) for s in shape)
@@ -103,7 +105,7 @@ def phase_shift_patterns(
             f"need 0 ≤ amplitude ≤ offset (light is ≥ 0), got offset={offset!r}, "
             f"amplitude={amplitude!r}"
         )
-    p = np.asarray(phase, dtype=np.float64)
+    p = real_array("phase", phase, finite=False)
     if p.ndim == 2:
         p = p[..., None]
     if p.ndim != 3:
@@ -154,7 +156,7 @@ def gray_code_patterns(
     >>> G.shape, G[0, :, 0].tolist()
     ((1, 8, 2), [0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0])
     """
-    p = np.asarray(phase, dtype=np.float64)
+    p = real_array("phase", phase, finite=False)
     if p.ndim != 2:
         raise ValueError(f"phase must be one (H, W) map, got shape {p.shape}")
     if not np.all(np.isfinite(p)) or np.any(p < 0):

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._registry import Registry
+from ..validate import real_array
 
 __all__ = ["Glass", "GLASSES", "register_glass", "refractive_index"]
 
@@ -73,7 +74,7 @@ def register_glass(name: str, B, C, *, replace: bool = False, _builtin: bool = F
     if not isinstance(name, str) or not name:
         raise ValueError(f"a glass needs a non-empty name, got {name!r}")
     for what, coeffs in (("B", B), ("C", C)):
-        vals = np.asarray(coeffs, dtype=np.float64)
+        vals = real_array("coeffs", coeffs, finite=False)
         if vals.shape != (3,) or not np.isfinite(vals).all():
             raise ValueError(
                 f"glass {name!r}: Sellmeier {what} must be 3 finite numbers, got {coeffs!r}"

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..validate import real_array
 from .glass import _glass
 
 __all__ = ["DoubleAmiciPrism", "NoDesign", "THESIS_FIELD_DEG"]
@@ -18,7 +19,7 @@ THESIS_FIELD_DEG = float(np.rad2deg(np.arctan(4.0 / 200.0)) * 2)
 
 
 def _finite(name, value):
-    v = np.asarray(value, dtype=np.float64)
+    v = real_array("value", value, finite=False)
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return v

@@ -19,6 +19,7 @@ import numbers
 
 import numpy as np
 
+from ..validate import real_array
 from .zernike import zernike as _zernike
 
 __all__ = [
@@ -300,7 +301,7 @@ def sweep_psf_stack(
 
 def _lists(**named):
     """The named sequences as non-empty 1-D float arrays, or a ``ValueError`` naming them."""
-    out = [np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in named.values()]
+    out = [np.atleast_1d(real_array(k, v, finite=False)) for k, v in named.items()]
     if any(v.ndim != 1 or not v.size for v in out):
         raise ValueError(f"{' and '.join(named)} must be non-empty 1-D lists")
     return out
@@ -340,7 +341,7 @@ def _psf_grid(lens, lam, dep, foc, zernike, size, supersample, min_share, caller
 
 def psf_width(h) -> float:
     """RMS radius of a PSF in pixels, ``sqrt(Σ h · |x − x̄|²) / sqrt(Σ h)``."""
-    h = np.asarray(h, dtype=np.float64)
+    h = real_array("the PSF", h, finite=False)
     if h.ndim != 2 or not h.sum() > 0:
         raise ValueError(f"psf_width needs a 2-D PSF with positive sum, got shape {h.shape}")
     h = h / h.sum()

@@ -7,7 +7,7 @@ from math import factorial
 
 import numpy as np
 
-from ..validate import integer
+from ..validate import integer, real_array
 
 __all__ = ["noll_to_nm", "zernike", "zernike_radial", "NAMES"]
 
@@ -58,7 +58,7 @@ def zernike_radial(n: int, m: int, rho):
         raise ValueError(
             f"a Zernike radial polynomial needs n ≥ 0, |m| ≤ n and n − |m| even, got n={n}, m={m}"
         )
-    rho = np.asarray(rho, dtype=np.float64)
+    rho = real_array("rho", rho, finite=False)
     out = np.zeros_like(rho)
     for s in range((n - m) // 2 + 1):
         c = (
@@ -94,8 +94,8 @@ def zernike(j: int, rho, theta):
     2.44949
     """
     n, m = noll_to_nm(j)
-    rho = np.asarray(rho, dtype=np.float64)
-    theta = np.asarray(theta, dtype=np.float64)
+    rho = real_array("rho", rho, finite=False)
+    theta = real_array("theta", theta, finite=False)
     if not (np.all(np.isfinite(rho)) and np.all(np.isfinite(theta))):
         raise ValueError("rho and theta must be finite")
     if np.any(rho < 0):

@@ -30,7 +30,7 @@ import scipy.sparse as sp
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .. import _backend as B
-from ..validate import integer
+from ..validate import integer, real_array
 
 __all__ = ["PatchDictionary", "train_dictionary", "dictionary_admm"]
 
@@ -221,7 +221,7 @@ class PatchDictionary:
         return g if g[-1] == n - self.patch else np.append(g, n - self.patch)
 
     def __call__(self, x, sigma):
-        xn = np.asarray(B.to_numpy(x), dtype=np.float64)
+        xn = real_array("the cube", B.to_numpy(x), finite=False)
         self._check(xn.shape)
         p = self.patch
         rows, cols = self._grid(xn.shape[0]), self._grid(xn.shape[1])
@@ -251,7 +251,7 @@ class PatchDictionary:
 def _sample_patches(cubes, patch, n_patches, rng, align=(1, 1)):
     """``n_patches`` random ``patch × patch × C`` patches (columns), evenly from ``cubes``, their
     corners on multiples of ``align`` (rows, columns)."""
-    cubes = [np.asarray(B.to_numpy(c), dtype=np.float64) for c in cubes]
+    cubes = [real_array("a training cube", B.to_numpy(c), finite=False) for c in cubes]
     if not cubes:
         raise ValueError("train_dictionary needs at least one training cube")
     chans = {c.shape[2] if c.ndim == 3 else None for c in cubes}

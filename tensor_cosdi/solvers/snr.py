@@ -71,7 +71,7 @@ import numpy as np
 
 from .. import _backend as B
 from ..noise import frame_powers, frame_rank_sigma, frame_sigmas, snr_db_from_sigma
-from ..validate import number
+from ..validate import number, real_array
 from .subspace import has_many_bands, subspace_gap_tv
 
 __all__ = [
@@ -198,7 +198,7 @@ def grouped_reading_db(system, g_unit, sigmas) -> float:
     >>> round(grouped_reading_db(system, g, np.array([0.005, 0.0])), 1)  # the CASSI camera
     40.0
     """
-    sigmas = np.asarray(sigmas, dtype=np.float64)
+    sigmas = real_array("sigmas", sigmas, finite=False)
     groups = getattr(system, "snr_frame_groups", None)
     if not groups:
         return snr_db_from_sigma(float(np.mean(g_unit * g_unit)), float(sigmas.max()))
@@ -240,7 +240,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
         fit = "auto"
     if fit is not False and not (isinstance(fit, str) and fit in FITS):
         raise ValueError(f"fit must be True, False or one of {FITS}, got {fit!r}")
-    g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+    g = real_array("measurement", B.to_numpy(measurement), finite=False)
     if not np.isfinite(g).all():
         raise ValueError("the measurement holds NaN or inf: no SNR can be estimated from it")
     peak = float(np.max(np.abs(g))) if g.size else 0.0

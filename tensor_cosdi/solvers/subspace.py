@@ -17,6 +17,7 @@ from tensorly import tenalg
 
 from .. import _backend as B
 from ..bases import dct
+from ..validate import real_array
 from . import engine
 from .priors import TV
 
@@ -247,8 +248,8 @@ def spectral_roughness(w, n_smooth: int = SMOOTH_ATOMS) -> float:
     """
     n_smooth = _check_int("n_smooth", n_smooth, 1)
     try:
-        w = np.asarray(w, dtype=np.float64)
-    except (TypeError, ValueError):
+        w = real_array("the spectrum", w, finite=False)
+    except TypeError:
         raise ValueError(f"the spectrum must be numbers, got {type(w).__name__}") from None
     if w.ndim != 1 or w.size < 2 or not np.isfinite(w).all() or not np.abs(w).max() > 0:
         raise ValueError(
@@ -325,7 +326,7 @@ def _check_weights(spectral_weights, system) -> dict:
                 f"({list(system.panchromatic_axes)})"
             )
         n = system.cube_shape[names.index(name)]
-        w = np.asarray(B.to_numpy(w), dtype=np.float64)
+        w = real_array(f"spectral_weights: the weights of {name!r}", B.to_numpy(w), finite=False)
         if w.shape != (n,) or not np.isfinite(w).all() or not (w > 0).all():
             raise ValueError(
                 f"spectral_weights[{name!r}] must be {n} finite weights > 0, got shape "

@@ -8,7 +8,7 @@ from functools import lru_cache, partial
 
 import numpy as np
 
-from ..validate import precision
+from ..validate import precision, real_array
 
 __all__ = [
     "colour_code_design", "colour_code_run", "cs2li_code_design", "cs2li_code_run",
@@ -356,7 +356,7 @@ def cs2li_code_design(
 def _energy_shares(coefficients, fractions, points):
     """The share of the largest coefficients that holds each energy fraction, and the energy
     captured at ``points`` (shares of the coefficients, sorted by magnitude)."""
-    e = np.sort(np.abs(np.asarray(coefficients, dtype=np.float64)).ravel() ** 2)[::-1]
+    e = np.sort(np.abs(real_array("coefficients", coefficients, finite=False)).ravel() ** 2)[::-1]
     cum = np.cumsum(e) / e.sum()
     n = e.size
     # min(…, n − 1): a fraction of 1 can sit above the last cumulative sum by rounding

@@ -16,6 +16,7 @@ import numpy as np
 from .. import metrics, scenes
 from .. import systems as S
 from ..systems import Problem
+from ..validate import real_array
 
 __all__ = [
     "SYSTEMS", "SCENES", "Problem", "make_problem", "score", "score_depth", "compare",
@@ -111,7 +112,7 @@ def score(problem: Problem, cube) -> dict:
     from .. import _backend as B
 
     truth = np.asarray(problem.cube, dtype=np.float64)
-    est = np.asarray(B.to_numpy(cube), dtype=np.float64)
+    est = real_array("cube", B.to_numpy(cube), finite=False)
     if est.shape != truth.shape:
         raise ValueError(f"cube of shape {est.shape} does not match the truth's {truth.shape}")
     peak = float(truth.max())

@@ -11,7 +11,7 @@ from .._units import check_wavelengths_nm
 from ..noise import add_noise
 from ..operators import Code, SumAxis, TensorOperator, parse_shifts, sensing_gain
 from ..operators.shear import MAX_BANDS
-from ..validate import integer
+from ..validate import integer, real_array
 from ._roles import SystemRoles
 from .registry import REGISTRY
 
@@ -60,7 +60,9 @@ def wavelengths_for(wavelengths, n_bands: int) -> np.ndarray:
 
         w = default_wavelengths(n_bands)
     else:
-        w = np.array(B.to_numpy(wavelengths), dtype=np.float64).reshape(-1)
+        w = np.array(real_array("wavelengths", B.to_numpy(wavelengths), finite=False))
+        if w.ndim != 1:
+            raise ValueError(f"wavelengths must be 1-D (one per band), got shape {w.shape}")
         if w.size != n_bands:
             raise ValueError(f"expected {n_bands} wavelengths (one per band), got {w.size}")
         check_wavelengths_nm(w)  # nanometres, or an error naming the unit
@@ -72,7 +74,7 @@ def wavelengths_for(wavelengths, n_bands: int) -> np.ndarray:
 
 def fractional_weights(shifts: np.ndarray):
     """For every band: integer offset and interpolation weight (linear, Shear's model)."""
-    s = np.asarray(shifts, dtype=np.float64)
+    s = real_array("shifts", shifts, finite=False)
     lo = np.floor(s).astype(np.int64)
     return lo, s - lo
 

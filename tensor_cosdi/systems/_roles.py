@@ -26,6 +26,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from .. import _backend as B
+from ..validate import real_array
 from .registry import REGISTRY
 
 __all__ = ["Problem", "SystemRoles", "stack_frames"]
@@ -203,7 +204,7 @@ class SystemRoles:
         return g if g.ndim == 3 else g[..., None]
 
     def _frames_check(self, measurement) -> np.ndarray:
-        g = np.asarray(B.to_numpy(measurement), dtype=np.float64)
+        g = real_array("measurement", B.to_numpy(measurement), finite=False)
         if g.shape != tuple(self.measurement_shape):
             raise ValueError(
                 f"measurement shape {g.shape} does not match the system's "
@@ -220,7 +221,7 @@ class SystemRoles:
     def spectral_view(self, cube) -> np.ndarray:
         """An ``(Nx, Ny, Nλ)`` reflectance-like view of a cube (sRGB previews); the cube itself
         here."""
-        return np.asarray(B.to_numpy(cube), dtype=np.float64)
+        return real_array("cube", B.to_numpy(cube), finite=False)
 
     def score_depth(self, depth, problem: Problem) -> dict:
         """How well ``depth`` (a :meth:`depth_from_cube` result) matches ``problem``'s truth; ``{}``
@@ -234,7 +235,7 @@ class SystemRoles:
 
         if depth is None or problem.depth is None:
             return {}
-        d = np.asarray(B.to_numpy(depth), dtype=np.float64)
+        d = real_array("depth", B.to_numpy(depth), finite=False)
         if self.depth_kind == "planes":
             return {"planes_right": float(np.mean(np.round(d) == problem.depth))}
         if self.depth_kind == "disparity":

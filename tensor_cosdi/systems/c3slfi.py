@@ -9,6 +9,7 @@ import tensorly as tl
 from .. import _backend as B
 from ..codes import complementary_colour_codes
 from ..operators import LAYOUTS, Code, LightFieldLayout, ModeProduct, Stack, SumAxis
+from ..validate import real_array
 from ._base import System, as_code, count, wavelengths_for
 
 __all__ = ["C3SLFI"]
@@ -245,7 +246,7 @@ class C3SLFI(System):
 
     def spectral_view(self, cube):
         """The centre view of the light field."""
-        five = np.asarray(self.to_5d(np.asarray(cube, dtype=np.float64)))
+        five = np.asarray(self.to_5d(real_array("cube", cube, finite=False)))
         return five[:, :, :, five.shape[3] // 2, five.shape[4] // 2]
 
     @classmethod

@@ -8,6 +8,7 @@ import scipy.sparse as sp
 from .. import _backend as B
 from ..codes import depth_codes
 from ..operators import Blur, BlurSum, Code, Shear, SumAxis
+from ..validate import real_array
 from ._base import (
     System,
     as_code,
@@ -192,12 +193,12 @@ class CASSDIDFA(System):
     def depth_from_cube(self, cube, *, n_steps: int = 4, max_disparity: float = 2.0):
         """Index of the depth plane holding most of each pixel's energy, ``argmax_z Σ_λ F``
         (float)."""
-        x = np.asarray(B.to_numpy(cube), dtype=np.float64)
+        x = real_array("cube", B.to_numpy(cube), finite=False)
         return np.argmax(x.sum(axis=2), axis=2).astype(np.float64)
 
     def spectral_view(self, cube):
         """The all-in-focus cube: the sum over depth planes."""
-        return np.asarray(B.to_numpy(cube), dtype=np.float64).sum(axis=3)
+        return real_array("cube", B.to_numpy(cube), finite=False).sum(axis=3)
 
     @classmethod
     def _example(cls, scene, shape, wl, seed, shifts, n_depths):

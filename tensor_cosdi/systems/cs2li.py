@@ -11,6 +11,7 @@ import tensorly as tl
 from .. import _backend as B
 from .. import validate
 from ..codes import colour_coded_aperture
+from ..validate import real_array
 from ._base import (
     System,
     as_code,
@@ -102,7 +103,7 @@ class CS2LI(System):
 
     def spectral_view(self, cube):
         """The reflectance: the mean over the phase steps (fringe offset 1, Equation 107)."""
-        return np.asarray(B.to_numpy(cube), dtype=np.float64).mean(axis=3)
+        return real_array("cube", B.to_numpy(cube), finite=False).mean(axis=3)
 
     @classmethod
     def _example(cls, scene, shape, wl, seed, shifts, n_steps, n_filters):
@@ -190,7 +191,7 @@ def fringe_cube(
     shape = tuple(tl.shape(reflectance)) if tl.is_tensor(reflectance) else np.shape(reflectance)
     if len(shape) != 3:
         raise ValueError(f"reflectance must have shape (Nx, Ny, Nλ), got {shape}")
-    ph = np.asarray(B.to_numpy(phases), dtype=np.float64)
+    ph = real_array("phases", B.to_numpy(phases), finite=False)
     if ph.ndim == 2:
         ph = ph[:, :, None]
     if ph.ndim != 3 or ph.shape[:2] != shape[:2]:
@@ -203,7 +204,9 @@ def fringe_cube(
     mod = offset + amplitude * np.cos(ph[:, :, :, None] + 2 * np.pi * k / n_steps)  # (Nx, Ny, f, K)
     mod = mod.reshape(shape[:2] + (-1,))  # t = f·K + k
     if isinstance(reflectance, np.ndarray) or not tl.is_tensor(reflectance):
-        F = np.asarray(reflectance, dtype=np.float64)  # NumPy in, NumPy out (any backend)
+        F = real_array(
+            "reflectance", reflectance, finite=False
+        )  # NumPy in, NumPy out (any backend)
         return F[:, :, :, None] * mod[:, :, None, :]
     F = reflectance
     return F[:, :, :, None] * B.tensor_like(mod[:, :, None, :], F)
@@ -219,7 +222,7 @@ def fringe_phase(cube, n_steps: int):
     """
     from ..depth import wrapped_phase
 
-    z = np.asarray(B.to_numpy(cube), dtype=np.float64).sum(axis=2)
+    z = real_array("cube", B.to_numpy(cube), finite=False).sum(axis=2)
     nt = z.shape[2]
     K = n_steps if nt % n_steps == 0 and n_steps >= 3 else nt
     if K < 3:

@@ -20,6 +20,7 @@ from .. import _backend as B
 from ..codes import random_binary
 from ..noise import add_noise
 from ..operators import Code, Pad, Shear, Stack, SumAxis
+from ..validate import real_array
 from ._base import (
     System,
     as_code,
@@ -58,7 +59,7 @@ def camera_response(wavelengths, camera: str = DEFAULT_CAMERA) -> np.ndarray:
             f"{sorted(colour.MSDS_CAMERA_SENSITIVITIES)}"
         )
     sens = colour.MSDS_CAMERA_SENSITIVITIES[camera]
-    wl = np.asarray(wavelengths, dtype=np.float64).reshape(-1)
+    wl = real_array("wavelengths", wavelengths, finite=False).reshape(-1)
     lo, hi = float(sens.wavelengths[0]), float(sens.wavelengths[-1])
     if wl.size == 0 or not np.isfinite(wl).all() or wl.min() < lo or wl.max() > hi:
         raise ValueError(
@@ -230,7 +231,7 @@ class LytroCASSI(System):
 
     def spectral_view(self, cube) -> np.ndarray:
         """The centre view of the lenslet cube (the whole cube without ``views``)."""
-        c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+        c = real_array("cube", B.to_numpy(cube), finite=False)
         if self.views is None:
             return c
         n4, n5 = self.views

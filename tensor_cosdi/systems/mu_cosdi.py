@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from .. import _backend as B
 from ..codes import random_binary
 from ..operators import LAYOUTS, LightFieldLayout
+from ..validate import real_array
 from ._base import (
     System,
     as_code,
@@ -127,7 +126,7 @@ class MuCoSDI(System):
 
     def spectral_view(self, cube):
         """``"sl"``: the mean over the phase steps (the reflectance); otherwise the cube."""
-        c = np.asarray(B.to_numpy(cube), dtype=np.float64)
+        c = real_array("cube", B.to_numpy(cube), finite=False)
         return c.mean(axis=3) if self.modality == "sl" else c
 
     @classmethod

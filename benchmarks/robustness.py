@@ -446,7 +446,9 @@ def misc_cases(folder: Path):
         ("optics", "prism_grid with a NaN apex", lambda: tc.studies.prism_grid(phi1=(np.nan,)),
          ("phi1",)),
         ("studies", "compare with options for a method not run",
-         lambda: tc.studies.compare(None, ("gap_tv",), options={"otd": {}}), ("options",)),
+         lambda: tc.studies.compare(
+             tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4),
+             ("gap_tv",), options={"otd": {}}), ("options",)),
         ("studies", "sweep over an axis without values",
          lambda: tc.studies.sweep({"x": []}, lambda x: {}, progress=False), ("no values",)),
         ("io.frames", "frames_to_measurement NaN pixel",
@@ -709,6 +711,35 @@ def complex_cases():
          ("wavelengths",)),
         ("solvers", "train_dictionary complex", lambda: tc.solvers.train_dictionary([z], patch=4),
          ("training cube",)),
+    ]  # fmt: skip
+    return [Case(m, label, call, words) for m, label, call, words in cases]
+
+
+def shape_and_kind_cases():
+    """Empty shapes, objects of the wrong kind, and data paths that leave the data folder."""
+    from tensor_cosdi import codes, datasets, operators, testing
+
+    arr = np.zeros(3)
+    cases = [
+        ("codes", "random_binary of an empty shape", lambda: codes.random_binary(()), ("shape",)),
+        ("codes", "random_binary of an array with no rows",
+         lambda: codes.random_binary(np.zeros((0, 8))), ("shape",)),
+        ("operators", "vec_index of an empty shape", lambda: operators.vec_index(()), ("shape",)),
+        ("operators", "sensing_gain of an array", lambda: operators.sensing_gain(arr),
+         ("tensoroperator",)),
+        ("operators", "gram_eigenvalues of an array", lambda: operators.gram_eigenvalues(arr),
+         ("structured",)),
+        ("operators", "dot_test of an array", lambda: testing.dot_test(arr), ("tensoroperator",)),
+        ("bases", "tucker_bases of an empty tensor",
+         lambda: tc.bases.tucker_bases(np.zeros((0, 4, 3))), ("no entries",)),
+        ("studies", "conditioning of an array", lambda: studies.conditioning(arr), ("imager",)),
+        ("studies", "compare of an array", lambda: studies.compare(arr), ("problem",)),
+        ("io.frames", "frame_count of an array", lambda: tc.io.frame_count(arr), ("imager",)),
+        ("io.hostile", "data_file absolute path", lambda: datasets.data_file("/etc/passwd"),
+         ("relative",)),
+        ("io.hostile", "data_file climbing out", lambda: datasets.data_file("masks/../../x.mat"),
+         ("relative",)),
+        ("io.hostile", "data_file of a number", lambda: datasets.data_file(3), ("path",)),
     ]  # fmt: skip
     return [Case(m, label, call, words) for m, label, call, words in cases]
 
@@ -1215,6 +1246,7 @@ def catalogue(folder: Path, n_flips: int = 150):
         + plot_cases()
         + parallel_cases()
         + complex_cases()
+        + shape_and_kind_cases()
     )
 
 

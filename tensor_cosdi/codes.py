@@ -45,6 +45,8 @@ def _shape(shape, what="shape") -> tuple[int, ...]:
         not isinstance(n, numbers.Integral) for n in shape
     ):
         raise ValueError(f"{what} must be a tuple of positive integers, got {shape!r}")
+    if not out:  # (an empty tuple, or an array of no rows, iterated)
+        raise ValueError(f"{what} must have at least one axis, got {shape!r}")
     return out
 
 

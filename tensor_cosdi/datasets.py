@@ -228,7 +228,17 @@ def data_file(relative) -> Path:
     ... except FileNotFoundError as err:
     ...     path = None  # a plain install: use a seeded random code instead
     """
-    tried = [r / relative for r in _roots()]
+    if not isinstance(relative, (str, os.PathLike)):
+        raise ValueError(
+            f"data_file takes a path inside the research data folder (e.g. "
+            f"'masks/tsa_mask256.mat'), got {type(relative).__name__}"
+        )
+    rel = Path(relative)
+    if rel.is_absolute() or ".." in rel.parts or not rel.parts:
+        raise ValueError(
+            f"data_file takes a relative path inside the research data folder, got {str(rel)!r}"
+        )
+    tried = [r / rel for r in _roots()]
     for p in tried:
         if p.exists():
             return p

@@ -39,6 +39,8 @@ def _cube(cube, wavelengths=None, name: str = "cube"):
     c = validate.real_array(name, B.to_numpy(cube))
     if c.ndim != 3:
         raise ValueError(f"expected a {name} (rows, columns, bands), got shape {c.shape}")
+    if c.size == 0:
+        raise ValueError(f"the {name} is empty (shape {c.shape}): there is nothing to draw")
     if wavelengths is not None:
         return c, validate.increasing("wavelengths", wavelengths, size=c.shape[2])
     return c, None

@@ -25,6 +25,7 @@ from .operators import (
     SumAxis,
     TensorOperator,
     Transpose,
+    validate_shape,
     weighted_sum,
 )
 
@@ -41,8 +42,9 @@ __all__ = [
 
 def random_tensor(shape, *, rng=None, dtype="float64"):
     """Seeded standard-normal tensor of ``shape`` on the active backend."""
+    shape = validate_shape(shape)
     rng = B.default_rng(rng)
-    return B.as_tensor(rng.standard_normal(tuple(shape)), dtype)
+    return B.as_tensor(rng.standard_normal(shape), dtype)
 
 
 def dot_test(op: TensorOperator, *, rng=0, dtype: str = "float64") -> float:
@@ -58,6 +60,8 @@ def dot_test(op: TensorOperator, *, rng=0, dtype: str = "float64") -> float:
     >>> dot_test(Shear((4, 5, 3), 2)) < 1e-12
     True
     """
+    if not isinstance(op, TensorOperator):
+        raise ValueError(f"dot_test needs a TensorOperator, got {type(op).__name__}")
     rng = B.default_rng(rng)
     x = random_tensor(op.input_shape, rng=rng, dtype=dtype)
     y = random_tensor(op.output_shape, rng=rng, dtype=dtype)

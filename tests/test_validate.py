@@ -154,3 +154,33 @@ def test_a_complex_array_is_refused_not_cast_to_its_real_part(call, name):
 def test_system_wavelengths_must_be_one_dimensional():
     with pytest.raises(ValueError, match="wavelengths must be 1-D \\(one per band\\), got shape"):
         tc.systems.SDCASSI(np.ones((8, 8)), n_bands=4, wavelengths=_WL.reshape(2, 2))
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda: tc.codes.random_binary(np.zeros((0, 8))), "shape must have at least one axis"),
+        (lambda: tc.codes.random_binary(()), "shape must have at least one axis"),
+        (lambda: tc.testing.random_tensor(()), "shape must have at least one axis"),
+        (lambda: tc.operators.vec_index(()), "shape must have at least one axis"),
+        (lambda: tc.bases.tucker_bases(np.zeros((0, 4, 3))), "the tensor has no entries"),
+        (lambda: tc.plot.white_point(np.zeros((0, 4, 3))), "the cube is empty"),
+        (lambda: tc.io.frame_count(np.zeros(3)), "expected an imager"),
+        (lambda: tc.studies.conditioning(np.zeros(3)), "expected an imager"),
+        (lambda: tc.studies.compare(np.zeros(3)), "compare needs a Problem"),
+        (lambda: tc.operators.sensing_gain(np.zeros(3)), "expected a TensorOperator"),
+        (lambda: tc.operators.gram_eigenvalues(np.zeros(3)), "expected a structured A Aᵀ"),
+        (lambda: tc.testing.dot_test(np.zeros(3)), "dot_test needs a TensorOperator"),
+        (lambda: tc.datasets.data_file(3), "data_file takes a path inside"),
+    ],
+)
+def test_empty_shapes_and_objects_of_the_wrong_kind_are_named(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()
+
+
+@pytest.mark.parametrize("path", ["/etc/passwd", "../secret.mat", "masks/../../x.mat", ""])
+def test_data_file_stays_inside_the_research_data(path):
+    """An absolute path or one climbing out with ``..`` would read any file on the machine."""
+    with pytest.raises(ValueError, match="data_file takes a relative path inside"):
+        tc.datasets.data_file(path)

@@ -128,6 +128,8 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
     dtype = str(getattr(tensor, "dtype", np.asarray(tensor).dtype))
     if "complex" in dtype or "bool" in dtype:
         raise ValueError(f"tucker_bases: the tensor must hold real numbers, got dtype {dtype}")
+    if not shape or 0 in shape:
+        raise ValueError(f"tucker_bases: the tensor has no entries (shape {shape})")
     modes = range(len(shape)) if modes is None else modes
     out = {}
     for m in modes:

@@ -31,6 +31,8 @@ __all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count", "dua
 
 def frame_count(system) -> int:
     """How many sensor frames one measurement of ``system`` takes (``system.frame_count``)."""
+    if not hasattr(type(system), "frame_count"):
+        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
     return system.frame_count
 
 

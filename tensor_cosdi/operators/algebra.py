@@ -83,7 +83,7 @@ def unvec(v, shape) -> np.ndarray:
 
 def vec_index(shape) -> np.ndarray:
     """Array of ``shape`` whose entry at a multi-index is its position in ``vec``."""
-    shape = tuple(shape)
+    shape = validate_shape(shape)
     return np.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape, order="F")
 
 
@@ -513,6 +513,8 @@ def sensing_gain(operator: "TensorOperator", like=None) -> float:
 
     ``like`` fixes backend, dtype and device of the probe (default: float64 NumPy).
     """
+    if not isinstance(operator, TensorOperator):
+        raise ValueError(f"expected a TensorOperator, got {type(operator).__name__}")
     probe = np.ones(operator.input_shape)
     ones = probe if like is None else B.tensor_like(probe, like)
     s = float(tl.norm(operator._forward(ones))) ** 2 / float(np.prod(operator.input_shape))

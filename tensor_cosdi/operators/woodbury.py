@@ -340,7 +340,12 @@ def conjugate_gradient(
 def gram_eigenvalues(gram):
     """All eigenvalues of a structured ``A Aᵀ`` (:class:`Diagonal`, :class:`PixelBlocks`,
     :class:`RowBanded`) and its Gershgorin ``(lower, upper)`` bounds, in float64 NumPy."""
-    kind = gram.kind
+    kind = getattr(gram, "kind", None)
+    if not isinstance(kind, str):
+        raise ValueError(
+            "expected a structured A Aᵀ (Diagonal, PixelBlocks or RowBanded, e.g. "
+            f"system.gram_dual()), got {type(gram).__name__}"
+        )
     if kind == "diagonal":
         d = np.asarray(B.to_numpy(gram.d), dtype=np.float64).ravel()
         return d, (float(d.min()), float(d.max()))

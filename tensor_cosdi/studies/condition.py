@@ -213,4 +213,6 @@ def conditioning(system, *, exact_below: int = 4096, tol: float = 1e-8) -> dict:
     the structure of ``A Aᵀ`` and the method used (exact from the structure,
     dense below ``exact_below`` measurements, else Lanczos).
     """
+    if not callable(getattr(getattr(system, "operator", None), "conditioning", None)):
+        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
     return system.operator.conditioning(exact_below=exact_below, tol=tol)

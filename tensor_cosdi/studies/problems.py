@@ -149,6 +149,10 @@ def compare(
     """
     from ..solvers import reconstruct
 
+    if not isinstance(problem, Problem):
+        raise ValueError(
+            f"compare needs a Problem (studies.make_problem), got {type(problem).__name__}"
+        )
     if isinstance(methods, str):
         methods = (methods,)
     methods = tuple(methods)

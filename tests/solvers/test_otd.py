@@ -526,8 +526,13 @@ def test_spectral_roughness_reads_sharp_lines_and_not_smooth_spectra():
     assert spectral_roughness(smooth) < 0.02
     assert spectral_roughness(lit) > 1.3 * ROUGH_SPECTRUM  # 0.155
     assert spectral_roughness(7.0 * lit) == pytest.approx(spectral_roughness(lit))
-    for bad in ([1.0], [[1.0, 2.0]], [0.0, 0.0], [1.0, np.nan], "ab"):
+    for bad in ([1.0], [[1.0, 2.0]], [0.0, 0.0], [1.0, np.nan]):
         with pytest.raises(ValueError, match="spectrum must be"):
+            spectral_roughness(bad)
+    for bad, dtype in (("ab", "<U2"), ([1.0, 2j], "complex128")):  # not numbers, not cast
+        with pytest.raises(
+            ValueError, match=f"the spectrum must hold real numbers, got dtype {dtype}"
+        ):
             spectral_roughness(bad)
     with pytest.raises(ValueError, match="n_smooth"):
         spectral_roughness(smooth, 0)

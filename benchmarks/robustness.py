@@ -718,6 +718,7 @@ def complex_cases():
 def shape_and_kind_cases():
     """Empty shapes, objects of the wrong kind, and data paths that leave the data folder."""
     from tensor_cosdi import codes, datasets, operators, testing
+    from tensor_cosdi.learn import dcosnet_train
 
     arr = np.zeros(3)
     cases = [
@@ -740,6 +741,12 @@ def shape_and_kind_cases():
         ("io.hostile", "data_file climbing out", lambda: datasets.data_file("masks/../../x.mat"),
          ("relative",)),
         ("io.hostile", "data_file of a number", lambda: datasets.data_file(3), ("path",)),
+        ("solvers", "lam_schedule of an array", lambda: tc.solvers.otd.lam_schedule(arr),
+         ("imager",)),
+        ("solvers", "has_many_bands of a name",
+         lambda: tc.solvers.subspace.has_many_bands("sd_cassi"), ("imager",)),
+        ("learn", "dcosnet training_data of a dict",
+         lambda: dcosnet_train.training_data({"n_bands": 28}), ("dcosnetconfig",)),
     ]  # fmt: skip
     return [Case(m, label, call, words) for m, label, call, words in cases]
 

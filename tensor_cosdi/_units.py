@@ -23,6 +23,8 @@ def check_wavelengths_nm(values, what: str = "wavelengths") -> np.ndarray:
     if not np.all(np.isfinite(wl)) or wl.min() < lo or wl.max() > hi:
         finite = wl[np.isfinite(wl)]
         shown = f"{finite.min():g}–{finite.max():g}" if finite.size else "no finite values"
+        if finite.size < wl.size:
+            shown += f" and {wl.size - finite.size} NaN or infinite"
         micro = finite.size and finite.max() < 30
         hint = " (they look like micrometres: multiply by 1000)" if micro else ""
         raise ValueError(f"{what} must be nanometres in {lo:g}–{hi:g}, got {shown}{hint}")

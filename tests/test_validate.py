@@ -6,6 +6,7 @@ import pytest
 
 import tensor_cosdi as tc
 from tensor_cosdi.io.triggers import AcquisitionPlan
+from tensor_cosdi.learn import dcosnet_train
 from tensor_cosdi.solvers import denoisers
 from tensor_cosdi.validate import (
     flag,
@@ -172,6 +173,9 @@ def test_system_wavelengths_must_be_one_dimensional():
         (lambda: tc.operators.gram_eigenvalues(np.zeros(3)), "expected a structured A Aᵀ"),
         (lambda: tc.testing.dot_test(np.zeros(3)), "dot_test needs a TensorOperator"),
         (lambda: tc.datasets.data_file(3), "data_file takes a path inside"),
+        (lambda: tc.solvers.otd.lam_schedule(np.zeros(3)), "expected an imager"),
+        (lambda: tc.solvers.subspace.has_many_bands("sd_cassi"), "expected an imager"),
+        (lambda: dcosnet_train.training_data({"n_bands": 28}), "needs a DCoSNetConfig, got dict"),
     ],
 )
 def test_empty_shapes_and_objects_of_the_wrong_kind_are_named(call, message):
@@ -184,3 +188,13 @@ def test_data_file_stays_inside_the_research_data(path):
     """An absolute path or one climbing out with ``..`` would read any file on the machine."""
     with pytest.raises(ValueError, match="data_file takes a relative path inside"):
         tc.datasets.data_file(path)
+
+
+def test_wavelengths_with_nan_say_so():
+    """An ENVI header's ``wavelength = {400, nan}`` once read as "got 400–400"."""
+    from tensor_cosdi._units import check_wavelengths_nm
+
+    with pytest.raises(ValueError, match="got 400–400 and 1 NaN or infinite$"):
+        check_wavelengths_nm([400.0, np.nan])
+    with pytest.raises(ValueError, match="got no finite values and 2 NaN or infinite$"):
+        check_wavelengths_nm([np.nan, np.inf])

@@ -221,6 +221,8 @@ def training_data(cfg: DCoSNetConfig, folder=None):
     is built from (:meth:`~tensor_cosdi.learn.dcosnet.Sensing.coded_shear`)."""
     from ..datasets import KAIST_WAVELENGTHS, load_hsi, training_scenes
 
+    if not isinstance(cfg, DCoSNetConfig):
+        raise ValueError(f"training_data needs a DCoSNetConfig, got {type(cfg).__name__}")
     wl = KAIST_WAVELENGTHS if cfg.n_bands == 28 else np.linspace(400.0, 700.0, cfg.n_bands)
     names = training_scenes(cfg.hold_out)
     need = (cfg.patch, cfg.patch + cfg.margin)

@@ -103,6 +103,8 @@ def has_many_bands(system) -> bool:
     >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=16))
     False
     """
+    if not all(hasattr(system, a) for a in ("axes", "cube_shape", "panchromatic_axes")):
+        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
     names = list(system.axes)
     longest = max((system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0)
     return longest >= MANY_BANDS

@@ -745,6 +745,11 @@ def shape_and_kind_cases():
          ("imager",)),
         ("solvers", "has_many_bands of a name",
          lambda: tc.solvers.subspace.has_many_bands("sd_cassi"), ("imager",)),
+        ("io.bundle", "save_bundle to a .mat name",
+         lambda: tc.io.save_bundle(Path(tempfile.gettempdir()) / "never_written.mat",
+                                   metadata={}), ("bundle is an .npz",)),
+        ("io.bundle", "save_bundle into a file as a folder",
+         lambda: tc.io.save_bundle(Path(__file__) / "b.npz", metadata={}), ("not a folder",)),
         ("learn", "dcosnet training_data of a dict",
          lambda: dcosnet_train.training_data({"n_bands": 28}), ("dcosnetconfig",)),
     ]  # fmt: skip

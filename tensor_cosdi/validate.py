@@ -23,6 +23,7 @@ import numpy as np
 
 __all__ = [
     "number", "integer", "flag", "precision", "option_types", "real_array", "increasing",
+    "output_folder",
 ]  # fmt: skip
 
 
@@ -151,3 +152,20 @@ def increasing(name: str, value, *, size: int | None = None) -> np.ndarray:
     if a.size == 0 or (np.diff(a) <= 0).any():
         raise ValueError(f"{name} must be non-empty and strictly increasing, got {a.tolist()}")
     return a
+
+
+def output_folder(path, what: str = "output folder") -> None:
+    """A ``FileNotFoundError`` unless the folder that the file ``path`` goes into exists and is a
+    folder (checked before any work, so that a typo there does not cost a reconstruction).
+
+    >>> output_folder("/no/such/folder/cube.h5")
+    Traceback (most recent call last):
+    ...
+    FileNotFoundError: output folder /no/such/folder does not exist
+    """
+    from pathlib import Path
+
+    folder = Path(path).parent
+    if not folder.is_dir():
+        state = "is not a folder" if folder.exists() else "does not exist"
+        raise FileNotFoundError(f"{what} {folder} {state}")

@@ -58,6 +58,7 @@ from .util import (
     _method_defaults,
     _option_value,
     _positive_int,
+    check_output,
     done_line,
     option_dict,
     run_metadata,
@@ -166,8 +167,7 @@ def _reconstruct(args) -> int:
             f"--out {args.out}: a reconstruction bundle is an .npz file (e.g. {out.stem}.npz); "
             "for a plain cube file use the direct path (--system/--mask/--measurement)"
         )
-    if out.exists() and not args.force:
-        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    check_output(out, args.force)
     cal = load_bundle(args.calibration)
     if cal.system is None:
         raise ValueError(

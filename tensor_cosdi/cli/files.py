@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .util import _method_defaults, done_line, option_dict, run_metadata
+from .util import _method_defaults, check_output, done_line, option_dict, run_metadata
 
 
 def _values(text: str, flag: str, what: str):
@@ -152,10 +152,7 @@ def _reconstruct_direct(args) -> int:
         raise ValueError(
             f"--out {args.out}: a reconstruction bundle is an .h5 or .npz file (e.g. {out.stem}.h5)"
         )
-    if out.is_dir():
-        raise IsADirectoryError(f"--out {args.out} is a folder; give a file name")
-    if out.exists() and not args.force:
-        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    check_output(out, args.force)
     defaults = _method_defaults(args.method)
     mask_path, mask_key = split_key(args.mask)
     meas_path, meas_key = split_key(args.measurement)
@@ -268,8 +265,7 @@ def preview_target(spec: str, out, force: bool) -> Path:
     target = Path(out) if out else Path(path).with_name(Path(path).stem + "_preview.png")
     if target.suffix.lower() != ".png":
         raise ValueError(f"--out {target}: a preview is a .png file")
-    if target.exists() and not force:
-        raise FileExistsError(f"{target} exists; pass --force to replace it")
+    check_output(target, force)
     return target
 
 

@@ -50,6 +50,21 @@ def option_dict(pairs, flag: str) -> dict:
     return out
 
 
+def check_output(out, force: bool) -> None:
+    """Before any work: ``out`` must not be a folder, must not exist without ``--force``, and its
+    folder must exist (a typo there would otherwise surface only after the reconstruction)."""
+    from pathlib import Path
+
+    from ..validate import output_folder
+
+    out = Path(out)
+    if out.is_dir():
+        raise IsADirectoryError(f"--out {out} is a folder; give a file name")
+    if out.exists() and not force:
+        raise FileExistsError(f"{out} exists; pass --force to replace it")
+    output_folder(out, f"--out {out}: the output folder")
+
+
 def _method_defaults(name):
     from ..solvers import METHODS
 

@@ -8,6 +8,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from ..validate import output_folder
+
 
 def _fsync_path(path) -> None:
     fd = os.open(path, os.O_RDONLY)
@@ -33,8 +35,7 @@ def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = N
     with it, the old file is replaced only once the new one is complete.
     """
     p = Path(path)
-    if not p.parent.is_dir():
-        raise FileNotFoundError(f"output folder {p.parent} does not exist")
+    output_folder(p)
     if p.is_dir():
         raise IsADirectoryError(f"{p} is a folder; give the name of a file to write")
     if p.exists() and not overwrite:
@@ -74,8 +75,7 @@ def atomic_write_many(items, *, overwrite: bool = False) -> list[Path]:
     """
     items = [(Path(p), w) for p, w in items]
     for p, _ in items:
-        if not p.parent.is_dir():
-            raise FileNotFoundError(f"output folder {p.parent} does not exist")
+        output_folder(p)
         if p.is_dir():
             raise IsADirectoryError(f"{p} is a folder; give the name of a file to write")
         if p.exists() and not overwrite:
@@ -118,8 +118,7 @@ def atomic_write_folder(path, write, *, overwrite: bool = False) -> Path:
     import shutil
 
     p = Path(path)
-    if not p.parent.is_dir():
-        raise FileNotFoundError(f"output folder {p.parent} does not exist")
+    output_folder(p)
     if p.exists() and not overwrite:
         raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
     if p.exists() and (p.is_symlink() or not p.is_dir()):

@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
+from ..validate import output_folder
 from ._atomic import atomic_write
 
 #: Extensions written and read as HDF5 bundles (everything else: ``.npz``).
@@ -167,7 +168,8 @@ def save_bundle(
     Parameters
     ----------
     path : str or Path
-        Target file: ``.h5``/``.hdf5`` for HDF5, else ``.npz`` (appended if missing).
+        Target file: ``.h5``/``.hdf5`` for HDF5, ``.npz`` for NumPy's zip; any other
+        suffix (or none) is a ``ValueError``, not a renamed file.
     system : System, optional
         Saved by parameters and arrays (rebuilt on load).
     measurement, cube, depth : array or tensor, optional
@@ -203,12 +205,14 @@ def save_bundle(
     from .._version import __version__
 
     p = Path(path)
-    if p.suffix.lower() not in (".npz",) + H5_SUFFIXES:
-        p = p.with_name(p.name + ".npz")
+    if p.suffix.lower() not in (".npz",) + H5_SUFFIXES:  # never a name other than the one given
+        raise ValueError(
+            f"{p}: a bundle is an .npz or .h5/.hdf5 file (e.g. {p.with_suffix('.npz').name}); "
+            f"got suffix {p.suffix or '(none)'!r}"
+        )
     if p.exists() and not overwrite:
         raise FileExistsError(f"{p} exists; pass overwrite=True (CLI: --force) to replace it")
-    if not p.parent.is_dir():
-        raise FileNotFoundError(f"folder {p.parent} does not exist")
+    output_folder(p)
     store: dict[str, np.ndarray] = {}
     doc = {
         "format": FORMAT,

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..datasets import training_scenes
-from ..validate import integer
+from ..validate import integer, output_folder
 from . import require_torch
 
 
@@ -38,8 +38,7 @@ def check_out(out, force: bool) -> tuple[Path, Path]:
     out = Path(out)
     if out.exists() and not force:
         raise FileExistsError(f"{out} exists; pass force=True (--force) to write over it")
-    if not out.parent.is_dir():
-        raise FileNotFoundError(f"output folder {out.parent} does not exist")
+    output_folder(out)
     return out, out.with_name(out.name + ".ckpt")
 
 

@@ -206,6 +206,21 @@ def test_outputs_that_are_folders_or_unknown_files_are_one_line_errors(files, ca
     assert not (d / "cube.npz").exists() and not (d / "cube").exists()
 
 
+def test_an_output_folder_that_is_missing_is_refused_before_any_work(files, capsys):
+    """A typo in ``--out``'s folder surfaced only after the whole reconstruction."""
+    d, _ = files
+    args = _args(d, "missing/cube.h5")
+    args[args.index("--mask") + 1] = str(d / "no_such_mask.mat")  # would fail if read first
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    assert "the output folder" in err and "missing does not exist" in err, err
+    (d / "plain").write_text("")
+    assert cli.main(_args(d, "plain/cube.h5")) == 2
+    assert "plain is not a folder" in capsys.readouterr().err
+    assert cli.main(["preview", str(d / "meas.mat:meas"), "--out", str(d / "gone/p.png")]) == 2
+    assert "gone does not exist" in capsys.readouterr().err
+
+
 def test_damaged_inputs_never_show_a_traceback_or_advise_unpickling(files, capsys):
     d, _ = files
     (d / "bad.hdr").write_text("ENVI\nsamples = 4\n")

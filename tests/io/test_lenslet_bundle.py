@@ -114,7 +114,7 @@ def test_bundles_round_trip_bit_exactly(tmp_path, system):
     src = tmp_path / "frame.bin"
     src.write_bytes(b"raw capture")
     path = io.save_bundle(
-        tmp_path / "b",
+        tmp_path / "b.npz",
         system=system,
         measurement=g,
         cube=cube,
@@ -153,12 +153,13 @@ def test_bundles_never_overwrite(tmp_path):
 def test_bundle_errors(tmp_path):
     sd = tc.systems.SDCASSI.example((8, 8, 4))
     with pytest.raises(ValueError, match="measurement shape \\(3, 3\\) does not match"):
-        io.save_bundle(tmp_path / "a", system=sd, measurement=np.zeros((3, 3)))
+        io.save_bundle(tmp_path / "a.npz", system=sd, measurement=np.zeros((3, 3)))
     with pytest.raises(ValueError, match="JSON-serialisable"):
-        io.save_bundle(tmp_path / "a", metadata={"x": object()})
+        io.save_bundle(tmp_path / "a.npz", metadata={"x": object()})
     with pytest.raises(ValueError, match="separable"):
         io.save_bundle(
-            tmp_path / "a", system=tc.systems.C3SLFI.separable(np.eye(2, 4) * 0 + 0.5, (4, 4, 4))
+            tmp_path / "a.npz",
+            system=tc.systems.C3SLFI.separable(np.eye(2, 4) * 0 + 0.5, (4, 4, 4)),
         )
     np.savez(tmp_path / "plain.npz", a=np.ones(2))
     with pytest.raises(ValueError, match="not a tensor_cosdi bundle"):
@@ -167,8 +168,12 @@ def test_bundle_errors(tmp_path):
     with pytest.raises(ValueError, match="junk.npz: not a readable"):
         io.load_bundle(tmp_path / "junk.npz")
     with pytest.raises(FileNotFoundError, match="source file not found"):
-        io.save_bundle(tmp_path / "a", sources=[tmp_path / "missing.tif"])
+        io.save_bundle(tmp_path / "a.npz", sources=[tmp_path / "missing.tif"])
     assert not (tmp_path / "a.npz").exists()
+    for name in ("a", "a.mat"):  # a name is never changed behind the user's back
+        with pytest.raises(ValueError, match="a bundle is an .npz or .h5/.hdf5 file"):
+            io.save_bundle(tmp_path / name, system=sd)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.npz", "plain.npz"]
 
 
 @pytest.mark.parametrize("layout", ["interleaved", "tiled"])

@@ -53,7 +53,15 @@ import numpy as np
 import tensor_cosdi as tc
 from tensor_cosdi import metrics, noise, studies
 from tensor_cosdi.bases import KroneckerBasis
-from tensor_cosdi.io import _atomic, load_bundle, read_frame, save_bundle, write_frames
+from tensor_cosdi.io import (
+    AcquisitionPlan,
+    _atomic,
+    load_bundle,
+    read_frame,
+    read_log,
+    save_bundle,
+    write_frames,
+)  # fmt: skip
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
 from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
 from tensor_cosdi.testing import edit_bundle_document, hostile_files, rgb_values
@@ -864,6 +872,14 @@ def hostile_file_cases(folder: Path):
          ("complex",)),
         ("3 wavelengths for 4 bands", lambda: read_cube(hf["npz_wavelengths"]), ("wavelengths",)),
         ("TIFF pages of two shapes", lambda: read_cube(hf["tiff_mixed"]), ("series", "pages")),
+        ("plan of JSON nested 200,000 deep", lambda: AcquisitionPlan.load(hf["plan_deep"]),
+         ("nested too deeply",)),
+        ("frame log of JSON nested 200,000 deep", lambda: read_log(hf["log_deep"]),
+         ("not json",)),
+        (".npz bundle document nested 200,000 deep", lambda: load_bundle(hf["bundle_deep_npz"]),
+         ("nested too deeply",)),
+        ("HDF5 bundle document nested 200,000 deep",
+         lambda: load_bundle(hf["bundle_deep_h5"]), ("nested too deeply",)),
     ] + [
         (f"a {what} named .npy", lambda k=key: read_array(hf[k]), ("regular file",))
         for key, what in (("fifo", "FIFO"), ("dev_zero", "link to /dev/zero")) if key in hf

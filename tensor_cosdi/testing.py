@@ -251,7 +251,10 @@ def hostile_files(folder) -> dict:
     (3 wavelengths for 4 bands), ``tiff_mixed`` (pages of two shapes),
     ``tiff_rgb`` (a 12×16 RGB image, values ``rgb_values(0)``), and on POSIX
     ``fifo`` (a FIFO named ``.npy``) and ``dev_zero`` (a link to ``/dev/zero``
-    named ``.npy``), and the Zarr stores of :func:`_hostile_zarr` where zarr is installed.
+    named ``.npy``), JSON nested 200,000 deep as an acquisition plan (``plan_deep``), a
+    frame log (``log_deep``), a bundle's document (``bundle_deep_npz``, ``bundle_deep_h5``)
+    and a TIFF description (``tiff_deep``), and the Zarr stores of :func:`_hostile_zarr`
+    where zarr is installed.
     Shared by the tests and ``benchmarks/robustness.py``.
     """
     import os
@@ -309,6 +312,19 @@ def hostile_files(folder) -> dict:
     if os.path.exists("/dev/zero"):
         out["dev_zero"] = folder / "zero.npy"
         os.symlink("/dev/zero", out["dev_zero"])
+    deep = "[" * 200_000 + "]" * 200_000  # JSON past any parser's stack
+    out["plan_deep"] = folder / "plan_deep.json"
+    out["plan_deep"].write_text(deep)
+    out["log_deep"] = folder / "log_deep.jsonl"
+    out["log_deep"].write_text(deep + "\n")
+    out["bundle_deep_npz"] = folder / "bundle_deep.npz"
+    np.savez(out["bundle_deep_npz"], __bundle__=np.array(deep))
+    out["bundle_deep_h5"] = folder / "bundle_deep.h5"
+    with h5py.File(out["bundle_deep_h5"], "w") as f:
+        f.attrs["tensor_cosdi_bundle"] = deep
+    out["tiff_deep"] = folder / "tiff_deep.tif"
+    tifffile.imwrite(out["tiff_deep"], np.ones((3, 4, 4), np.float32), description=deep,
+                     photometric="minisblack", metadata=None)  # fmt: skip
     out.update(_hostile_zarr(folder, secret))
     return out
 

@@ -9,11 +9,19 @@ import numpy as np
 #: range.  Larger, NaN or infinite values never reach the hardware.
 DM_MAX_WAVES = 10.0
 
+#: The longest command line sent to the device (a plan's longest, ``DM`` with many pairs, is far
+#: shorter); a longer one is refused before it is echoed in a message or written to the port.
+MAX_COMMAND_CHARS = 1024
+
 
 def check_command(c):
     """``c`` stripped, or a ``ValueError``: one line, a known verb, arguments of the right kind and
     range (``DMD``/``PROJ``/``TRIG``: one integer ≥ 0; ``DM``: ``j:a`` pairs, Noll ``j ≥ 1``,
     finite ``|a| ≤`` :data:`DM_MAX_WAVES`; ``PING``: none)."""
+    if isinstance(c, str) and len(c) > MAX_COMMAND_CHARS:
+        raise ValueError(
+            f"a command is at most {MAX_COMMAND_CHARS} characters, got {len(c)} starting {c[:40]!r}"
+        )
     if not isinstance(c, str) or not c.strip() or "\n" in c or "\r" in c:
         raise ValueError(f"a command is one non-empty line of text, got {c!r}")
     verb, *args = c.split()
@@ -47,6 +55,11 @@ def check_command(c):
 
 def _check_frame_name(name):
     """A plan's frame name must be a plain file name: it is joined to the capture folder."""
+    size = len(name.encode("utf-8", "surrogatepass")) if isinstance(name, str) else 0
+    if size > 255:
+        raise ValueError(
+            f"a frame name is at most 255 bytes (a file name), got {size} starting {name[:40]!r}"
+        )
     if (
         not isinstance(name, str)
         or not name

@@ -3,7 +3,6 @@ acquisition holds (:class:`tensor_cosdi.io.triggers.Acquisition`)."""
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
@@ -16,7 +15,7 @@ def read_log(path) -> tuple[dict | None, list[dict]]:
 
     Nothing there: ``(None, [])``.  Something there that is not a regular file (a FIFO, a
     folder, a device), or a file over :data:`MAX_LOG_BYTES`, is refused before it is read."""
-    from ._readers import require_file
+    from ._readers import parse_json, require_file
 
     p = Path(path)
     if not os.path.lexists(p):
@@ -36,7 +35,7 @@ def read_log(path) -> tuple[dict | None, list[dict]]:
         if not line.strip():
             continue
         try:
-            obj = json.loads(line)
+            obj = parse_json(line, "the line")
         except ValueError:
             raise ValueError(f"{p}: line {n + 1} is not JSON; is this a frame log?") from None
         if not isinstance(obj, dict):

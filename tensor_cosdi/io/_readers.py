@@ -4,6 +4,7 @@ for a file its format library cannot parse.  Used by :mod:`tensor_cosdi.io.files
 
 from __future__ import annotations
 
+import json
 import os
 import struct
 import zlib
@@ -496,6 +497,16 @@ _READERS = {
     ".tiff": ("TIFF", _entries_tiff),
     ".zarr": ("Zarr", _entries_zarr),
 }
+
+
+def parse_json(text, where: str):
+    """``text`` parsed as JSON; a ``ValueError`` naming ``where`` for JSON nested past what the
+    parser's stack holds (a ``RecursionError`` otherwise; malformed JSON is already a
+    ``ValueError``, :class:`json.JSONDecodeError`)."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise ValueError(f"{where}: the JSON is nested too deeply to be read") from None
 
 
 def reason(exc: BaseException) -> str:

@@ -324,7 +324,7 @@ def _write_h5(tmp, store, doc):
 
 
 def _read_h5(p: Path, max_bytes: int):
-    from ._readers import check_h5_dataset, hard_linked
+    from ._readers import check_h5_dataset, hard_linked, parse_json
     from .files import _check_size, _require_h5py
 
     h5py = _require_h5py()
@@ -335,7 +335,7 @@ def _read_h5(p: Path, max_bytes: int):
     with f:
         if "tensor_cosdi_bundle" not in f.attrs:
             raise ValueError(f"{p}: an HDF5 file without the tensor_cosdi_bundle attribute")
-        doc = json.loads(f.attrs["tensor_cosdi_bundle"])
+        doc = parse_json(f.attrs["tensor_cosdi_bundle"], f"{p}: the bundle's document")
         data = {}
         for k in doc.get("arrays", []):
             name = _h5_name(k)
@@ -356,28 +356,31 @@ def _read_h5(p: Path, max_bytes: int):
 def bundle_document(path) -> dict | None:
     """The JSON document of a bundle at ``path`` (``.npz`` or HDF5) without reading its arrays, or
     ``None`` when the file is not a bundle."""
-    from ._readers import reason, require_file
+    from ._readers import parse_json, reason, require_file
     from .files import _require_h5py
 
     p = Path(path)
     if p.suffix.lower() == ".zarr" and p.is_dir():
         return None  # a bundle is one file; a Zarr store is a cube
     require_file(p)
+    raw = None
     try:
         if p.suffix.lower() in H5_SUFFIXES:
             with _require_h5py().File(p, "r") as f:
                 raw = f.attrs.get("tensor_cosdi_bundle")
-            return None if raw is None else json.loads(raw)
-        if p.suffix.lower() == ".npz":
+        elif p.suffix.lower() == ".npz":
             with np.load(p, allow_pickle=False) as z:
-                return json.loads(str(z["__bundle__"])) if "__bundle__" in z.files else None
-    except json.JSONDecodeError as e:
-        raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
+                raw = str(z["__bundle__"]) if "__bundle__" in z.files else None
     except ImportError:
         raise
     except Exception as e:  # zipfile, h5py and NumPy raise many kinds on a damaged file
         raise ValueError(f"{p}: cannot read the file — truncated or corrupted ({reason(e)})") from e
-    return None
+    if raw is None:
+        return None
+    try:
+        return parse_json(raw, f"{p}: the bundle's document")  # too deep: a ValueError naming p
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
 
 
 def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
@@ -391,7 +394,14 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
     the JSON document are each checked against their SHA-256: an edited
     system description, like an edited array, is an error.
     """
-    from ._readers import HEADER_SLACK_BYTES, MAX_ARRAY_BYTES, UnsafeFile, reason, require_file
+    from ._readers import (
+        HEADER_SLACK_BYTES,
+        MAX_ARRAY_BYTES,
+        UnsafeFile,
+        parse_json,
+        reason,
+        require_file,
+    )
 
     p = Path(path)
     require_file(p, "bundle")
@@ -426,7 +436,7 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
                 f"{p}: an .npz file without the __bundle__ document — not a tensor_cosdi bundle"
             )
         try:
-            doc = json.loads(str(data.pop("__bundle__")))
+            doc = parse_json(str(data.pop("__bundle__")), f"{p}: the bundle's document")
         except json.JSONDecodeError as e:
             raise ValueError(f"{p}: the bundle's document is corrupted ({e})") from e
     if doc.get("format") != FORMAT:

@@ -51,6 +51,7 @@ from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     _load,
     _require_h5py,
     array_entries,
+    parse_json,
     reason,
     require_file,
 )
@@ -245,7 +246,7 @@ def _tiff_wavelengths(path, n_bands):
     with tifffile.TiffFile(path) as t:
         desc = t.pages[0].description
     try:
-        meta = json.loads(desc)
+        meta = parse_json(desc, "the TIFF description")
     except (TypeError, ValueError):
         return None
     wl = meta.get("wavelengths_nm") if isinstance(meta, dict) else None

@@ -247,7 +247,7 @@ class AcquisitionPlan:
     def load(cls, path) -> "AcquisitionPlan":
         """A plan written by :meth:`save`: a regular JSON file of at most
         :data:`MAX_PLAN_FILE_BYTES`, every step checked as :class:`Step` checks it."""
-        from ._readers import require_file
+        from ._readers import parse_json, require_file
 
         p = Path(path)
         require_file(p, "acquisition plan")
@@ -257,7 +257,7 @@ class AcquisitionPlan:
                 f"can be ({MAX_PLAN_FILE_BYTES} bytes); not an acquisition plan"
             )
         try:
-            doc = json.loads(p.read_text(encoding="utf-8"))
+            doc = parse_json(p.read_text(encoding="utf-8"), "the plan")
             if not isinstance(doc, dict) or not isinstance(doc.get("steps"), list):
                 raise ValueError("expected a JSON object with a list of 'steps'")
             return cls(tuple(doc["steps"]), doc.get("name", p.stem))

@@ -188,3 +188,31 @@ def test_a_matlab_v4_file_still_reads(tmp_path):
 
     scipy.io.savemat(tmp_path / "v4.mat", {"mask": np.eye(3)}, format="4")
     np.testing.assert_array_equal(read_array(tmp_path / "v4.mat", "mask"), np.eye(3))
+
+
+def test_json_nested_past_the_parsers_stack_is_a_one_line_error(hostile):
+    """A plan, frame log or bundle document of 200,000 nested brackets raised RecursionError."""
+    from tensor_cosdi.io import AcquisitionPlan, read_log
+    from tensor_cosdi.io.bundle import bundle_document
+
+    deep = "the JSON is nested too deeply to be read"
+    with pytest.raises(ValueError, match=f"not an acquisition plan .*{deep}"):
+        AcquisitionPlan.load(hostile["plan_deep"])
+    with pytest.raises(ValueError, match="line 1 is not JSON; is this a frame log"):
+        read_log(hostile["log_deep"])
+    for key in ("bundle_deep_npz", "bundle_deep_h5"):
+        for read in (load_bundle, bundle_document):
+            with pytest.raises(ValueError, match=f"bundle_deep.*the bundle's document: {deep}"):
+                read(hostile[key])
+    # a TIFF description is only a place wavelengths may be: one that is not JSON is ignored
+    cube, wavelengths = read_cube(hostile["tiff_deep"])
+    assert cube.shape == (4, 4, 3) and wavelengths is None
+
+
+def test_commands_and_frame_names_longer_than_a_line_or_a_file_name_are_refused():
+    from tensor_cosdi.io import AcquisitionPlan, Step
+
+    with pytest.raises(ValueError, match="a command is at most 1024 characters, got 1000000 s"):
+        AcquisitionPlan((Step({"k": 0}, ("X" * 10**6,), "f.tif"),))
+    with pytest.raises(ValueError, match="a frame name is at most 255 bytes .*, got 304 s"):
+        AcquisitionPlan((Step({"k": 0}, ("DMD 0",), "f" * 300 + ".tif"),))

@@ -938,6 +938,7 @@ def _weights_file_cases(folder: Path, sd):
 
     from tensor_cosdi.learn import dcosnet
     from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+    from tensor_cosdi.learn.train import train_denoiser
 
     files = {"empty": b"", "truncated": b"PK\x03\x04 not a whole file",
              "pickle payload": pickle.dumps({"config": _Payload()})}  # fmt: skip
@@ -953,6 +954,13 @@ def _weights_file_cases(folder: Path, sd):
         ):
             out.append(Case("learn.hostile", f"{name} of a {what} file", call,
                             ("checkpoint", "weights", "not a")))  # fmt: skip
+        # the same bytes as a training checkpoint to resume (no training data is read first)
+        ckpt = folder / f"resume_{what.replace(' ', '_')}.pt.ckpt"
+        ckpt.write_bytes(data)
+        out.append(Case("learn.hostile", f"train_denoiser resume=True from a {what} checkpoint",
+                        lambda c=ckpt: train_denoiser(c.with_suffix(""), resume=True,
+                                                      progress=False, device="cpu"),
+                        ("not a readable checkpoint",)))  # fmt: skip
     return out
 
 

@@ -67,6 +67,42 @@ def check_stop_after(stop_after):
         raise ValueError(f"stop_after must be a positive integer, got {stop_after!r}")
 
 
+#: What a checkpoint written by :func:`run` holds.
+CHECKPOINT_KEYS = (
+    "model", "optimizer", "scheduler", "step", "losses", "elapsed", "rng", "torch_rng", "config",
+)  # fmt: skip
+
+
+def _resume_state(torch, path: Path, config_cls):
+    """``(state, config)`` of the checkpoint at ``path``, or a one-line ``ValueError`` saying
+    that it is damaged or not one of this training's (and how to start over)."""
+
+    def damaged(why):
+        return ValueError(
+            f"--resume: {path} is not a readable checkpoint of this training ({why}); delete it "
+            "or pass --force to start over"
+        )
+
+    try:
+        state = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as exc:  # EOFError, a zip reader's RuntimeError, UnpicklingError, …
+        first = (str(exc).splitlines() or [""])[0][:100]
+        raise damaged(f"{type(exc).__name__}: {first}" if first else type(exc).__name__) from None
+    missing = [k for k in CHECKPOINT_KEYS if not isinstance(state, dict) or k not in state]
+    if missing:
+        raise damaged(f"no {', '.join(missing)}")
+    try:
+        fields = json.loads(state["config"])
+        json.loads(state["rng"])
+        if not isinstance(fields, dict):
+            raise TypeError(f"the config is a {type(fields).__name__}, not a mapping")
+        config = config_cls(**fields)
+    except (TypeError, ValueError, RecursionError) as exc:  # unknown fields, bad JSON, too deep
+        why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)[:100]
+        raise damaged(f"its config: {why}") from None
+    return state, config
+
+
 def run(
     *,
     desc: str,
@@ -103,8 +139,7 @@ def run(
     if resume:
         if not ckpt_path.is_file():
             raise FileNotFoundError(f"--resume: no checkpoint {ckpt_path}")
-        state = torch.load(ckpt_path, map_location="cpu", weights_only=True)
-        saved = config_cls(**json.loads(state["config"]))
+        state, saved = _resume_state(torch, ckpt_path, config_cls)
         if config is not None and config != saved:
             raise ValueError(
                 f"--resume: the checkpoint was made with {saved}, not {config}; "
@@ -135,13 +170,25 @@ def run(
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lr_at)
     step, losses, elapsed = 0, [], 0.0
     if state is not None:
-        net.load_state_dict(state["model"])
-        opt.load_state_dict(state["optimizer"])
-        sched.load_state_dict(state["scheduler"])
-        step, losses = int(state["step"]), list(state["losses"])
-        elapsed = float(state["elapsed"])
-        rng.bit_generator.state = json.loads(state["rng"])
-        torch.set_rng_state(state["torch_rng"])
+        try:
+            net.load_state_dict(state["model"])
+            opt.load_state_dict(state["optimizer"])
+            sched.load_state_dict(state["scheduler"])
+            step, losses = int(state["step"]), [float(v) for v in state["losses"]]
+            elapsed = float(state["elapsed"])
+            rng.bit_generator.state = json.loads(state["rng"])
+            torch.set_rng_state(state["torch_rng"])
+        except Exception as exc:  # tensors of other shapes, a damaged optimiser or RNG state
+            why = (str(exc).splitlines() or [""])[0][:100]
+            raise ValueError(
+                f"--resume: {ckpt_path} does not fit this training ({type(exc).__name__}: "
+                f"{why}); delete it or pass --force to start over"
+            ) from None
+        if not 0 <= step <= cfg.steps:
+            raise ValueError(
+                f"--resume: {ckpt_path} is at step {step}, outside 0…{cfg.steps}; delete it or "
+                "pass --force to start over"
+            )
 
     def checkpoint():
         atomic_save(

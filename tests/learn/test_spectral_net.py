@@ -186,6 +186,52 @@ def test_training_checkpoints_resume_exactly_and_never_overwrite(tmp_path):
 
 
 @needs_torch
+def test_a_damaged_checkpoint_is_a_one_line_error_before_any_training(tmp_path):
+    """An empty, foreign or edited ``.ckpt`` raised EOFError, KeyError or TypeError."""
+    import json
+
+    import torch
+
+    from tensor_cosdi.learn._loop import CHECKPOINT_KEYS
+    from tensor_cosdi.learn.train import train_denoiser
+
+    good = {k: 0 for k in CHECKPOINT_KEYS} | {"rng": "{}", "config": json.dumps({"steps": 2})}
+    cases = [
+        (b"", "EOFError"),
+        ({"model": {}}, "no optimizer, scheduler"),
+        (good | {"config": json.dumps({"bogus": 1})}, "unexpected keyword argument 'bogus'"),
+        (good | {"config": "[1, 2]"}, "the config is a list, not a mapping"),
+        (good | {"config": "[" * 100_000 + "]" * 100_000}, "its config: nested too deeply"),
+    ]
+    for i, (state, why) in enumerate(cases):
+        ckpt = tmp_path / f"w{i}.pt.ckpt"
+        if isinstance(state, bytes):
+            ckpt.write_bytes(state)
+        else:
+            torch.save(state, ckpt)
+        with pytest.raises(ValueError, match=f"not a readable checkpoint of this training.*{why}"):
+            train_denoiser(tmp_path / f"w{i}.pt", resume=True, progress=False, device="cpu")
+
+
+@needs_torch
+def test_a_checkpoint_whose_tensors_do_not_fit_is_refused(tmp_path):
+    import torch
+
+    from tensor_cosdi.learn.train import TrainConfig, train_denoiser
+
+    _real()
+    cfg = TrainConfig(steps=3, batch=2, patch=16, width=8, blocks=1, r_max=4, checkpoint_every=1)
+    train_denoiser(tmp_path / "w.pt", cfg, progress=False, device="cpu", stop_after=1)
+    ckpt = tmp_path / "w.pt.ckpt"
+    state = torch.load(ckpt, weights_only=True)
+    name = next(iter(state["model"]))
+    state["model"][name] = torch.zeros(3)
+    torch.save(state, ckpt)
+    with pytest.raises(ValueError, match="w.pt.ckpt does not fit this training.*--force"):
+        train_denoiser(tmp_path / "w.pt", cfg, resume=True, progress=False, device="cpu")
+
+
+@needs_torch
 def test_cli_train_denoiser(tmp_path, capsys):
     from tensor_cosdi import cli
 

@@ -878,6 +878,10 @@ def hostile_file_cases(folder: Path):
          ("not json",)),
         (".npz bundle document nested 200,000 deep", lambda: load_bundle(hf["bundle_deep_npz"]),
          ("nested too deeply",)),
+        ("ENVI cube of complex values", lambda: read_cube(hf["envi_complex"]), ("complex",)),
+        ("ENVI interleave 'xyz'", lambda: read_cube(hf["envi_interleave"]), ("interleave",)),
+        ("ENVI data file linked to another file", lambda: read_cube(hf["envi_link"]),
+         ("symbolic link",)),
         ("HDF5 bundle document nested 200,000 deep",
          lambda: load_bundle(hf["bundle_deep_h5"]), ("nested too deeply",)),
     ] + [

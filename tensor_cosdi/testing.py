@@ -253,7 +253,9 @@ def hostile_files(folder) -> dict:
     ``fifo`` (a FIFO named ``.npy``) and ``dev_zero`` (a link to ``/dev/zero``
     named ``.npy``), JSON nested 200,000 deep as an acquisition plan (``plan_deep``), a
     frame log (``log_deep``), a bundle's document (``bundle_deep_npz``, ``bundle_deep_h5``)
-    and a TIFF description (``tiff_deep``), and the Zarr stores of :func:`_hostile_zarr`
+    and a TIFF description (``tiff_deep``), ENVI headers of complex data (``envi_complex``),
+    an unknown interleave (``envi_interleave``) and a data file that is a link to another
+    (``envi_link``), and the Zarr stores of :func:`_hostile_zarr`
     where zarr is installed.
     Shared by the tests and ``benchmarks/robustness.py``.
     """
@@ -325,6 +327,16 @@ def hostile_files(folder) -> dict:
     out["tiff_deep"] = folder / "tiff_deep.tif"
     tifffile.imwrite(out["tiff_deep"], np.ones((3, 4, 4), np.float32), description=deep,
                      photometric="minisblack", metadata=None)  # fmt: skip
+    envi = "ENVI\nsamples = 4\nlines = 4\nbands = 2\nheader offset = 0\ndata type = {dt}\n" \
+        "interleave = {il}\nbyte order = 0\n"  # fmt: skip
+    for name, dt, il in (("envi_complex", 6, "bsq"), ("envi_interleave", 4, "xyz"),
+                         ("envi_link", 4, "bsq")):  # fmt: skip
+        out[name] = folder / f"{name}.hdr"
+        out[name].write_text(envi.format(dt=dt, il=il))
+        if name == "envi_link":  # the data "file" is a link to another file
+            os.symlink(secret, folder / f"{name}.img")
+        else:
+            (folder / f"{name}.img").write_bytes(bytes(256))
     out.update(_hostile_zarr(folder, secret))
     return out
 

@@ -157,6 +157,29 @@ def _check_wavelengths(path, wl, n_bands):
     return check_wavelengths_nm(wl, f"{path}: wavelengths")
 
 
+def _check_envi_header(path, img, shape, dtype) -> None:
+    """Fields that spectral reads without complaint but that no cube of light can have: a
+    complex data type, an unknown interleave or byte order, a negative offset, an empty axis."""
+    meta = img.metadata
+    interleave = str(meta.get("interleave", "bsq")).strip().lower()
+    if interleave not in ("bsq", "bil", "bip"):
+        raise ValueError(f"{path}: interleave {interleave!r}; ENVI knows bsq, bil and bip")
+    order = str(meta.get("byte order", "0")).strip()
+    if order not in ("0", "1"):
+        raise ValueError(f"{path}: byte order {order!r}; ENVI knows 0 (little) and 1 (big endian)")
+    if dtype.kind not in "biuf":
+        raise ValueError(
+            f"{path}: ENVI data type {meta.get('data type')} holds {dtype.name} values; a cube of "
+            "light is real"
+        )
+    if int(img.offset) < 0:
+        raise ValueError(f"{path}: header offset {int(img.offset)}; expected ≥ 0")
+    if min(shape) < 1:
+        raise ValueError(
+            f"{path}: the header declares an empty cube (lines, samples, bands) {shape}"
+        )
+
+
 def _read_envi(path: Path, max_bytes):
     try:
         from spectral.io import envi
@@ -171,8 +194,13 @@ def _read_envi(path: Path, max_bytes):
         dtype = np.dtype(img.dtype)
     except Exception as e:  # spectral raises its own kinds on a bad header
         raise ValueError(f"{path}: not a readable ENVI header ({reason(e)})") from e
+    _check_envi_header(path, img, shape, dtype)
     _check_size(path, "cube", shape, dtype, max_bytes)
     data = Path(img.filename)
+    if data.is_symlink():  # the header's folder names the data; a link would read another file
+        raise ValueError(
+            f"{path}: its data file {data} is a symbolic link; copy the file there instead"
+        )
     need = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize + int(img.offset)
     if not data.is_file() or data.stat().st_size < need:  # a device, a FIFO, a short file
         raise ValueError(

@@ -159,6 +159,44 @@ def test_envi_units_are_converted(tmp_path):
         write_cube(tmp_path / "c.hdr", _cube(), WL)
 
 
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("data type", "6", "ENVI data type 6 holds complex64 values; a cube of light is real"),
+        ("interleave", "xyz", "interleave 'xyz'; ENVI knows bsq, bil and bip"),
+        ("byte order", "7", "byte order '7'; ENVI knows 0"),
+        ("header offset", "-5", "header offset -5; expected ≥ 0"),
+        ("samples", "0", "the header declares an empty cube"),
+    ],
+)
+def test_envi_headers_that_spectral_reads_without_complaint_are_refused(
+    tmp_path, field, value, message
+):
+    """Each of these read a cube: complex values, an unknown interleave read as bsq, ..."""
+    pytest.importorskip("spectral")
+    write_cube(tmp_path / "c.hdr", _cube(), WL)
+    lines = [
+        f"{field} = {value}" if line.split("=")[0].strip() == field else line
+        for line in (tmp_path / "c.hdr").read_text().splitlines()
+    ]
+    if not any(line.startswith(f"{field} =") for line in lines):
+        lines.append(f"{field} = {value}")
+    (tmp_path / "c.hdr").write_text("\n".join(lines) + "\n")
+    with pytest.raises(ValueError, match=message):
+        read_cube(tmp_path / "c.hdr")
+
+
+def test_an_envi_data_file_that_links_elsewhere_is_refused(tmp_path):
+    """A header and a link named like its data would read any file on the machine as a cube."""
+    pytest.importorskip("spectral")
+    write_cube(tmp_path / "c.hdr", _cube(), WL)
+    secret = tmp_path / "elsewhere.bin"
+    (tmp_path / "c.img").rename(secret)
+    (tmp_path / "c.img").symlink_to(secret)
+    with pytest.raises(ValueError, match="c.img is a symbolic link"):
+        read_cube(tmp_path / "c.hdr")
+
+
 def test_metadata_is_stored(tmp_path):
     h5py = pytest.importorskip("h5py")
     write_cube(tmp_path / "c.h5", _cube(), WL, metadata={"scene": "face"})

@@ -96,12 +96,24 @@ def cube_suffix(path: Path) -> str:
     return s
 
 
+def size_text(n: int) -> str:
+    """``n`` bytes in the largest binary unit that keeps it ≥ 1 (``"4.00 GiB"``, ``"1000 B"``).
+
+    >>> size_text(4 * 2**30), size_text(1 << 20), size_text(1000)
+    ('4.00 GiB', '1.00 MiB', '1000 B')
+    """
+    for unit, shift in (("GiB", 30), ("MiB", 20), ("KiB", 10)):
+        if n >= 1 << shift:
+            return f"{n / (1 << shift):.2f} {unit}"
+    return f"{int(n)} B"
+
+
 def _check_size(path, name, shape, dtype, max_bytes):
     n = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
     if n > max_bytes:
         raise ValueError(
             f"{path}: {name!r} declares shape {tuple(shape)} of {np.dtype(dtype)} = "
-            f"{n / 2**30:.2f} GiB, above the {max_bytes / 2**30:.2f} GiB limit "
+            f"{size_text(n)}, above the {size_text(max_bytes)} limit "
             "(pass max_bytes= to allow it)"
         )
 

@@ -288,7 +288,7 @@ def test_read_frame_checks_declared_sizes_before_reading(tmp_path):
     from tensor_cosdi.io import read_frame
 
     np.save(tmp_path / "f.npy", np.zeros((64, 64)))
-    with pytest.raises(ValueError, match="GiB limit"):
+    with pytest.raises(ValueError, match="= 32.00 KiB, above the 1000 B limit"):
         read_frame(tmp_path / "f.npy", max_bytes=1000)
     # a forged .npy header declaring a 74 GiB array in a tiny file
     header = "{'descr': '<f8', 'fortran_order': False, 'shape': (100000, 100000), }"

@@ -96,10 +96,10 @@ def cube_suffix(path: Path) -> str:
     return s
 
 
-def size_text(n: int) -> str:
+def _size_text(n: int) -> str:
     """``n`` bytes in the largest binary unit that keeps it ≥ 1 (``"4.00 GiB"``, ``"1000 B"``).
 
-    >>> size_text(4 * 2**30), size_text(1 << 20), size_text(1000)
+    >>> _size_text(4 * 2**30), _size_text(1 << 20), _size_text(1000)
     ('4.00 GiB', '1.00 MiB', '1000 B')
     """
     for unit, shift in (("GiB", 30), ("MiB", 20), ("KiB", 10)):
@@ -113,7 +113,7 @@ def _check_size(path, name, shape, dtype, max_bytes):
     if n > max_bytes:
         raise ValueError(
             f"{path}: {name!r} declares shape {tuple(shape)} of {np.dtype(dtype)} = "
-            f"{size_text(n)}, above the {size_text(max_bytes)} limit "
+            f"{_size_text(n)}, above the {_size_text(max_bytes)} limit "
             "(pass max_bytes= to allow it)"
         )
 

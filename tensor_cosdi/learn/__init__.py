@@ -31,6 +31,13 @@ def require_torch():
     return torch
 
 
+def _exception_text(exc: BaseException) -> str:
+    """``"Kind: first line"`` (100 characters at most) of a loader's exception, for a one-line
+    message; ``"Kind"`` alone when it says nothing."""
+    first = (str(exc).splitlines() or [""])[0][:100]
+    return f"{type(exc).__name__}: {first}" if first else type(exc).__name__
+
+
 def load_weights(path, kind: str, command: str) -> dict:
     """A weights file read with ``torch.load(weights_only=True)`` (no code in a pickle can run).
 
@@ -64,10 +71,8 @@ def load_weights(path, kind: str, command: str) -> dict:
     try:
         ckpt = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # EOFError, a zip reader's RuntimeError, UnpicklingError, …
-        why = (str(exc).splitlines() or [""])[0][:100]
         raise ValueError(
-            f"{path} is not a {kind} checkpoint of tensor-cosdi {command} "
-            f"({type(exc).__name__}: {why})"
+            f"{path} is not a {kind} checkpoint of tensor-cosdi {command} ({_exception_text(exc)})"
         ) from None
     if not isinstance(ckpt, dict) or "config" not in ckpt or "model" not in ckpt:
         raise ValueError(

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..datasets import training_scenes
 from ..validate import integer, output_folder
-from . import require_torch
+from . import _exception_text, require_torch
 
 
 def atomic_save(torch, obj, path: Path):
@@ -86,14 +86,12 @@ def _resume_state(torch, path: Path, config_cls):
     try:
         state = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # EOFError, a zip reader's RuntimeError, UnpicklingError, …
-        first = (str(exc).splitlines() or [""])[0][:100]
-        raise damaged(f"{type(exc).__name__}: {first}" if first else type(exc).__name__) from None
+        raise damaged(_exception_text(exc)) from None
     missing = [k for k in CHECKPOINT_KEYS if not isinstance(state, dict) or k not in state]
     if missing:
         raise damaged(f"no {', '.join(missing)}")
     try:
         fields = json.loads(state["config"])
-        json.loads(state["rng"])
         if not isinstance(fields, dict):
             raise TypeError(f"the config is a {type(fields).__name__}, not a mapping")
         config = config_cls(**fields)
@@ -179,10 +177,9 @@ def run(
             rng.bit_generator.state = json.loads(state["rng"])
             torch.set_rng_state(state["torch_rng"])
         except Exception as exc:  # tensors of other shapes, a damaged optimiser or RNG state
-            why = (str(exc).splitlines() or [""])[0][:100]
             raise ValueError(
-                f"--resume: {ckpt_path} does not fit this training ({type(exc).__name__}: "
-                f"{why}); delete it or pass --force to start over"
+                f"--resume: {ckpt_path} does not fit this training ({_exception_text(exc)}); "
+                "delete it or pass --force to start over"
             ) from None
         if not 0 <= step <= cfg.steps:
             raise ValueError(

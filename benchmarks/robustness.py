@@ -64,7 +64,12 @@ from tensor_cosdi.io import (
 )  # fmt: skip
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
 from tensor_cosdi.solvers.denoisers import denoise, self_ensemble
-from tensor_cosdi.testing import edit_bundle_document, hostile_files, rgb_values
+from tensor_cosdi.testing import (
+    edit_bundle_document,
+    hostile_arguments,
+    hostile_files,
+    rgb_values,
+)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import write_results  # noqa: E402
@@ -1271,6 +1276,12 @@ def reader_cases(folder: Path):
     return out
 
 
+def argument_cases():
+    """One bad argument at a time for the public functions beyond ``reconstruct``
+    (``tensor_cosdi.testing.hostile_arguments``, which the tests run too)."""
+    return [Case(module, label, call, words) for module, label, call, words in hostile_arguments()]
+
+
 def catalogue(folder: Path, n_flips: int = 150):
     return (
         system_cases()
@@ -1287,6 +1298,7 @@ def catalogue(folder: Path, n_flips: int = 150):
         + parallel_cases()
         + complex_cases()
         + shape_and_kind_cases()
+        + argument_cases()
     )
 
 

@@ -15,6 +15,8 @@ import threading
 import numpy as np
 import tensorly as tl
 
+from .validate import seed as check_seed
+
 __all__ = [
     "backend_name",
     "to_numpy",
@@ -134,10 +136,12 @@ def all_finite(x) -> bool:
 
 
 def default_rng(seed=None) -> np.random.Generator:
-    """Seeded NumPy generator; passes an existing ``Generator`` through."""
+    """Seeded NumPy generator; passes an existing ``Generator`` through.  A seed that is not
+    ``None``, an integer ≥ 0, a ``BitGenerator`` or a ``SeedSequence`` is a ``ValueError``
+    (see :func:`tensor_cosdi.validate.seed`)."""
     if isinstance(seed, np.random.Generator):
         return seed
-    return np.random.default_rng(seed)
+    return np.random.default_rng(check_seed("rng", seed))
 
 
 class ParamCache:

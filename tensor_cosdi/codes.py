@@ -22,7 +22,7 @@ import numbers
 import numpy as np
 
 from . import _backend as B
-from .validate import real_array
+from .validate import axis_index, number, real_array
 
 __all__ = [
     "random_binary",
@@ -57,13 +57,7 @@ def _count(value, what, minimum=1) -> int:
 
 
 def _fraction(value, what) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a number in (0, 1], got {value!r}") from None
-    if not (0.0 < v <= 1.0):
-        raise ValueError(f"{what} must be in (0, 1], got {value!r}")
-    return v
+    return number(what, value, low=0, low_open=True, high=1)
 
 
 def random_binary(shape, *, transmittance: float = 0.5, rng=None) -> np.ndarray:
@@ -160,9 +154,7 @@ def complementary_colour_codes(
     """
     shape = _shape(cube_shape, "cube_shape")
     K = _count(n_snapshots, "n_snapshots", 2)
-    if not -len(shape) <= band_axis < len(shape):
-        raise ValueError(f"band_axis={band_axis} is not an axis of cube_shape {shape}")
-    band_axis %= len(shape)
+    band_axis = axis_index("band_axis", band_axis, len(shape))
     n_bands = shape[band_axis]
     n_filters = K if n_filters is None else _count(n_filters, "n_filters")
     if not K <= n_filters <= n_bands:
@@ -235,5 +227,7 @@ def is_complementary(codes, *, axis: int = -1, atol: float = 1e-9) -> bool:
     >>> is_complementary(np.full((3, 3, 4, 2), 0.4))
     False
     """
-    s = np.sum(real_array("codes", B.to_numpy(codes), finite=False), axis=axis)
-    return bool(np.all(np.abs(s - 1.0) <= atol))
+    c = real_array("codes", B.to_numpy(codes), finite=False)
+    tol = number("atol", atol, low=0)
+    s = np.sum(c, axis=axis_index("axis", axis, c.ndim))
+    return bool(np.all(np.abs(s - 1.0) <= tol))

@@ -75,8 +75,9 @@ def to_srgb(
         raise ValueError("the cube holds NaN or infinite values; an image of them has no colour")
     if not np.isfinite(wl).all() or wl.min() < 360 or wl.max() > 830 or (np.diff(wl) <= 0).any():
         raise ValueError(f"wavelengths must increase strictly within 360–830 nm, got {wl.tolist()}")
-    if illuminant not in colour.SDS_ILLUMINANTS:
+    if not isinstance(illuminant, str) or illuminant not in colour.SDS_ILLUMINANTS:
         raise ValueError(f"unknown illuminant {illuminant!r}; e.g. 'D65', 'A', 'D50'")
+    white_balance = validate.flag("white_balance", white_balance)
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
     xyz_bar = np.stack(
         [np.interp(wl, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)], axis=1
@@ -126,6 +127,7 @@ def rgb_to_cube(rgb, wavelengths, *, encoded: bool = True):
     """
     colour = colour_science()
     x = validate.real_array("rgb", B.to_numpy(rgb), finite=False)
+    encoded = validate.flag("encoded", encoded)
     if x.ndim == 0 or x.shape[-1] != 3:
         raise ValueError(f"rgb must have a last axis of 3 (R, G, B), got shape {x.shape}")
     if not np.isfinite(x).all():
@@ -165,7 +167,8 @@ def reflectance(cube, white, dark=0.0):
     ------
     ValueError
         Where ``white − dark`` is not positive (the ratio would be undefined
-        or flip sign); the message counts the offending entries.
+        or flip sign), or where an input holds NaN or ±inf; the message counts the
+        offending entries.
 
     Examples
     --------
@@ -173,9 +176,11 @@ def reflectance(cube, white, dark=0.0):
     >>> reflectance(np.array([3.0, 5.0]), np.array([5.0, 9.0]), dark=1.0).tolist()
     [0.5, 0.5]
     """
-    x = real_array("cube", B.to_numpy(cube), finite=False)
-    w = real_array("white", B.to_numpy(white), finite=False)
-    d = real_array("dark", B.to_numpy(dark), finite=False)
+    x = real_array("cube", B.to_numpy(cube))
+    w = real_array("white", B.to_numpy(white))
+    if isinstance(dark, (bool, np.bool_)):
+        raise ValueError(f"dark must be a dark count (a number or an array), got {dark!r}")
+    d = real_array("dark", B.to_numpy(dark))
     try:
         denom = np.broadcast_to(w - d, np.broadcast_shapes(x.shape, w.shape, d.shape))
     except ValueError:

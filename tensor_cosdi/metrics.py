@@ -14,7 +14,7 @@ import numpy as np
 from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
 from . import _backend as B
-from .validate import integer, real_array
+from .validate import integer, number, real_array
 
 __all__ = ["psnr", "ssim", "rmse", "sam", "combined_error"]
 
@@ -79,9 +79,13 @@ def _pair(image_true, image_test, data_range=None):
         raise ValueError("image_true and image_test must be finite (NaN or inf found)")
     if data_range is None:
         data_range = float(t.max() - t.min())
-    if not data_range > 0:
-        raise ValueError(f"data_range must be positive, got {data_range!r}")
-    return t, e, float(data_range)
+        if not data_range > 0:
+            raise ValueError(
+                "data_range must be positive, got 0.0 (the true image is constant); pass it"
+            )
+        return t, e, data_range
+    # a peak beyond 1e150 would overflow its own square inside scikit-image
+    return t, e, number("data_range", data_range, low=0, low_open=True, high=1e150)
 
 
 def _bands_last_as_images(x: np.ndarray, axis: int) -> np.ndarray:
@@ -118,7 +122,7 @@ def ssim(
     t, e, data_range = _pair(image_true, image_test, data_range)
     axis = _channel_axis(channel_axis, band_axis, t.ndim)
     tb, eb = _bands_last_as_images(t, axis), _bands_last_as_images(e, axis)
-    w = min(win_size, *tb.shape[1:])
+    w = min(integer("win_size", win_size, low=3), *tb.shape[1:])
     w -= 1 - w % 2
     if w < 3:
         raise ValueError(f"SSIM needs images of at least 3 × 3 pixels, got {tb.shape[1:]}")

@@ -73,7 +73,13 @@ def add_noise(measurement, snr_db: float | None, *, rng=None):
     power = float(np.mean(g * g))
     if power == 0.0:
         raise ValueError("cannot set an SNR on an all-zero measurement (signal power is 0)")
-    sigma = np.sqrt(power / 10.0 ** (snr_db / 10.0))
+    lowest = 10.0 * np.log10(power) - 20.0 * np.log10(np.finfo(np.float64).max) + 40.0
+    if snr_db < lowest:  # σ (times a normal draw) would overflow
+        raise ValueError(
+            f"snr_db {snr_db:g} dB asks for noise beyond the float range; expected ≥ "
+            f"{lowest:.0f} dB"
+        )
+    sigma = float(np.sqrt(power) * 10.0 ** (-snr_db / 20.0))
     noise = B.default_rng(rng).standard_normal(g.shape) * sigma
     return measurement + B.tensor_like(noise, measurement)
 
@@ -214,10 +220,11 @@ def frame_rank_sigma(x) -> float:
 
 
 def snr_db_from_sigma(power: float, sigma: float) -> float:
-    """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``); ``power`` and ``σ`` finite and ≥ 0."""
-    number("power", power, low=0)
-    number("sigma", sigma, low=0)
-    return float("inf") if sigma == 0 else float(10.0 * np.log10(power / sigma**2))
+    """``10 log10(power / σ²)`` (``inf`` when ``σ = 0``); ``power`` finite and > 0, ``σ``
+    finite and ≥ 0."""
+    power = number("power", power, low=0, low_open=True)
+    sigma = number("sigma", sigma, low=0)
+    return float("inf") if sigma == 0 else float(10.0 * np.log10(power) - 20.0 * np.log10(sigma))
 
 
 def estimate_snr_db(measurement) -> float:
@@ -240,11 +247,18 @@ def snr_schedule(snr_db: float, anchors: dict) -> float:
     ``snr_schedule(35, {40: 0.3, 30: 1.0})`` is ``√(0.3 · 1.0)``; an
     infinite SNR takes the weight of the highest anchor.
     """
-    if not anchors:
-        raise ValueError("snr_schedule needs at least one (SNR dB, weight) anchor")
-    pts = sorted((float(k), float(v)) for k, v in anchors.items())
-    if any(v <= 0 for _, v in pts):
-        raise ValueError(f"anchor weights must be > 0, got {anchors}")
+    if not isinstance(anchors, dict) or not anchors:
+        raise ValueError(
+            f"snr_schedule needs anchors {{SNR dB: weight}} with one entry or more, got {anchors!r}"
+        )
+    pts = sorted(
+        (number("an anchor's SNR (dB)", k), number("an anchor's weight", v, low=0, low_open=True))
+        for k, v in anchors.items()
+    )
+    if isinstance(snr_db, np.ndarray) and snr_db.ndim == 0:
+        snr_db = snr_db[()]
+    if isinstance(snr_db, (bool, np.bool_)) or not isinstance(snr_db, numbers.Real):
+        raise ValueError(f"snr_db must be a number of dB (inf for noiseless), got {snr_db!r}")
     snr = float(snr_db)
     if np.isnan(snr):
         raise ValueError("snr_db is NaN")
@@ -270,9 +284,14 @@ def auto_weight(
     noise-free weight depends on the scene more than on the noise, so it is
     not extrapolated).
     """
+    # weights beyond 1e100 would overflow once extrapolated to a noisy measurement
+    at_30db = number("at_30db", at_30db, low=0, low_open=True, high=1e100)
+    at_20db = number("at_20db", at_20db, low=0, low_open=True, high=1e100)
+    floor = None if floor is None else number("floor", floor, low=0, low_open=True, high=1e100)
     snr = estimate_snr_db(measurement)
     lo = at_30db if floor is None else floor
     if not np.isfinite(snr):
         return float(lo)
-    w = at_30db * (at_20db / at_30db) ** ((30.0 - snr) / 10.0)
+    t = (30.0 - snr) / 10.0  # log-linear, in logs so that no ratio of weights overflows
+    w = float(np.exp((1.0 - t) * np.log(at_30db) + t * np.log(at_20db)))
     return float(min(max(w, lo), 10 * at_20db))

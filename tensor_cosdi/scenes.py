@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _backend as B
+from . import validate
 from ._registry import Registry
 from ._units import check_wavelengths_nm
 from .operators import validate_shape
@@ -238,7 +239,8 @@ def depth_planes(depth, n_planes: int, *, near_is_large: bool = True) -> np.ndar
     [[0, 0], [1, 1]]
     """
     d = real_array("depth", B.to_numpy(depth), finite=False)
-    (n_planes,) = validate_shape((n_planes,), "n_planes")
+    n_planes = validate.integer("n_planes", n_planes, low=1)
+    near_is_large = validate.flag("near_is_large", near_is_large)
     if d.ndim != 2 or not np.isfinite(d).all():
         raise ValueError(f"depth must be a finite 2-D map, got shape {d.shape}")
     lo, hi = d.min(), d.max()
@@ -306,11 +308,21 @@ def light_field(cube, disparity, views=(5, 5)):
     """
     from scipy import ndimage
 
-    c = real_array("cube", B.to_numpy(cube), finite=False)
+    c = real_array("cube", B.to_numpy(cube))
     if c.ndim != 3:
         raise ValueError(f"cube must have shape (Nx, Ny, Nλ), got {c.shape}")
     U, V = validate_shape(views, "views")
-    d = np.broadcast_to(real_array("disparity", disparity, finite=False), c.shape[:2])
+    if isinstance(disparity, (bool, np.bool_)):
+        raise ValueError(f"disparity must be pixels per view step, got {disparity!r}")
+    try:
+        d = np.broadcast_to(real_array("disparity", disparity, finite=False), c.shape[:2])
+    except ValueError as exc:
+        if "disparity" in str(exc):
+            raise
+        raise ValueError(
+            f"disparity must be a number or an (Nx, Ny) = {c.shape[:2]} map, got shape "
+            f"{np.shape(disparity)}"
+        ) from None
     if not np.isfinite(d).all():
         raise ValueError("disparity contains NaN or inf")
     xx, yy = np.meshgrid(np.arange(c.shape[0]), np.arange(c.shape[1]), indexing="ij")
@@ -487,6 +499,10 @@ class StructuredLightScene:
     phase_per_height: float
 
 
+#: Most Gaussian bumps a :func:`structured_light` height map sums (each is a full-image pass).
+MAX_BUMPS = 1000
+
+
 def structured_light(
     shape=(64, 64),
     wavelengths=None,
@@ -524,12 +540,11 @@ def structured_light(
     from ._backend import default_rng
 
     nx, ny = validate_shape(shape, "shape")
-    freqs = tuple(float(f) for f in np.atleast_1d(frequencies))
+    freqs = tuple(real_array("frequencies", frequencies, finite=False).reshape(-1).tolist())
     if not freqs or not all(np.isfinite(f) and f > 0 for f in freqs):
         raise ValueError(f"frequencies must be positive numbers, got {frequencies!r}")
-    if not (np.isfinite(phase_per_height) and phase_per_height > 0):
-        raise ValueError(f"phase_per_height must be > 0, got {phase_per_height!r}")
-    (n_bumps,) = validate_shape((n_bumps,), "n_bumps")
+    validate.number("phase_per_height", phase_per_height, low=0, low_open=True)
+    n_bumps = validate.integer("n_bumps", n_bumps, low=1, high=MAX_BUMPS)
     gen = default_rng(rng)
     xx, yy = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, ny), indexing="ij")
     height = np.zeros((nx, ny))

@@ -7,6 +7,7 @@ with :func:`register`.
 
 from __future__ import annotations
 
+import inspect
 from typing import Callable
 
 import numpy as np
@@ -37,6 +38,7 @@ __all__ = [
     "hostile_files",
     "rgb_values",
     "edit_bundle_document",
+    "hostile_arguments",
 ]
 
 
@@ -417,3 +419,201 @@ def edit_bundle_document(path, edit) -> None:
             doc = json.loads(f.attrs["tensor_cosdi_bundle"])
             edit(doc)
             f.attrs["tensor_cosdi_bundle"] = json.dumps(doc)
+
+
+def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str, ...]]]:
+    """Bad arguments, one at a time, for the public functions beyond ``reconstruct``:
+    ``(module, label, call, words)``.
+
+    Each ``call`` passes one wrong value (NaN, ±inf, a boolean or a string where a number
+    goes, a number too large to compute with, an axis that does not exist, an object that is
+    not what the argument names) and every other argument valid; it must raise a
+    ``ValueError`` or ``TypeError`` whose message holds one of ``words`` (lower case), the
+    argument's name as a rule.  Shared by the tests and ``benchmarks/robustness.py``.
+    """
+    from . import bases, codes, colour, depth, metrics, noise, optics, scenes
+    from .io import calibration, layouts, lenslet
+    from .operators import Diagonal, Scaled, conjugate_gradient, unshear_bands
+    from .solvers import denoisers, priors
+    from .solvers.snr import estimate_snr
+    from .systems import SDCASSI, fringe_cube
+
+    rng = np.random.default_rng(0)
+    cube = rng.random((16, 16, 8))
+    wl = np.linspace(450.0, 650.0, 8)
+    img = rng.random((16, 16))
+    phase = img * 6.0
+    frames = rng.random((16, 16, 4))
+    views = rng.random((3, 3, 16, 16))
+    nan_cube, inf_img = cube.copy(), img.copy()
+    nan_cube[0, 0, 0], inf_img[0, 0] = np.nan, np.inf
+    lenslets = 1.0 + np.cos(np.arange(64)[:, None] * 0.8) * np.cos(np.arange(64)[None, :] * 0.8)
+    sd = SDCASSI(codes.random_binary((16, 16), rng=0), n_bands=8)
+    nan, inf = float("nan"), float("inf")
+    number_slips = [nan, inf, True, "3", 1 + 1j]  # never a number, wherever a number goes
+    table = [
+        # module, function, positional args, keyword args, {argument: bad values}, words
+        ("codes", codes.random_binary, ((16, 16),), {}, {"transmittance": number_slips + [0, 1.5],
+         "rng": [True, -1, 2.5, "7"]}),
+        ("codes", codes.depth_codes, ((16, 16), 3), {}, {"transmittance": [True, "0.5"]}),
+        ("codes", codes.colour_coded_aperture, ((16, 16), 8), {}, {"transmittance": [True]}),
+        ("codes", codes.complementary_colour_codes, ((16, 16, 8), 2), {},
+         {"band_axis": [True, 3, -4, 1.0]}),
+        ("codes", codes.is_complementary, (np.full((4, 4, 2), 0.5),), {},
+         {"atol": number_slips + [-1.0], "axis": [True, 5]}),
+        ("colour", colour.to_srgb, (cube, wl), {}, {"white_balance": [2, "yes", None, nan],
+         "illuminant": [3, None, "D66"]}),
+        ("colour", colour.rgb_to_cube, (rng.random((4, 4, 3)), wl), {},
+         {"encoded": [2, "yes", None]}),
+        ("colour", colour.reflectance, (cube, np.full(8, 2.0)), {}, {"dark": [True, nan]}),
+        ("colour", colour.reflectance, (nan_cube, np.full(8, 2.0)), {}, {}),
+        ("metrics", metrics.psnr, (cube, cube * 0.9), {},
+         {"data_range": number_slips + [1e308, 0, -1.0]}),
+        ("metrics", metrics.ssim, (cube, cube * 0.9), {"data_range": 1.0},
+         {"data_range": [True, inf, 1e308], "win_size": [inf, 2.5, True, 1]}),
+        ("noise", noise.add_noise, (img, 30.0), {"rng": 0}, {1: [-1e308, True, "30"],
+         "rng": [True, 2.5, "7", -1]}),
+        ("noise", noise.snr_db_from_sigma, (1.0, 0.1), {}, {0: [0.0, True], 1: [inf, "0.1"]}),
+        ("noise", noise.snr_schedule, (25.0, {30.0: 0.1, 20.0: 0.3}), {},
+         {0: [True, "25", None], 1: [{30.0: nan}, {}, {30.0: -1.0}, [0.1]]}),
+        ("noise", noise.auto_weight, (img,), {"at_30db": 0.1, "at_20db": 0.3},
+         {"at_30db": [nan, inf, 0.0, True], "at_20db": [0.0, 1e308], "floor": [nan, -1.0]}),
+        ("scenes", scenes.depth_planes, (img, 3), {}, {1: [1e308, 2.5, True, 0],
+         "near_is_large": [2, "yes", None]}),
+        ("scenes", scenes.light_field, (cube, 0.5), {"views": (3, 3)},
+         {1: [True, np.ones((3, 3))]}),
+        ("scenes", scenes.light_field, (nan_cube, 0.5), {"views": (3, 3)}, {}),
+        ("scenes", scenes.structured_light, ((16, 16), wl), {}, {"n_bumps": [10**6, 2.5, True],
+         "phase_per_height": [True, "2", nan], "frequencies": [("4",), (nan,)]}),
+        ("depth", depth.wrapped_phase, (frames,), {}, {"axis": [True, 3, -4, 1.5]}),
+        ("depth", depth.fringe_modulation, (frames,), {}, {"axis": [5]}),
+        ("depth", depth.decode_gray_code, (frames,), {}, {"axis": [7], "threshold": [True]}),
+        ("depth", depth.temporal_unwrap, (phase, phase / 4, 4.0), {},
+         {0: [inf_img], 2: [True, "4", nan, 0.0]}),
+        ("depth", depth.phase_to_height, (phase, phase * 0), {"phase_per_height": 2.0},
+         {0: [inf_img], "phase_per_height": [True, 1 + 1j, "2", 0.0]}),
+        ("depth", depth.wrap, (phase,), {}, {0: [inf_img]}),
+        ("depth", depth.depth_from_focus, (frames,), {}, {"axis": [9, True],
+         "sigma": [1e308, 1e6]}),
+        ("depth", depth.focus_measure, (img,), {}, {"sigma": [1e308]}),
+        ("depth", depth.textured_mask, (img,), {}, {"sigma": [1e6]}),
+        ("depth", depth.disparity_from_views, (views,), {"step": 0.5},
+         {"max_disparity": [1e308, 1e6]}),
+        ("depth", depth.guided_filter, (img, img), {}, {"eps": [True, "1e-4"]}),
+        ("depth", depth.depth_from_disparity, (img + 1,), {"baseline_mm": 10.0, "focal_px": 100.0},
+         {0: [inf_img], "baseline_mm": [True], "focal_px": ["3"], "offset": [1 + 1j, True, nan]}),
+        ("optics", optics.psf, (550.0, 1200.0), {}, {0: [True, "550", 0.55, nan],
+         1: [True, 2.5], "supersample": [10**6], "pupil_samples": [10**6, 1]}),
+        ("optics", optics.Lens, (), {}, {"focal_mm": ["50", True], "pixel_um": [True, "6"],
+         "aperture_radius_mm": ["2.5"]}),
+        ("optics", optics.zernike_radial, (2, 0, np.linspace(0, 1, 5)), {},
+         {0: [10**6], 2: [np.array([0.0, nan])]}),
+        ("optics", optics.gray_code_bits, (4.0,), {}, {0: [1e308, True]}),
+        ("optics", optics.phase_shift_patterns, (phase,), {}, {"n_steps": [10**6],
+         "offset": [True], "amplitude": ["0.5"]}),
+        ("optics", optics.projector_phase, ((16, 16), (4.0,)), {},
+         {0: [(16.5, 16), ("16", 16)], "axis": [True]}),
+        ("optics", optics.DoubleAmiciPrism, (), {}, {"phi1": [True]}),
+        ("optics", optics.DoubleAmiciPrism().mean_deviation, (570.0,), {},
+         {"field_deg": [True, "2", nan]}),
+        ("optics", optics.psf_width, (np.ones((5, 5)),), {}, {0: [np.full((5, 5), inf)]}),
+        ("bases", bases.dct, (8,), {}, {0: [10**6]}),
+        ("bases", bases.wavelet_level, (16, "sym8"), {}, {1: ["nonexistent", 3]}),
+        ("bases", bases.unfolding_gram, (cube, 1), {}, {1: [5, True], 0: ["abc", nan_cube]}),
+        ("bases", bases.is_orthonormal, (np.eye(4),), {}, {"atol": [nan, -1.0, True]}),
+        ("bases", bases.block_sizes, (28, 8), {}, {0: [2.5, "3", True, inf], 1: [1e308]}),
+        ("bases", bases.block_hosvd, (cube, 2, [4, 4]), {},
+         {2: [[4 + 1j, 4], ["4", "4"], [4.5, 3.5]]}),
+        ("io.lenslet", lenslet.calibrate_lenslet_grid, (lenslets,), {"pitch_range": (4.0, 16.0)},
+         {0: [-lenslets], "pitch_range": [(), (0, 0), (nan,), (16.0, 4.0)],
+          "min_peak": [-1.0, True]}),
+        ("io.calibration", calibration.shift_code, (img > 0.5, 0.5, 0.5), {},
+         {0: [None, "abc", inf_img], 1: [nan, True], 2: [inf]}),
+        ("io.calibration", calibration.mirror_symmetric, ([0.0, 1.0, 2.0],), {}, {"tol": [inf]}),
+        ("operators", Scaled, (2.0, None), {}, {}),
+        ("operators", conjugate_gradient, (lambda v: 2 * v, np.ones(5)), {},
+         {1: [None, np.array("abc"), np.full(5, nan)], "rtol": [nan, 1e308, -1.0, True],
+          "maxiter": [0, True, 2.5], "warn": ["yes"]}),
+        ("operators", Diagonal, (np.full(4, nan),), {}, {}),
+        ("operators", unshear_bands, (rng.random((16, 23, 8)), 16), {},
+         {0: [None], 1: [1e308], "axis": [10**6]}),
+        ("systems", fringe_cube, (cube, img), {}, {0: [nan_cube], "n_steps": [10**6],
+         "offset": [True]}),
+        ("io.frames", layouts.measurement_to_frames, (sd, np.ones(sd.measurement_shape)), {},
+         {0: [None, "sd_cassi"]}),
+        ("denoisers", denoisers.tv, (cube, 0.1), {"n_iter": 5},
+         {0: [nan_cube, np.float64(1.0), None, cube.astype(complex)]}),
+        ("denoisers", denoisers.wavelet, (cube, 0.1), {}, {0: [nan_cube, np.ones(8)],
+         1: [1e308], "wavelet_name": [3], "mode": ["medium"]}),
+        ("denoisers", denoisers.WarmTV(5), (nan_cube, 0.1), {}, {}),
+        ("solvers", priors.SparseInBasis, ({0: np.eye(16)},), {"lam": 0.1, "mu": 1.0},
+         {0: [np.eye(16)], "lam": number_slips + [-1.0], "mu": [0.0, True], "beta": [nan]}),
+        ("solvers", priors.TV, (0.1,), {}, {0: number_slips + [0.0, -1.0]}),
+        ("solvers", priors.Denoiser, ("tv",), {"sigma": 0.1}, {"sigma": number_slips + [0.0],
+         "sigma_end": [nan], "n_steps": [0, 2.5, inf, True], "nonneg": [2, "yes", None]}),
+        ("solvers", priors.Ridge, (1.0,), {}, {0: [nan, True, -1.0]}),
+        ("solvers", priors.NonNegative, (priors.Ridge(1.0),), {}, {0: [None, "tv"]}),
+        ("solvers", estimate_snr, (sd, np.ones(sd.measurement_shape)), {},
+         {0: [None, "sd_cassi"]}),
+    ]  # fmt: skip
+    table += _writer_arguments()
+    out = []
+    for module, fn, args, kwargs, bad in table:
+        name = getattr(fn, "__name__", type(fn).__name__)
+        params = list(inspect.signature(fn).parameters)
+        if not bad:  # the arguments as given are the bad input
+            words = ("nan", "finite", "tensoroperator", "diagonal")
+            out.append((module, f"{name}{_short(args)}", lambda f=fn, a=args, k=kwargs: f(*a, **k),
+                        words))  # fmt: skip
+            continue
+        for key, values in bad.items():
+            arg = params[key] if isinstance(key, int) else key
+            # what the message must name: the argument ("anchors": "an anchor's …"), or what it
+            # is where its name says little
+            words = _ARGUMENT_WORDS.get(arg, (arg.lower(), arg.lower().removesuffix("s")))
+            for value in values:
+                a, k = list(args), dict(kwargs)
+                if isinstance(key, int):
+                    a[key] = value
+                else:
+                    k[key] = value
+                label = f"{name} {arg}={_short(value)}"
+                out.append((module, label, lambda f=fn, a=tuple(a), k=k: f(*a, **k), words))
+    return out
+
+
+def _writer_arguments():
+    """Writers given an ``overwrite`` that is not ``True``/``False`` (``"no"`` is truthy): each
+    writes into a fresh temporary folder, over a file already there."""
+    import tempfile
+    from pathlib import Path
+
+    from .io import save_bundle, write_cube
+    from .studies import write_csv
+
+    folder = Path(tempfile.mkdtemp(prefix="tensor_cosdi_hostile_"))
+    cube = folder / "cube.npy"
+    np.save(cube, np.ones((2, 2, 2)))
+    csv, bundle = folder / "r.csv", folder / "b.npz"
+    csv.write_text("a\n1\n")
+    save_bundle(bundle, cube=np.ones((2, 2, 2)))
+    slips = ["no", "False", 1, None]
+    return [
+        ("io.files", write_cube, (cube, np.zeros((2, 2, 2))), {}, {"overwrite": slips}),
+        ("studies", write_csv, ([{"a": 2}], csv), {}, {"overwrite": slips}),
+        ("io.bundle", save_bundle, (bundle,), {"cube": np.zeros((2, 2, 2))},
+         {"overwrite": slips}),
+    ]  # fmt: skip
+
+
+_ARGUMENT_WORDS = {"x": ("tensor", "x must", "x holds"), "name": ("wavelet",), "n": ("n must",)}
+
+
+def _short(value) -> str:
+    """A label for a bad value: its repr, an array as its shape and what is wrong in it."""
+    if isinstance(value, np.ndarray):
+        flags = [w for w, bad in (("NaN", np.isnan), ("inf", np.isinf))
+                 if value.dtype.kind == "f" and bad(value).any()]  # fmt: skip
+        return " ".join([f"array{value.shape}"] + flags)
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "…"

@@ -22,8 +22,8 @@ import numbers
 import numpy as np
 
 __all__ = [
-    "number", "integer", "flag", "precision", "option_types", "real_array", "increasing",
-    "output_folder",
+    "number", "integer", "flag", "axis_index", "seed", "precision", "option_types", "real_array",
+    "increasing", "output_folder",
 ]  # fmt: skip
 
 
@@ -79,6 +79,47 @@ def flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {value!r}")
     return bool(value)
+
+
+def axis_index(name: str, value, ndim: int) -> int:
+    """``value`` as an axis of an array of ``ndim`` axes, counted from 0 (a negative one from the
+    end, as NumPy does), or a ``ValueError`` naming ``name``; booleans are not axes.
+
+    >>> axis_index("band_axis", -1, 3)
+    2
+    >>> axis_index("axis", 3, 3)
+    Traceback (most recent call last):
+    ...
+    ValueError: axis must be an integer in -3…2 (an axis of an array of 3 axes), got 3
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+    if not ok or not -ndim <= value < ndim:
+        raise ValueError(
+            f"{name} must be an integer in {-ndim}…{ndim - 1} (an axis of an array of {ndim} "
+            f"axes), got {value!r}"
+        )
+    return int(value) % ndim
+
+
+def seed(name: str, value):
+    """``value`` if it can seed NumPy's generator: ``None``, an integer ≥ 0 (not a boolean), a
+    ``Generator``, ``BitGenerator`` or ``SeedSequence``; else a ``ValueError`` naming ``name``
+    (NumPy would take ``True`` as the seed 1 and fail deep inside on ``2.5`` or ``"7"``).
+    """
+    if value is None or isinstance(
+        value, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence)
+    ):
+        return value
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)):
+        if value >= 0:
+            return int(value)
+    raise ValueError(
+        f"{name} must be None, an integer ≥ 0 or a numpy.random.Generator, got {value!r}"
+    )
 
 
 def precision(name: str, value) -> np.dtype:

@@ -1,6 +1,8 @@
 """Every sub-command given user mistakes: exit code 2, no traceback, and one line naming what was
 wrong (argparse's own usage errors: its usage lines, then one ``error:`` line)."""
 
+import importlib.util
+
 import numpy as np
 import pytest
 import scipy.io
@@ -79,6 +81,26 @@ MISTAKES = {
         [*RECON, "--out", "c.h5", "--preview", "--points", "3"],
         "ROW,COL",
     ),
+    "reconstruct: a dark frame on the direct path": (
+        [*RECON, "--out", "c.h5", "--dark", "nothing.npy"],
+        "--dark applies to frames",
+    ),
+    "reconstruct: binning and a roi on the direct path": (
+        [*RECON, "--out", "c.h5", "--binning", "2", "--roi", "0", "4", "0", "4"],
+        "--roi, --binning apply to frames",
+    ),
+    "reconstruct: preview points without --preview": (
+        [*RECON, "--out", "c.h5", "--points", "1,1"],
+        "add --preview",
+    ),
+    "reconstruct: a step that shifts past the limit": (
+        [*RECON[:-1], "1e308", "--out", "c.h5"],
+        "at most 65536 px",
+    ),
+    "train-denoiser: a patch larger than the scenes": (
+        ["train-denoiser", "--out", "w.pt", "--patch", "100000"],
+        "8…512",
+    ),
     "preview: missing file": (["preview", "nothing.h5"], "nothing.h5"),
     "preview: no wavelengths": (["preview", "cube.npy"], "wavelengths"),
     "preview: garbage HDF5": (["preview", "junk.h5"], "junk.h5"),
@@ -105,3 +127,11 @@ def test_a_mistake_ends_in_one_line_and_exit_code_2(folder, capsys, argv, word):
     message = [line for line in lines if not line.startswith(("usage:", " "))]
     assert len(message) == 1, err  # one line that says what was wrong
     assert word.lower() in message[0].lower(), err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("torch") is None, reason="PyTorch is not installed")
+def test_a_device_this_torch_lacks_is_one_line_before_any_training(folder, capsys):
+    assert cli.main(["train-denoiser", "--out", "w.pt", "--device", "tpu", "--steps", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "device must be" in err and "Traceback" not in err
+    assert not (folder / "w.pt").exists() and not (folder / "w.pt.ckpt").exists()

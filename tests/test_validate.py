@@ -9,6 +9,7 @@ from tensor_cosdi.io.triggers import AcquisitionPlan
 from tensor_cosdi.learn import dcosnet_train
 from tensor_cosdi.solvers import denoisers
 from tensor_cosdi.validate import (
+    axis_index,
     flag,
     increasing,
     integer,
@@ -16,6 +17,7 @@ from tensor_cosdi.validate import (
     option_types,
     precision,
     real_array,
+    seed,
 )
 
 
@@ -198,3 +200,26 @@ def test_wavelengths_with_nan_say_so():
         check_wavelengths_nm([400.0, np.nan])
     with pytest.raises(ValueError, match="got no finite values and 2 NaN or infinite$"):
         check_wavelengths_nm([np.nan, np.inf])
+
+
+def test_axis_index_counts_from_either_end_and_refuses_the_rest():
+    assert axis_index("axis", -1, 3) == 2 and axis_index("axis", np.int64(1), 3) == 1
+    assert axis_index("axis", np.array(0), 1) == 0
+    for bad in (3, -4, True, 1.0, "1", None):
+        with pytest.raises(ValueError, match=r"band_axis must be an integer in -3…2"):
+            axis_index("band_axis", bad, 3)
+
+
+def test_seed_is_none_a_count_or_a_generator():
+    g = np.random.default_rng(3)
+    assert seed("rng", None) is None and seed("rng", 7) == 7 and seed("rng", g) is g
+    assert seed("rng", np.uint32(5)) == 5
+    for bad in (True, -1, 2.5, "7", [1, 2]):
+        with pytest.raises(ValueError, match="rng must be None, an integer ≥ 0"):
+            seed("rng", bad)
+    # every seeded entry goes through it: a boolean seed is not the seed 1
+    with pytest.raises(ValueError, match="rng must be"):
+        tc.codes.random_binary((4, 4), rng=True)
+    assert np.array_equal(
+        tc.codes.random_binary((4, 4), rng=1), tc.codes.random_binary((4, 4), rng=1)
+    )

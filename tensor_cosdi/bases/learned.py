@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _backend as B
-from ..validate import real_array
+from ..validate import axis_index, integer, real_array
 from .matrices import _polish, dct
 from .transforms import BlockDense
 
@@ -99,6 +99,11 @@ def unfolding_gram(x: np.ndarray, mode: int) -> np.ndarray:
         if B.on_accelerator(x) and hasattr(x, "detach"):
             return B.unfolding_gram(x, mode)
         x = np.asarray(B.to_numpy(x))
+    if x.dtype.kind not in "biuf":
+        raise ValueError(f"unfolding_gram needs a tensor of real numbers, got dtype {x.dtype}")
+    if x.ndim == 0 or x.size == 0:
+        raise ValueError(f"unfolding_gram needs a tensor with entries, got shape {x.shape}")
+    mode = axis_index("mode", mode, x.ndim)
     n = x.shape[mode]
     pre, post = int(np.prod(x.shape[:mode])), int(np.prod(x.shape[mode + 1 :]))
     v = np.ascontiguousarray(x).reshape(pre, n, post)
@@ -110,6 +115,8 @@ def unfolding_gram(x: np.ndarray, mode: int) -> np.ndarray:
             blk = v[p0 : p0 + rows, :, c0 : c0 + cols].astype(np.float64)  # a small copy
             blk = blk.transpose(1, 0, 2).reshape(n, -1)
             gram += blk @ blk.T
+    if not np.isfinite(gram).all():  # NaN or inf anywhere in x reaches the Gram matrix
+        raise ValueError("unfolding_gram: the tensor contains NaN or inf")
     return gram
 
 
@@ -133,10 +140,11 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
     modes = range(len(shape)) if modes is None else modes
     out = {}
     for m in modes:
-        if not -len(shape) <= m < len(shape):
-            raise ValueError(f"mode {m} is not an axis of a tensor of shape {shape}")
-        m %= len(shape)
-        gram = unfolding_gram(tensor, m)
+        m = axis_index("mode", m, len(shape))
+        try:
+            gram = unfolding_gram(tensor, m)
+        except ValueError as exc:
+            raise ValueError(f"tucker_bases: {exc}".replace("unfolding_gram: ", "")) from None
         out[m] = _gram_basis(gram, "tucker_bases: the tensor contains NaN or inf")
     return out
 
@@ -146,9 +154,7 @@ def tucker_bases(tensor, modes=None) -> dict[int, np.ndarray]:
 
 def block_sizes(n: int, max_block: int) -> list[int]:
     """``n`` cut into ``⌈n / max_block⌉`` runs of near-equal length (they differ by at most 1)."""
-    n, max_block = int(n), int(max_block)
-    if n < 1 or max_block < 1:
-        raise ValueError(f"block_sizes needs n ≥ 1 and max_block ≥ 1, got {n}, {max_block}")
+    n, max_block = integer("n", n, low=1), integer("max_block", max_block, low=1)
     k = -(-n // max_block)
     return [n // k + (1 if i < n % k else 0) for i in range(k)]
 
@@ -158,11 +164,12 @@ def block_hosvd(tensor, mode: int, sizes) -> BlockDense:
     eigenvectors of the diagonal block ``k`` of the mode-``mode`` unfolding's Gram matrix
     (strongest first), i.e. the left singular vectors of the unfolding's rows in that run."""
     shape = np.shape(tensor)  # not copied to the host: only the Gram matrix is
-    if not -len(shape) <= mode < len(shape):
-        raise ValueError(f"mode {mode} is not an axis of a tensor of shape {shape}")
-    mode %= len(shape)
-    sizes = [int(s) for s in sizes]
-    if sum(sizes) != shape[mode] or min(sizes) < 1:
+    mode = axis_index("mode", mode, len(shape))
+    try:
+        sizes = [integer("a block size", s, low=1) for s in np.asarray(sizes, dtype=object).ravel()]
+    except TypeError:
+        raise ValueError(f"block sizes must be a sequence of integers, got {sizes!r}") from None
+    if sum(sizes) != shape[mode] or not sizes:
         raise ValueError(f"block sizes {sizes} do not cut an axis of {shape[mode]}")
     gram = unfolding_gram(tensor, mode)
     edges = np.cumsum([0] + sizes)

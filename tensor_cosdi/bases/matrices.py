@@ -10,20 +10,46 @@ import numpy as np
 import scipy.fft
 
 from .. import _backend as B
-from ..validate import real_array
+from ..validate import number, real_array
 
 __all__ = ["is_orthonormal", "identity", "dct", "wavelet", "wavelet_level", "AUTO_COARSEST"]
 
 
+#: Largest side of a dense basis matrix (16384² float64 is 2 GiB).
+MAX_BASIS_SIZE = 16384
+
+
 def _size(n) -> int:
-    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
-        raise ValueError(f"basis size must be a positive integer, got {n!r}")
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or not 1 <= n <= MAX_BASIS_SIZE:
+        raise ValueError(
+            f"basis size n must be a positive integer ≤ {MAX_BASIS_SIZE} (a dense n × n matrix), "
+            f"got {n!r}"
+        )
     return int(n)
 
 
+def _orthogonal_wavelet(name: str):
+    """The PyWavelets wavelet ``name``, or a ``ValueError`` unless it is an orthogonal one."""
+    import pywt
+
+    if not isinstance(name, str):
+        raise ValueError(
+            f"the wavelet must be a PyWavelets name such as 'sym8', got {type(name).__name__} "
+            f"{name!r}"
+        )
+    try:
+        w = pywt.Wavelet(name)
+    except ValueError:
+        raise ValueError(f"unknown wavelet {name!r}; see pywt.wavelist(kind='discrete')") from None
+    if not w.orthogonal:
+        raise ValueError(f"wavelet {name!r} is not orthogonal; its matrix would not be orthonormal")
+    return w
+
+
 def is_orthonormal(psi, *, atol: float = 1e-10) -> bool:
-    """True when ``psi`` is square with ``ΨᵀΨ = I`` within ``atol``."""
+    """True when ``psi`` is square with ``ΨᵀΨ = I`` within ``atol`` (a NaN entry: False)."""
     m = real_array("psi", B.to_numpy(psi), finite=False)
+    atol = number("atol", atol, low=0)
     return bool(
         m.ndim == 2
         and m.shape[0] == m.shape[1]
@@ -74,9 +100,8 @@ def wavelet_level(n: int, name: str = "sym8", level="auto") -> int:
     >>> wavelet_level(64), wavelet_level(96), wavelet_level(64, level="boundary")
     (6, 5, 2)
     """
-    import pywt
-
     n = _size(n)
+    w = _orthogonal_wavelet(name)
     if isinstance(level, str):
         if level == "auto":  # as deep as periodisation allows, down to AUTO_COARSEST coefficients
             depth = 0
@@ -84,7 +109,9 @@ def wavelet_level(n: int, name: str = "sym8", level="auto") -> int:
                 depth += 1
             return depth
         if level == "boundary":  # no atom wider than the signal (PyWavelets' maximum)
-            depth = pywt.dwt_max_level(n, pywt.Wavelet(name).dec_len)
+            import pywt
+
+            depth = pywt.dwt_max_level(n, w.dec_len)
             while depth > 0 and n % 2**depth:
                 depth -= 1
             return depth
@@ -131,17 +158,7 @@ def wavelet(n: int, name: str = "sym8", *, level="auto") -> np.ndarray:
     import pywt
 
     n = _size(n)
-    if not isinstance(name, str):
-        raise ValueError(
-            f"the wavelet must be a PyWavelets name such as 'sym8', got {type(name).__name__} "
-            f"{name!r}"
-        )
-    try:
-        w = pywt.Wavelet(name)
-    except ValueError:
-        raise ValueError(f"unknown wavelet {name!r}; see pywt.wavelist(kind='discrete')") from None
-    if not w.orthogonal:
-        raise ValueError(f"wavelet {name!r} is not orthogonal; its matrix would not be orthonormal")
+    w = _orthogonal_wavelet(name)
     level = wavelet_level(n, name, level)
     if level == 0:
         return np.eye(n)

@@ -130,11 +130,18 @@ def run_reconstruct(args) -> int:
     """Either path; with ``--preview``, the PNG's name and matplotlib are checked first and the
     preview is written from the bundle just saved."""
     points = parse_points(args.points)
+    if points and not args.preview:
+        raise ValueError("--points picks the spectra of --preview; add --preview or drop them")
     target = preview_target(args.out, None, args.force) if args.preview else None
     rc = _reconstruct(args)
     if target is not None:
         write_preview(args.out, target, points, None, args.force)
     return rc
+
+
+#: Options of ``reconstruct``'s frames path and their unset values: given on the direct path,
+#: they are an error (they would do nothing there).
+FRAMES_ONLY = {"pattern": "*", "dark": None, "flat": None, "roi": None, "binning": 1}
 
 
 def _reconstruct(args) -> int:
@@ -144,6 +151,15 @@ def _reconstruct(args) -> int:
             raise ValueError(
                 "give either --system/--mask/--measurement (direct path) or a calibration bundle "
                 "and frames, not both"
+            )
+        frames_only = [
+            f"--{name}" for name, unset in FRAMES_ONLY.items() if getattr(args, name) != unset
+        ]
+        if frames_only:  # each would be ignored on a measurement file: say so, never drop it
+            verb = "applies" if len(frames_only) == 1 else "apply"
+            raise ValueError(
+                f"{', '.join(frames_only)} {verb} to frames (a calibration bundle and --frames); "
+                "a file given with --measurement is used as it is"
             )
         return _reconstruct_direct(args)
     if not args.calibration or not args.frames:

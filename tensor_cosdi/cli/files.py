@@ -86,7 +86,8 @@ def parse_shifts(text: str, n):
     if step is not None:
         if not np.isfinite(step):
             raise ValueError(what)
-        return int(step) if step.is_integer() else step
+        # an integral step as an int (the integer shear kernel), unless it is too large to be one
+        return int(step) if step.is_integer() and abs(step) < 2**53 else step
     shifts = _values(text, "--shift", what)
     if shifts is None:
         raise ValueError(what)

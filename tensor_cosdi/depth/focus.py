@@ -7,7 +7,7 @@ import numbers
 import numpy as np
 from scipy import ndimage
 
-from ..validate import number, real_array
+from ..validate import axis_index, number, real_array
 
 __all__ = ["focus_measure", "depth_from_focus"]
 
@@ -26,7 +26,7 @@ def focus_measure(image, *, window: int = 5, sigma: float = 0.0):
         raise ValueError(f"image must be (H, W) or (H, W, C), got {np.shape(image)}")
     if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")
-    number("sigma", sigma, low=0)
+    number("sigma", sigma, low=0, high=max(x.shape[:2]))  # wider than the image: nothing left
     if not np.isfinite(x).all():
         raise ValueError("image must hold finite values")
     out = np.zeros(x.shape[:2])
@@ -72,7 +72,8 @@ def depth_from_focus(
     >>> bool(np.mean(np.round(depth_from_focus(stack)) == 1) > 0.95)
     True
     """
-    x = np.moveaxis(real_array("stack", stack, finite=False), axis, -1)
+    x = real_array("stack", stack, finite=False)
+    x = np.moveaxis(x, axis_index("axis", axis, max(x.ndim, 1)), -1) if x.ndim else x
     if x.ndim not in (3, 4):
         raise ValueError(
             f"stack must be (H, W, Nz) or (H, W, C, Nz) along axis={axis}, got {np.shape(stack)}"

@@ -59,6 +59,10 @@ def _views(views):
     return L
 
 
+#: Most candidate disparities :func:`disparity_from_views` tries (each warps every view).
+MAX_CANDIDATES = 2001
+
+
 def disparity_cost_volume(
     views, disparities, *, window: int = 5, order: int = 3, shiftable: bool = True
 ):
@@ -203,8 +207,7 @@ def guided_filter(guide, src, *, radius: int = 4, eps: float = 1e-4):
         raise ValueError(f"guide must be (H, W) and src (…, H, W); got {I.shape} and {p.shape}")
     if isinstance(radius, bool) or not isinstance(radius, numbers.Integral) or radius < 0:
         raise ValueError(f"radius must be an integer ≥ 0, got {radius!r}")
-    if not (np.isfinite(eps) and eps > 0):
-        raise ValueError(f"eps must be > 0, got {eps!r}")
+    number("eps", eps, low=0, low_open=True)
     if not (np.isfinite(I).all() and np.isfinite(p).all()):
         raise ValueError("guide and src must hold finite values (NaN would spread over boxes)")
     if radius == 0:
@@ -300,7 +303,13 @@ def disparity_from_views(
         raise ValueError(f"step must be in (0, max_disparity], got {step!r}")
     if isinstance(window, bool) or not isinstance(window, numbers.Integral) or window < 1:
         raise ValueError(f"window must be a positive integer, got {window!r}")  # every method
-    n = int(np.floor(max_disparity / step + 1e-9))
+    half = np.floor(max_disparity / step + 1e-9)  # a float: 1e308 / 0.1 is no integer
+    if 2 * half + 1 > MAX_CANDIDATES:
+        raise ValueError(
+            f"max_disparity={max_disparity:g} with step={step:g} asks for {2 * half + 1:.3g} "
+            f"candidate disparities; at most {MAX_CANDIDATES} (raise step or lower max_disparity)"
+        )
+    n = int(half)
     cand = step * np.arange(-n, n + 1)
     if method == "ssd":
         cost = disparity_cost_volume(views, cand, window=window, order=order, shiftable=shiftable)
@@ -336,7 +345,7 @@ def textured_mask(image, *, threshold: float = 0.05, sigma: float = 1.0):
     if not np.isfinite(x).all():
         raise ValueError("image must hold finite values")
     number("threshold", threshold, low=0, high=1)
-    number("sigma", sigma, low=0)
+    number("sigma", sigma, low=0, high=max(x.shape))  # wider than the image: nothing left
     g = ndimage.gaussian_gradient_magnitude(x, sigma)
     return g >= threshold * max(g.max(), np.finfo(float).tiny)
 
@@ -348,11 +357,20 @@ def depth_from_disparity(disparity, *, baseline_mm: float, focal_px: float, offs
     ``focal_px`` the focal length in pixels, ``offset = d0`` the disparity of
     the plane at infinity (for a lenslet camera focused at a finite
     distance, the disparity of the focal plane is 0 and ``d0`` is negative;
-    calibrate it with a far target).  Pixels with ``d ≤ d0`` get ``inf``.
+    calibrate it with a far target).  Pixels with ``d ≤ d0`` get ``inf``; a NaN disparity (an
+    invalid pixel) stays NaN.
     """
-    for name, v in (("baseline_mm", baseline_mm), ("focal_px", focal_px)):
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be > 0, got {v!r}")
-    d = real_array("disparity", disparity, finite=False) - offset
-    with np.errstate(divide="ignore"):
-        return np.where(d > 0, focal_px * baseline_mm / np.where(d > 0, d, 1.0), np.inf)
+    fb = number("baseline_mm", baseline_mm, low=0, low_open=True) * number(
+        "focal_px", focal_px, low=0, low_open=True
+    )
+    d0 = number("offset", offset)
+    d = real_array("disparity", disparity, finite=False)
+    if np.isinf(d).any():
+        raise ValueError(
+            f"disparity holds {int(np.isinf(d).sum())} infinite values; expected finite pixels "
+            "per view step (NaN marks an invalid pixel)"
+        )
+    d = d - d0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        z = np.where(d > 0, fb / np.where(d > 0, d, 1.0), np.inf)
+    return np.where(np.isnan(d), np.nan, z)

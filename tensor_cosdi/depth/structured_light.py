@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validate import real_array
+from ..validate import axis_index, number, real_array
 
 __all__ = [
     "wrapped_phase",
@@ -28,9 +28,20 @@ __all__ = [
 ]
 
 
+def _phase(name, value):
+    """A phase map: real numbers, NaN allowed (an invalid pixel stays NaN), ±inf refused."""
+    p = real_array(name, value, finite=False)
+    n_inf = int(np.isinf(p).sum())
+    if n_inf:
+        raise ValueError(
+            f"{name} holds {n_inf} infinite values; expected radians (NaN marks an invalid pixel)"
+        )
+    return p
+
+
 def wrap(phase):
-    """Wrap to ``(−π, π]``."""
-    p = real_array("phase", phase, finite=False)
+    """Wrap to ``(−π, π]`` (a NaN, an invalid pixel, stays NaN)."""
+    p = _phase("phase", phase)
     w = np.mod(p + np.pi, 2 * np.pi) - np.pi
     return np.where(w == -np.pi, np.pi, w)
 
@@ -39,7 +50,7 @@ def _frames(frames, axis, what="frames"):
     x = real_array("frames", frames, finite=False)
     if x.ndim < 1:
         raise ValueError(f"{what} must be an array with a step axis, got a scalar")
-    x = np.moveaxis(x, axis, -1)
+    x = np.moveaxis(x, axis_index("axis", axis, x.ndim), -1)
     if x.shape[-1] < 3:
         raise ValueError(f"phase shifting needs K ≥ 3 frames along axis {axis}, got {x.shape[-1]}")
     if not np.all(np.isfinite(x)):
@@ -107,14 +118,13 @@ def temporal_unwrap(wrapped, reference, ratio):
     ``Φ = φ + 2π·round((ratio·Φ_ref − φ) / 2π)`` — the fringe order of Eq. 20/24
     (``ratio = ν_h / ν_l``).  Correct where ``|ratio·(Φ_ref error)| < π``.
     """
-    w = real_array("wrapped", wrapped, finite=False)
-    r = real_array("reference", reference, finite=False)
+    w = _phase("wrapped", wrapped)
+    r = _phase("reference", reference)
     if w.shape != r.shape:
         raise ValueError(
             f"wrapped phase {w.shape} and reference {r.shape} must have the same shape"
         )
-    if not (np.isfinite(ratio) and ratio > 0):
-        raise ValueError(f"ratio must be a frequency ratio > 0, got {ratio!r}")
+    ratio = number("ratio", ratio, low=0, low_open=True)
     order = np.round((ratio * r - w) / (2 * np.pi))
     return w + 2 * np.pi * order
 
@@ -157,7 +167,7 @@ def heterodyne_unwrap(wrapped, frequencies):
     >>> bool(np.allclose(heterodyne_unwrap(wrap(Phi), [8.0, 7.2]), Phi[..., 0]))
     True
     """
-    w = real_array("wrapped", wrapped, finite=False)
+    w = _phase("wrapped", wrapped)
     f = real_array("frequencies", frequencies, finite=False).reshape(-1)
     if w.shape[-1:] != f.shape:
         raise ValueError(
@@ -206,9 +216,14 @@ def decode_gray_code(frames, threshold=0.5, *, axis: int = -1):
     """
     from ..optics.fringes import gray_to_binary
 
-    x = np.moveaxis(real_array("frames", frames, finite=False), axis, -1)
+    x = real_array("frames", frames, finite=False)
+    if x.ndim < 1:
+        raise ValueError("Gray-code frames must be an array with a bit axis, got a scalar")
+    x = np.moveaxis(x, axis_index("axis", axis, x.ndim), -1)
     if not np.all(np.isfinite(x)):
         raise ValueError("Gray-code frames contain NaN or inf")
+    if isinstance(threshold, (bool, np.bool_)):
+        raise ValueError(f"threshold must be a number or a per-pixel map, got {threshold!r}")
     t = real_array("threshold", threshold, finite=False)
     if not np.all(np.isfinite(t)):
         raise ValueError("threshold must be finite (a number or a per-pixel map)")
@@ -227,7 +242,7 @@ def unwrap_gray_code(wrapped, labels):
     — so a label that is off by one at a stripe edge never changes the
     result (see :func:`~tensor_cosdi.optics.gray_code_patterns`).
     """
-    w = real_array("wrapped", wrapped, finite=False)
+    w = _phase("wrapped", wrapped)
     h = np.asarray(labels)
     if w.shape != h.shape:
         raise ValueError(f"wrapped phase {w.shape} and labels {h.shape} must have the same shape")
@@ -283,14 +298,13 @@ def phase_to_height(phase, reference_phase, *, phase_per_height: float):
     planes of known height.  The linear model holds when the height is small
     next to the camera/projector distance (the thesis' ~1 cm objects).
     """
-    if not (np.isfinite(phase_per_height) and phase_per_height != 0):
-        raise ValueError(
-            f"phase_per_height must be a finite non-zero number, got {phase_per_height!r}"
-        )
-    p = real_array("phase", phase, finite=False)
-    r = real_array("reference_phase", reference_phase, finite=False)
+    k = number("phase_per_height", phase_per_height)
+    if k == 0:
+        raise ValueError("phase_per_height must be a finite non-zero number, got 0")
+    p = _phase("phase", phase)
+    r = _phase("reference_phase", reference_phase)
     try:
-        return (p - r) / phase_per_height
+        return (p - r) / k
     except ValueError:
         raise ValueError(
             f"phase {p.shape} and reference_phase {r.shape} do not broadcast"

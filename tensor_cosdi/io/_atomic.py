@@ -8,7 +8,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from ..validate import output_folder
+from ..validate import flag, output_folder
 
 
 def _fsync_path(path) -> None:
@@ -34,6 +34,7 @@ def atomic_write(path, write, *, overwrite: bool = False, suffix: str | None = N
     ``FileExistsError`` (checked before writing and, atomically, at the end);
     with it, the old file is replaced only once the new one is complete.
     """
+    overwrite = flag("overwrite", overwrite)  # "no" is not False: never a guess about a file
     p = Path(path)
     output_folder(p)
     if p.is_dir():
@@ -73,6 +74,7 @@ def atomic_write_many(items, *, overwrite: bool = False) -> list[Path]:
     writing (full disk, I/O error) removes the temporaries and leaves every
     existing file as it was.
     """
+    overwrite = flag("overwrite", overwrite)
     items = [(Path(p), w) for p, w in items]
     for p, _ in items:
         output_folder(p)
@@ -117,6 +119,7 @@ def atomic_write_folder(path, write, *, overwrite: bool = False) -> Path:
     """
     import shutil
 
+    overwrite = flag("overwrite", overwrite)
     p = Path(path)
     output_folder(p)
     if p.exists() and not overwrite:

@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
-from ..validate import output_folder
+from ..validate import flag, output_folder
 from ._atomic import atomic_write
 
 #: Extensions written and read as HDF5 bundles (everything else: ``.npz``).
@@ -204,6 +204,7 @@ def save_bundle(
     """
     from .._version import __version__
 
+    overwrite = flag("overwrite", overwrite)
     p = Path(path)
     if p.suffix.lower() not in (".npz",) + H5_SUFFIXES:  # never a name other than the one given
         raise ValueError(

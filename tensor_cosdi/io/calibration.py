@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from ..validate import real_array
+from ..validate import number, real_array
 
 __all__ = [
     "shifts_from_line_frames",
@@ -222,7 +222,10 @@ class Registration:
 
 def shift_code(code: np.ndarray, rows: float, cols: float) -> np.ndarray:
     """``code`` moved by ``(rows, cols)`` pixels (linear interpolation, edges repeated)."""
-    shift = (rows, cols) + (0.0,) * (code.ndim - 2)
+    code = real_array("code", code)
+    if code.ndim < 2:
+        raise ValueError(f"code must have (rows, columns) axes, got shape {code.shape}")
+    shift = (number("rows", rows), number("cols", cols)) + (0.0,) * (code.ndim - 2)
     return ndimage.shift(code, shift, order=1, mode="nearest")
 
 
@@ -254,9 +257,8 @@ def mirror_symmetric(shifts, tol: float = 0.05) -> bool:
         s = np.array([np.nan])
     if s.size == 0 or not np.all(np.isfinite(s)):
         raise ValueError(f"shifts must be finite numbers, got {shifts!r}")
-    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.number)) or not tol >= 0:
-        raise ValueError(f"tol must be a number of pixels ≥ 0, got {tol!r}")
-    return bool(np.allclose(np.sort(s.max() - s), np.sort(s), rtol=0.0, atol=float(tol)))
+    tol = number("tol", tol, low=0)
+    return bool(np.allclose(np.sort(s.max() - s), np.sort(s), rtol=0.0, atol=tol))
 
 
 def _texture(a: np.ndarray) -> np.ndarray:

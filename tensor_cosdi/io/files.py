@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
-from ..validate import real_array
+from ..validate import flag, real_array
 from ._atomic import atomic_write, atomic_write_folder
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
@@ -429,6 +429,7 @@ def _write_envi_atomic(path: Path, cube, wl, metadata, overwrite):
     import shutil
     import tempfile
 
+    overwrite = flag("overwrite", overwrite)
     img_path = path.with_suffix(".img")
     for p in (path, img_path):
         if p.exists() and not overwrite:

@@ -29,11 +29,17 @@ from ..validate import real_array
 __all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count", "dual_camera_frames"]
 
 
+def _imager(system):
+    if not hasattr(type(system), "frame_count"):
+        raise ValueError(
+            f"system: expected an imager (tensor_cosdi.systems), got {type(system).__name__}"
+        )
+    return system
+
+
 def frame_count(system) -> int:
     """How many sensor frames one measurement of ``system`` takes (``system.frame_count``)."""
-    if not hasattr(type(system), "frame_count"):
-        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
-    return system.frame_count
+    return _imager(system).frame_count
 
 
 def frames_to_measurement(system, frames):
@@ -42,19 +48,19 @@ def frames_to_measurement(system, frames):
     ``system.frames_to_measurement``; raises ``ValueError`` naming the
     expected frame count and shape when they do not match.
     """
-    return system.frames_to_measurement(frames)
+    return _imager(system).frames_to_measurement(frames)
 
 
 def measurement_to_frames(system, measurement) -> np.ndarray:
     """``system``'s measurement → the ``(H, W, N)`` stack of sensor frames (the inverse of
     :func:`frames_to_measurement`)."""
-    return system.measurement_to_frames(measurement)
+    return _imager(system).measurement_to_frames(measurement)
 
 
 def dual_camera_frames(cassi_frame, pan_frame) -> np.ndarray:
     """The two frames of a dual-camera CASSI as one ``(Nx, Ny + S, 2)`` stack (pan zero-padded)."""
-    c = real_array("cassi_frame", cassi_frame, finite=False)
-    p = real_array("pan_frame", pan_frame, finite=False)
+    c = real_array("cassi_frame", cassi_frame)
+    p = real_array("pan_frame", pan_frame)
     if c.ndim != 2 or p.ndim != 2 or p.shape[0] != c.shape[0] or p.shape[1] > c.shape[1]:
         raise ValueError(
             f"need a CASSI frame (Nx, Ny + S) and a panchromatic frame (Nx, Ny); got {c.shape}, "

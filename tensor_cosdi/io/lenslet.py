@@ -184,6 +184,21 @@ class LensletGrid:
         raise ValueError(f"layout must be 'interleaved' or 'tiled', got {layout!r}")
 
 
+def _pitch_range(pitch_range) -> tuple[float, float]:
+    """``(low, high)`` lenslet pitches in pixels with ``2 ≤ low < high``, or a ``ValueError``."""
+    try:
+        lo, hi = pitch_range
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"pitch_range must be (low, high) pitches in pixels, got {pitch_range!r}"
+        ) from None
+    lo = number("pitch_range's low end", lo, low=2)
+    hi = number("pitch_range's high end", hi, low=2)
+    if not lo < hi:
+        raise ValueError(f"pitch_range must have low < high, got {pitch_range!r}")
+    return lo, hi
+
+
 def _coarse_lattice(img, pitch_range):
     """Pitch and rotation from the strongest FFT peak inside the expected frequency band."""
     h, w = img.shape
@@ -254,6 +269,8 @@ def calibrate_lenslet_grid(
     img = real_array("white_frame", white_frame, finite=False)
     if img.ndim != 2:
         raise ValueError(f"white_frame must be a 2-D frame, got shape {img.shape}")
+    pitch_range = _pitch_range(pitch_range)
+    min_peak = number("min_peak", min_peak, low=0)
     if not np.all(np.isfinite(img)):
         raise ValueError("white_frame contains NaN or inf")
     if dark is not None:
@@ -274,6 +291,11 @@ def calibrate_lenslet_grid(
     size = max(3, int(round(pitch0 * 0.7)))
     peaks = (smooth == ndimage.maximum_filter(smooth, size=size)) & (smooth > 0)
     pr, pc = np.nonzero(peaks)
+    if pr.size == 0:
+        raise ValueError(
+            "white_frame has no bright lenslet discs (no positive maxima): is it inverted, or a "
+            "dark frame?"
+        )
     vals = smooth[pr, pc]
     keep = vals >= min_peak * np.percentile(vals, 90)
     pr, pc = pr[keep], pc[keep]

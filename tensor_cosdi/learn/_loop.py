@@ -60,6 +60,32 @@ def check_config(cfg, positive_ints) -> None:
         raise ValueError(f"need 0 < lr_end ≤ lr, got {cfg.lr_end}, {cfg.lr}")
 
 
+def training_device(torch, device):
+    """``device`` (``None``: CUDA when available, else the CPU) as a ``torch.device`` this
+    PyTorch can run on, or a one-line ``ValueError`` naming what it has."""
+    if device is None:
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError, ValueError):
+        raise ValueError(
+            f"device must be a PyTorch device such as 'cpu' or 'cuda', got {device!r}"
+        ) from None
+    if dev.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(
+                f"device {device!r}: this PyTorch ({torch.__version__}) sees no CUDA GPU; use "
+                "--device cpu"
+            )
+        if dev.index is not None and dev.index >= torch.cuda.device_count():
+            raise ValueError(
+                f"device {device!r}: only {torch.cuda.device_count()} CUDA device(s) here"
+            )
+    elif dev.type != "cpu":
+        raise ValueError(f"device must be 'cpu' or 'cuda' (or 'cuda:N'), got {device!r}")
+    return dev
+
+
 def check_stop_after(stop_after):
     if stop_after is not None and (
         isinstance(stop_after, bool) or not isinstance(stop_after, int) or stop_after < 1
@@ -132,7 +158,7 @@ def run(
 
     out, ckpt_path = check_out(out, force)
     check_stop_after(stop_after)
-    dev = torch.device(device or ("cuda" if torch.cuda.is_available() else "cpu"))
+    dev = training_device(torch, device)
     state = None
     if resume:
         if not ckpt_path.is_file():
@@ -210,13 +236,21 @@ def run(
     net.train()
     while step < last:
         loss = batch_loss(torch, net, rng, dev, cfg, data, step)
+        value = loss.item()
+        if not math.isfinite(value):  # diverged: the last checkpoint is kept as it was
+            bar.close()
+            kept = f"; the last checkpoint ({ckpt_path}) is kept" if ckpt_path.is_file() else ""
+            raise ValueError(
+                f"training diverged at step {step + 1} (loss {value}); lower the learning "
+                f"rate (lr={cfg.lr:g}){kept}"
+            )
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(net.parameters(), 1.0)
         opt.step()
         sched.step()
         step += 1
-        losses.append(loss.item())
+        losses.append(value)
         bar.update(1)
         if step % 20 == 0:
             bar.set_postfix(loss=f"{np.mean(losses[-20:]):.2e}")

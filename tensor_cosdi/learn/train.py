@@ -47,6 +47,12 @@ __all__ = [
 ]  # fmt: skip
 
 
+#: Largest training patch side (the CAVE scenes are 512 × 512).
+MAX_PATCH = 512
+#: Most memory one batch of clean patches may take (before the network's activations).
+MAX_BATCH_BYTES = 2 * 2**30
+
+
 @dataclass(frozen=True)
 class TrainConfig:
     """Every option of a training run (stored with the weights)."""
@@ -107,8 +113,23 @@ class TrainConfig:
         d = self.density_spread
         if isinstance(d, bool) or not isinstance(d, (int, float)) or not 0 <= d < 0.5:
             raise ValueError(f"density_spread must be a number in [0, 0.5), got {d!r}")
-        if self.patch < 8 or self.patch % 2:
-            raise ValueError(f"patch must be an even size ≥ 8, got {self.patch}")
+        if self.patch < 8 or self.patch % 2 or self.patch > MAX_PATCH:
+            raise ValueError(
+                f"patch must be an even size in 8…{MAX_PATCH} (the training scenes' side), got "
+                f"{self.patch}"
+            )
+        if self.max_shift > self.patch:
+            raise ValueError(
+                f"max_shift must be ≤ patch ({self.patch} px: a larger shift separates the bands "
+                f"entirely), got {self.max_shift}"
+            )
+        batch_bytes = self.batch * self.patch**2 * 31 * 4  # float32, up to 31 bands
+        if batch_bytes > MAX_BATCH_BYTES:
+            raise ValueError(
+                f"batch={self.batch} of {self.patch}×{self.patch} patches takes "
+                f"{batch_bytes / 2**30:.1f} GiB a batch; at most {MAX_BATCH_BYTES / 2**30:.0f} "
+                "GiB (lower batch or patch)"
+            )
         for name in ("coded_fraction", "illumination", "zoom"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= 1:

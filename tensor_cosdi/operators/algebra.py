@@ -45,6 +45,10 @@ __all__ = [
 
 
 # --------------------------------------------------------------------- helpers
+#: Longest axis a shape may have (2³¹ − 1: beyond, an axis is a typo or an overflow).
+MAX_AXIS_LENGTH = 2**31 - 1
+
+
 def validate_shape(shape, what: str = "shape") -> tuple[int, ...]:
     """Return ``shape`` as a tuple of positive Python ints or raise ``ValueError``."""
     if isinstance(shape, numbers.Integral):
@@ -65,6 +69,10 @@ def validate_shape(shape, what: str = "shape") -> tuple[int, ...]:
                 )
         if n <= 0:
             raise ValueError(f"{what} must contain positive integers, got {shape!r} ({n} ≤ 0)")
+        if n > MAX_AXIS_LENGTH:
+            raise ValueError(
+                f"{what} must contain integers ≤ {MAX_AXIS_LENGTH}, got {shape!r}"[:300]
+            )
         out.append(int(n))
     if not out:
         raise ValueError(f"{what} must have at least one axis, got {shape!r}")
@@ -588,6 +596,8 @@ class Scaled(TensorOperator):
     """``α A`` for a real scalar ``α``."""
 
     def __init__(self, alpha: float, op: TensorOperator):
+        if not isinstance(op, TensorOperator):
+            raise ValueError(f"Scaled needs a TensorOperator to scale, got {type(op).__name__}")
         super().__init__(op.input_shape, op.output_shape)
         a = _as_scalar(alpha)
         if a is None or not np.isfinite(a):

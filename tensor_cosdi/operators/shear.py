@@ -40,6 +40,11 @@ def parse_shifts(shifts, n_bands: int) -> np.ndarray:
         step = float(np.asarray(shifts))
         if not np.isfinite(step) or step < 0:
             raise ValueError(f"shift step must be a finite number ≥ 0, got {shifts!r}")
+        if step * (n_bands - 1) > MAX_SHIFT_PX:  # (before the product can overflow)
+            raise ValueError(
+                f"a step of {step:g} px over {n_bands} bands shifts the last band by "
+                f"{step * (n_bands - 1):g} px; at most {MAX_SHIFT_PX} px"
+            )
         s = step * np.arange(n_bands)
     else:
         s = real_array("shifts", shifts, finite=False).reshape(-1)
@@ -195,7 +200,15 @@ def shear_bands(cube, shifts=1, *, axis: int = 1, band_axis: int = 2):
 
 def unshear_bands(measurement, n_columns: int, shifts=1, *, axis: int = 1, band_axis: int = 2):
     """Adjoint of :func:`shear_bands`: cut each band back to ``n_columns`` columns."""
-    shape = list(tl.shape(measurement))
-    shape[axis] = n_columns
+    if not (hasattr(measurement, "shape") or isinstance(measurement, (list, tuple))):
+        raise ValueError(
+            f"measurement must be an array, got {type(measurement).__name__} {measurement!r}"[:200]
+        )
+    shape = (
+        list(tl.shape(measurement)) if tl.is_tensor(measurement) else list(np.shape(measurement))
+    )
+    if not shape:
+        raise ValueError("measurement must be an array with rows and columns, got a scalar")
+    shape[_normalize_axis(axis, len(shape))] = validate_shape((n_columns,), "n_columns")[0]
     op = Shear(shape, shifts, axis=axis, band_axis=band_axis)
     return op.adjoint(measurement)

@@ -27,7 +27,7 @@ import scipy.linalg
 import tensorly as tl
 
 from .. import _backend as B
-from ..validate import real_array
+from ..validate import flag, integer, number, real_array
 
 __all__ = [
     "Diagonal",
@@ -67,7 +67,7 @@ class Diagonal(_Structure):
 
     def __init__(self, d: np.ndarray):
         super().__init__()
-        self.d = real_array("the diagonal", d, finite=False)
+        self.d = real_array("the diagonal", d)
 
     def solve(self, b, mu):
         denom = self._cached(("den", mu) + B.context_key(b), lambda: B.tensor_like(self.d + mu, b))
@@ -305,6 +305,16 @@ def conjugate_gradient(
     before the tolerance, unless ``warn=False`` (a deliberately inexact solve: a fixed
     number of warm-started steps inside an outer iteration).
     """
+    rtol = number("rtol", rtol, low=0, high=1)
+    maxiter = None if maxiter is None else integer("maxiter", maxiter, low=1)
+    warn = flag("warn", warn)
+    if not (hasattr(b, "shape") and hasattr(b, "dtype")) or (
+        isinstance(b, np.ndarray) and b.dtype.kind not in "iuf"
+    ):
+        raise ValueError(
+            f"b must be a tensor of real numbers, got {type(b).__name__} "
+            f"{getattr(b, 'dtype', '')}".rstrip()
+        )
     n = int(np.prod(tl.shape(b)))
     if maxiter is None:
         maxiter = int(min(max(10 * n, 100), 10_000))
@@ -313,6 +323,8 @@ def conjugate_gradient(
     p = r
     rs = float(tl.sum(r * r))
     bnorm2 = float(tl.sum(b * b))
+    if not np.isfinite(bnorm2):
+        raise ValueError("conjugate_gradient: b holds NaN or inf (or overflows when squared)")
     if bnorm2 == 0.0:
         return x
     tol2 = (rtol**2) * bnorm2

@@ -16,7 +16,7 @@ import numbers
 
 import numpy as np
 
-from ..validate import real_array
+from ..validate import number, real_array
 
 __all__ = [
     "projector_phase",
@@ -30,12 +30,19 @@ __all__ = [
 #: The most Gray-code bits :func:`gray_code_patterns` and :func:`gray_to_binary` take: the
 #: labels are int64.
 MAX_GRAY_BITS = 62
+#: The most phase steps :func:`phase_shift_patterns` makes (one full frame each).
+MAX_STEPS = 1024
 
 
 def _steps(n_steps):
-    if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
+    if (
+        isinstance(n_steps, bool)
+        or not isinstance(n_steps, numbers.Integral)
+        or not 3 <= n_steps <= MAX_STEPS
+    ):
         raise ValueError(
-            f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}"
+            f"n_steps must be an integer in 3…{MAX_STEPS} (phase shifting needs 3 steps), got "
+            f"{n_steps!r}"
         )
     return int(n_steps)
 
@@ -62,9 +69,16 @@ def projector_phase(shape, frequencies, *, axis: int = 1) -> np.ndarray:
     >>> projector_phase((1, 4), 1.0)[0, :, 0].round(4).tolist()
     [0.0, 1.5708, 3.1416, 4.7124]
     """
-    if len(tuple(shape)) != 2 or any(int(s) < 1 for s in shape):
-        raise ValueError(f"shape must be (H, W) with positive sizes, got {shape!r}")
-    if axis not in (0, 1):
+    try:
+        dims = tuple(shape)
+    except TypeError:
+        dims = ()
+    if len(dims) != 2 or not all(
+        isinstance(s, numbers.Integral) and not isinstance(s, (bool, np.bool_)) and s >= 1
+        for s in dims
+    ):
+        raise ValueError(f"shape must be (H, W) with positive integer sizes, got {shape!r}")
+    if isinstance(axis, (bool, np.bool_)) or axis not in (0, 1):
         raise ValueError(f"axis must be 0 or 1, got {axis!r}")
     f = np.atleast_1d(real_array("frequencies", frequencies, finite=False))
     if f.ndim != 1 or not f.size or not np.all(np.isfinite(f)) or np.any(f <= 0):
@@ -100,7 +114,8 @@ def phase_shift_patterns(
     [1.0, 0.5, 0.0, 0.5]
     """
     K = _steps(n_steps)
-    if not (np.isfinite(offset) and np.isfinite(amplitude) and 0 <= amplitude <= offset):
+    offset, amplitude = number("offset", offset), number("amplitude", amplitude)
+    if not 0 <= amplitude <= offset:
         raise ValueError(
             f"need 0 ≤ amplitude ≤ offset (light is ≥ 0), got offset={offset!r}, "
             f"amplitude={amplitude!r}"
@@ -119,9 +134,8 @@ def phase_shift_patterns(
 
 def gray_code_bits(n_periods: float) -> int:
     """Number of Gray-code patterns that label every half period of ``n_periods`` fringes."""
-    if not (np.isfinite(n_periods) and n_periods > 0):
-        raise ValueError(f"n_periods must be > 0, got {n_periods!r}")
-    return max(1, int(np.ceil(np.log2(2 * n_periods))))
+    n = number("n_periods", n_periods, low=0, low_open=True, high=2.0 ** (MAX_GRAY_BITS - 1))
+    return max(1, int(np.ceil(np.log2(2 * n))))
 
 
 def gray_code_patterns(

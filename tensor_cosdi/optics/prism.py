@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..validate import real_array
+from ..validate import number, real_array
 from .glass import _glass
 
 __all__ = ["DoubleAmiciPrism", "NoDesign", "THESIS_FIELD_DEG"]
@@ -70,6 +70,7 @@ class DoubleAmiciPrism:
             v = getattr(self, name)
             if not (
                 isinstance(v, (int, float, np.floating, np.integer))
+                and not isinstance(v, (bool, np.bool_))
                 and np.isfinite(v)
                 and 0 < v < 180
             ):
@@ -138,8 +139,7 @@ class DoubleAmiciPrism:
         ``field_deg`` is the full angular field (thesis: 2.29°, a 4 mm detector
         behind a 100 mm lens); ``n_angles`` evenly spaced incidences.
         """
-        if not (np.isfinite(field_deg) and field_deg >= 0):
-            raise ValueError(f"field_deg must be a finite angle ≥ 0, got {field_deg!r}")
+        number("field_deg", field_deg, low=0, high=180, high_open=True)
         if (
             isinstance(n_angles, bool)
             or not isinstance(n_angles, (int, np.integer))
@@ -254,7 +254,6 @@ class DoubleAmiciPrism:
         from scipy.optimize import brentq
 
         from .._units import check_wavelengths_nm
-        from ..validate import number
 
         # the inputs first: an unknown glass or a NaN angle must not read as "no design"
         _glass(glass1), _glass(glass2)

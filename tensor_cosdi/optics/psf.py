@@ -19,7 +19,8 @@ import numbers
 
 import numpy as np
 
-from ..validate import real_array
+from .._units import check_wavelengths_nm
+from ..validate import integer, number, real_array
 from .zernike import zernike as _zernike
 
 __all__ = [
@@ -33,14 +34,19 @@ class PSFCropWarning(UserWarning):
     PSF from the optics'."""
 
 
+#: Most pupil samples across a PSF's pupil (a defocus or aberration that needs more is refused:
+#: the pupil grid alone would hold more than 16 M complex values).
+MAX_PUPIL_SAMPLES = 4096
+#: Most sub-samples per pixel side.
+MAX_SUPERSAMPLE = 64
+
+
 def _pos(name, v, allow_inf=False):
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a number > 0, got {v!r}") from None
-    if not (f > 0 and (np.isfinite(f) or (allow_inf and f == np.inf))):
-        raise ValueError(f"{name} must be a finite number > 0, got {v!r}")
-    return f
+    """A number > 0 (``inf`` too with ``allow_inf``); booleans and strings are errors."""
+    if allow_inf and isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)):
+        if float(v) == np.inf:
+            return np.inf
+    return number(name, v, low=0, low_open=True)
 
 
 def _aberrations(zernikes) -> dict[int, float]:
@@ -109,9 +115,15 @@ class Lens:
         )
 
 
+def _wavelength(wavelength_nm) -> float:
+    """One wavelength in nm (checked for its unit) as millimetres."""
+    w = number("wavelength_nm", wavelength_nm)
+    return float(check_wavelengths_nm([w], "wavelength_nm")[0]) * 1e-6
+
+
 def defocus_coefficient(lens: Lens, wavelength_nm: float, depth_mm: float) -> float:
     """``Ω = (π/λ)(1/z + 1/z_i − 1/f) r²`` in radians at the pupil edge (Equation 51)."""
-    lam = _pos("wavelength_nm", wavelength_nm) * 1e-6  # mm
+    lam = _wavelength(wavelength_nm)
     z = _pos("depth_mm", depth_mm, allow_inf=True)
     return float(
         np.pi
@@ -154,16 +166,25 @@ def pupil_psf(
     if (
         isinstance(supersample, bool)
         or not isinstance(supersample, numbers.Integral)
-        or supersample < 1
+        or not 1 <= supersample <= MAX_SUPERSAMPLE
     ):
-        raise ValueError(f"supersample must be an integer ≥ 1, got {supersample!r}")
-    lam = _pos("wavelength_nm", wavelength_nm) * 1e-6
-    if not np.isfinite(omega):
-        raise ValueError(f"omega must be finite, got {omega!r}")
+        raise ValueError(
+            f"supersample must be an integer in 1…{MAX_SUPERSAMPLE}, got {supersample!r}"
+        )
+    lam = _wavelength(wavelength_nm)
+    omega = number("omega", omega)
     ab = _aberrations(zernike)
     if pupil_samples is None:
         slope = 2 * abs(omega) + 2 * np.pi * sum(abs(a) for a in ab.values()) * 8
+        if slope > MAX_PUPIL_SAMPLES:
+            raise ValueError(
+                f"a defocus of {omega:.3g} rad (and these aberrations) needs {slope:.3g} pupil "
+                f"samples; at most {MAX_PUPIL_SAMPLES}: the point is too far out of focus for a "
+                "pupil-sampled PSF (is depth_mm in millimetres, beyond the lens' focal length?)"
+            )
         pupil_samples = int(max(64, np.ceil(slope)))
+    else:
+        pupil_samples = integer("pupil_samples", pupil_samples, low=2, high=MAX_PUPIL_SAMPLES)
     r = lens.aperture_radius_mm
     u = (np.arange(pupil_samples) + 0.5) / pupil_samples * 2 - 1  # normalised, (-1, 1)
     U, V = np.meshgrid(u, u, indexing="ij")
@@ -341,7 +362,7 @@ def _psf_grid(lens, lam, dep, foc, zernike, size, supersample, min_share, caller
 
 def psf_width(h) -> float:
     """RMS radius of a PSF in pixels, ``sqrt(Σ h · |x − x̄|²) / sqrt(Σ h)``."""
-    h = real_array("the PSF", h, finite=False)
+    h = real_array("the PSF", h)
     if h.ndim != 2 or not h.sum() > 0:
         raise ValueError(f"psf_width needs a 2-D PSF with positive sum, got shape {h.shape}")
     h = h / h.sum()

@@ -50,15 +50,20 @@ def noll_to_nm(j: int) -> tuple[int, int]:
     return n, (m if j % 2 == 0 else -m)
 
 
+#: Highest radial order ``n`` computed (the alternating sum loses every digit of float64 well
+#: before it; optical designs use n ≤ 10).
+MAX_ORDER = 60
+
+
 def zernike_radial(n: int, m: int, rho):
     """The radial polynomial ``R_n^|m|(ρ)``: integers ``n ≥ 0`` and ``|m| ≤ n`` with ``n − |m|``
     even (the pairs :func:`noll_to_nm` gives); any other pair is a ``ValueError``."""
-    n, m = integer("n", n), abs(integer("m", m))
+    n, m = integer("n", n, high=MAX_ORDER), abs(integer("m", m))
     if n < 0 or m > n or (n - m) % 2:
         raise ValueError(
             f"a Zernike radial polynomial needs n ≥ 0, |m| ≤ n and n − |m| even, got n={n}, m={m}"
         )
-    rho = real_array("rho", rho, finite=False)
+    rho = real_array("rho", rho)
     out = np.zeros_like(rho)
     for s in range((n - m) // 2 + 1):
         c = (

@@ -34,10 +34,19 @@ DENOISERS = Registry("denoiser")
 """``name → denoise(x, sigma)``, read-only; add yours with :func:`register_denoiser`."""
 
 
-def _host(x):
+def _host(x, who: str):
     """A host copy, ``(H, W, channels)``; float32 stays float32 (scikit-image keeps it: half the
-    memory traffic of float64), anything else becomes float64."""
+    memory traffic of float64), anything else becomes float64.  ``x`` must be a finite real
+    image or cube (a ``ValueError`` naming the denoiser ``who`` otherwise)."""
     a = np.asarray(B.to_numpy(x))
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{who}: x must hold real numbers, got dtype {a.dtype}")
+    if a.ndim < 2:
+        raise ValueError(
+            f"{who}: x must be an image (H, W) or a cube (H, W, …), got shape {a.shape}"
+        )
+    if not np.isfinite(a).all():
+        raise ValueError(f"{who}: x holds NaN or inf")
     a = a if a.dtype == np.float32 else a.astype(np.float64)
     return a.reshape(a.shape[:2] + (-1,)), a.shape
 
@@ -85,7 +94,7 @@ def tv(x, sigma: float, *, n_iter: int = 50):
     n_iter = integer("tv: n_iter", n_iter, low=1)
     if B.on_accelerator(x):
         return _tv_on_device(x, weight, n_iter)
-    flat, shape = _host(x)
+    flat, shape = _host(x, "tv")
 
     def run(chunk):
         return denoise_tv_chambolle(chunk, weight=weight, max_num_iter=n_iter, channel_axis=2)
@@ -181,7 +190,7 @@ class WarmTV:
         w = number("WarmTV: sigma", sigma, low=0, low_open=True)
         if B.on_accelerator(x):  # a CUDA tensor, say: stays on its device
             return self._on_device(x, w)
-        flat, shape = _host(x)
+        flat, shape = _host(x, "WarmTV")
         f = np.ascontiguousarray(np.moveaxis(flat, 2, 0))  # (channels, H, W): planes contiguous
         if not isinstance(self.p, np.ndarray) or self.p.shape[1:] != f.shape:
             self.p = np.zeros((2,) + f.shape, f.dtype)
@@ -264,10 +273,15 @@ def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):
     ``sigma``."""
     from skimage.restoration import denoise_wavelet
 
-    flat, shape = _host(x)
+    sigma = number("wavelet: sigma", sigma, low=0, high=1e150)  # its square must not overflow
+    if not isinstance(wavelet_name, str):
+        raise ValueError(f"wavelet: wavelet_name must be a PyWavelets name, got {wavelet_name!r}")
+    if mode not in ("soft", "hard"):
+        raise ValueError(f"wavelet: mode must be 'soft' or 'hard', got {mode!r}")
+    flat, shape = _host(x, "wavelet")
     out = denoise_wavelet(
         flat,
-        sigma=number("wavelet: sigma", sigma, low=0),
+        sigma=sigma,
         wavelet=wavelet_name,
         mode=mode,
         channel_axis=2,

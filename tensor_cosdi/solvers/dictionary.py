@@ -316,10 +316,10 @@ def train_dictionary(
     """
     from tqdm.auto import tqdm
 
-    rng = np.random.default_rng(rng)
-    patch = int(patch)
-    if patch < 1 or n_iter < 1 or n_patches < 1:
-        raise ValueError("patch, n_iter and n_patches must be positive integers")
+    rng = B.default_rng(rng)
+    patch = integer("patch", patch, low=1)
+    n_iter = integer("n_iter", n_iter, low=1)
+    n_patches = integer("n_patches", n_patches, low=1)
     pair = tuple(np.broadcast_to(np.asarray(align, dtype=object), (2,)))
     if any(isinstance(a, bool) or not isinstance(a, (int, np.integer)) or a < 1 for a in pair):
         raise ValueError(f"align must be a positive integer or a pair of them, got {align!r}")
@@ -332,8 +332,8 @@ def train_dictionary(
         )
     Y = _sample_patches(cubes, patch, int(n_patches), rng, pair)
     dim, n = Y.shape
-    k = 2 * dim if n_atoms is None else int(n_atoms)
-    s = min(8, dim) if sparsity is None else int(sparsity)
+    k = 2 * dim if n_atoms is None else integer("n_atoms", n_atoms, low=1)
+    s = min(8, dim) if sparsity is None else integer("sparsity", sparsity, low=1)
     if not 1 <= s <= min(dim, k) or k < 1:
         raise ValueError(f"need 1 ≤ sparsity ≤ min(patch entries, atoms) = {min(dim, k)}; got {s}")
     D = Y[:, rng.choice(n, size=k, replace=k > n)].copy()

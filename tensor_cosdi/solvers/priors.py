@@ -35,6 +35,7 @@ import tensorly as tl
 
 from .. import _backend as B
 from ..bases import BlockDense, KroneckerBasis, block_hosvd, tucker_bases
+from ..validate import flag, integer, number
 from .denoisers import resolve
 
 __all__ = [
@@ -193,6 +194,13 @@ class Prior:
         return None
 
 
+def _prior(who: str, inner) -> Prior:
+    """``inner`` if it is a :class:`Prior`, else a ``ValueError`` naming ``who``."""
+    if not isinstance(inner, Prior):
+        raise ValueError(f"{who} needs an inner Prior, got {type(inner).__name__}")
+    return inner
+
+
 class SparseInBasis(Prior):
     """``λ‖w ∘ Ψᵀx‖₁`` in an orthonormal Kronecker basis, with an optional proximal memory ``β``.
 
@@ -214,8 +222,12 @@ class SparseInBasis(Prior):
     name = "sparse"
 
     def __init__(self, bases, *, lam: float, mu: float, beta: float = 0.0, weights=None):
+        if not isinstance(bases, dict):
+            raise ValueError(f"bases must be a dict {{mode: basis}}, got {type(bases).__name__}")
         self.bases = dict(bases)
-        self.lam, self.mu, self.beta = float(lam), float(mu), float(beta)
+        self.lam = number(f"{type(self).__name__}: lam", lam, low=0)
+        self.mu = number(f"{type(self).__name__}: mu", mu, low=0, low_open=True)
+        self.beta = number(f"{type(self).__name__}: beta", beta, low=0)
         self.weights = weights
         self.basis = None
         self._prev = None  # coefficients Ω_prev (None: the next prox is a plain soft threshold)
@@ -334,7 +346,7 @@ class TV(Prior):
     name = "tv"
 
     def __init__(self, weight: float, *, denoise=None):
-        self.weight = float(weight)
+        self.weight = number("TV: weight", weight, low=0, low_open=True)
         self._denoise = resolve("tv") if denoise is None else denoise
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
@@ -376,10 +388,13 @@ class Denoiser(Prior):
             raise ValueError(f"scale must be one of {LEVEL_SCALES}, got {scale!r}")
         self.scale = scale
         self._denoise = resolve(denoiser)
-        self.sigma = float(sigma)
-        self.sigma_end = self.sigma if sigma_end is None else float(sigma_end)
-        self.n_steps = max(int(n_steps), 1)
-        self.nonneg = bool(nonneg)
+        self.sigma = number("Denoiser: sigma", sigma, low=0, low_open=True)
+        self.sigma_end = (
+            self.sigma if sigma_end is None
+            else number("Denoiser: sigma_end", sigma_end, low=0, low_open=True)
+        )  # fmt: skip
+        self.n_steps = integer("Denoiser: n_steps", n_steps, low=1)
+        self.nonneg = flag("Denoiser: nonneg", nonneg)
         self.calls = 0
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
@@ -416,7 +431,9 @@ class PlaneSupport(Prior):
     name = "plane_support"
 
     def __init__(self, inner: Prior, *, axis: int, start_at: int = 20):
-        self.inner, self.axis, self.start_at = inner, int(axis), int(start_at)
+        self.inner = _prior("PlaneSupport", inner)
+        self.axis = integer("PlaneSupport: axis", axis, low=2)  # a non-spatial axis
+        self.start_at = integer("PlaneSupport: start_at", start_at, low=0)
         self.calls = 0
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
@@ -450,7 +467,7 @@ class Ridge(Prior):
     name = "ridge"
 
     def __init__(self, mu: float):
-        self.mu = float(mu)
+        self.mu = number("Ridge: mu", mu, low=0)
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
         self.penalty = float(penalty)
@@ -473,7 +490,7 @@ class NonNegative(Prior):
     name = "nonneg"
 
     def __init__(self, inner: Prior):
-        self.inner = inner
+        self.inner = _prior("NonNegative", inner)
 
     def setup(self, start, *, penalty: float, gain: float) -> None:
         self.inner.setup(start, penalty=penalty, gain=gain)

@@ -236,6 +236,10 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     >>> 17 < est.snr_db < 23
     True
     """
+    if not all(hasattr(system, a) for a in ("operator", "measurement_shape", "cube_shape")):
+        raise ValueError(
+            f"system: expected an imager (tensor_cosdi.systems), got {type(system).__name__}"
+        )
     if fit is True:
         fit = "auto"
     if fit is not False and not (isinstance(fit, str) and fit in FITS):

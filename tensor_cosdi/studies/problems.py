@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from .. import _backend as B
 from .. import metrics, scenes
 from .. import systems as S
 from ..systems import Problem
@@ -102,6 +103,14 @@ def make_problem(
     )
 
 
+def _problem(who: str, problem) -> Problem:
+    if not isinstance(problem, Problem):
+        raise ValueError(
+            f"{who} needs a Problem (studies.make_problem), got {type(problem).__name__}"
+        )
+    return problem
+
+
 def score(problem: Problem, cube) -> dict:
     """PSNR, SSIM (data range = the truth's peak), SAM (degrees) and RMSE of ``cube`` against the
     truth.
@@ -109,9 +118,7 @@ def score(problem: Problem, cube) -> dict:
     Cubes with more than three axes fold the extra axes (depth, pattern)
     into the band axis for PSNR/SSIM/RMSE and into pixels for SAM.
     """
-    from .. import _backend as B
-
-    truth = np.asarray(problem.cube, dtype=np.float64)
+    truth = np.asarray(_problem("score", problem).cube, dtype=np.float64)
     est = real_array("cube", B.to_numpy(cube), finite=False)
     if est.shape != truth.shape:
         raise ValueError(f"cube of shape {est.shape} does not match the truth's {truth.shape}")
@@ -135,7 +142,7 @@ def score_depth(problem: Problem, depth) -> dict:
     * fringe phase (CS2LI / Mu-CoSDI): ``"phase_mae"``, mean absolute wrapped-phase error (rad)
       of the first frequency.
     """
-    return problem.system.score_depth(depth, problem)
+    return _problem("score_depth", problem).system.score_depth(depth, problem)
 
 
 def compare(
@@ -202,7 +209,14 @@ def spectral_view(problem: Problem, cube) -> np.ndarray:
     steps divided by the fringe offset (the reflectance, Eq. 107); other
     systems: the cube itself (``problem.system.spectral_view``).
     """
-    return problem.system.spectral_view(cube)
+    system = _problem("spectral_view", problem).system
+    shape = tuple(np.shape(B.to_numpy(cube)))
+    if shape != tuple(system.cube_shape):
+        raise ValueError(
+            f"spectral_view: cube of shape {shape} is not one of this system's "
+            f"{tuple(system.cube_shape)}"
+        )
+    return system.spectral_view(cube)
 
 
 def reconstruction_run(

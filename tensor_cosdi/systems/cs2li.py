@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 import tensorly as tl
 
@@ -179,11 +177,10 @@ def fringe_cube(
     >>> P.shape, P[0, 0, 0].round(12).tolist()
     ((2, 3, 4, 4), [2.0, 1.0, 0.0, 1.0])
     """
-    if isinstance(n_steps, bool) or not isinstance(n_steps, numbers.Integral) or n_steps < 3:
-        raise ValueError(
-            f"n_steps must be an integer ≥ 3 (phase shifting needs 3 steps), got {n_steps!r}"
-        )
-    if not (np.isfinite(offset) and np.isfinite(amplitude) and 0 <= amplitude <= offset):
+    n_steps = validate.integer("n_steps (phase shifting needs 3)", n_steps, low=3, high=1024)
+    offset = validate.number("offset", offset)
+    amplitude = validate.number("amplitude", amplitude)
+    if not 0 <= amplitude <= offset:
         raise ValueError(
             f"need 0 ≤ amplitude ≤ offset so the projected light is ≥ 0, got offset={offset!r}, "
             f"amplitude={amplitude!r}"
@@ -204,9 +201,7 @@ def fringe_cube(
     mod = offset + amplitude * np.cos(ph[:, :, :, None] + 2 * np.pi * k / n_steps)  # (Nx, Ny, f, K)
     mod = mod.reshape(shape[:2] + (-1,))  # t = f·K + k
     if isinstance(reflectance, np.ndarray) or not tl.is_tensor(reflectance):
-        F = real_array(
-            "reflectance", reflectance, finite=False
-        )  # NumPy in, NumPy out (any backend)
+        F = real_array("reflectance", reflectance)  # NumPy in, NumPy out (any backend)
         return F[:, :, :, None] * mod[:, :, None, :]
     F = reflectance
     return F[:, :, :, None] * B.tensor_like(mod[:, :, None, :], F)

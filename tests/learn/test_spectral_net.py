@@ -626,3 +626,47 @@ def test_a_training_seed_and_noise_range_are_checked():
             TrainConfig(seed=seed).check()
     with pytest.raises(ValueError, match="sigma_max"):
         TrainConfig(sigma_max=float("inf")).check()
+
+
+def test_training_sizes_that_cannot_run_are_refused_before_any_work():
+    from tensor_cosdi.learn.train import TrainConfig
+
+    with pytest.raises(ValueError, match=r"patch must be an even size in 8…512"):
+        TrainConfig(patch=100_000).check()
+    with pytest.raises(ValueError, match="max_shift must be ≤ patch"):
+        TrainConfig(max_shift=100_000).check()
+    with pytest.raises(ValueError, match=r"batch=100000 of 64×64 patches takes 47.3 GiB"):
+        TrainConfig(batch=100_000).check()
+    assert TrainConfig(patch=512, batch=16, max_shift=3).check().patch == 512
+
+
+@needs_torch
+def test_a_device_this_torch_cannot_use_is_a_one_line_error():
+    import torch
+
+    from tensor_cosdi.learn._loop import training_device
+
+    assert training_device(torch, "cpu") == torch.device("cpu")
+    assert training_device(torch, None).type in ("cpu", "cuda")
+    for bad in ("tpu", "gpu0", 3):
+        with pytest.raises(ValueError, match="device must be"):
+            training_device(torch, bad)
+    if not torch.cuda.is_available():
+        with pytest.raises(ValueError, match="sees no CUDA GPU; use --device cpu"):
+            training_device(torch, "cuda")
+    else:
+        with pytest.raises(ValueError, match="CUDA device"):
+            training_device(torch, f"cuda:{torch.cuda.device_count()}")
+
+
+@needs_torch
+def test_a_diverging_training_stops_with_its_step_and_keeps_the_checkpoint(tmp_path):
+    from tensor_cosdi.learn.train import TrainConfig, train_denoiser
+
+    _real()  # skips without the scenes
+    cfg = TrainConfig(steps=6, batch=2, patch=16, width=8, blocks=1, r_max=4, lr=1e308,
+                      warmup=0, checkpoint_every=1)  # fmt: skip
+    with pytest.raises(ValueError, match=r"training diverged at step \d \(loss nan\)") as info:
+        train_denoiser(tmp_path / "d.pt", cfg, progress=False, device="cpu")
+    assert "the last checkpoint" in str(info.value) and (tmp_path / "d.pt.ckpt").is_file()
+    assert not (tmp_path / "d.pt").exists()  # no weights of NaN were written

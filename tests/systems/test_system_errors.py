@@ -43,7 +43,7 @@ CASES = [
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="much"), "alpha_t must be a finite number"),
     (lambda: CASSIVSI(ones((4, 5)), n_bands=3, alpha_t="0.5"), "alpha_t must be a finite number"),
     (lambda: SDCASSI(ones((4, 5)), n_bands=2**40), "n_bands must be an integer ≥ 1 and ≤ 10000"),
-    (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=1e15), "largest shift is 2e\\+15 px"),
+    (lambda: SDCASSI(ones((4, 5)), n_bands=3, shifts=1e15), "shifts the last band by 2e\\+15 px"),
     (
         lambda: CASSIVSI(ones((4, 5)), n_bands=3, beta=3),
         r"beta must be an integer column offset in \[0, 2\]",
@@ -101,11 +101,17 @@ CASES = [
     (lambda: MuCoSDI(ones((4, 7)), n_bands=3, modality="monocular", depth_estimator=3), "callable"),
     (lambda: DualCameraCASSI(ones((4, 5, 2)), n_bands=3), "code must have 2 axes"),
     # code generators
-    (lambda: codes.random_binary((4, 5), transmittance=0), r"transmittance must be in \(0, 1\]"),
+    (
+        lambda: codes.random_binary((4, 5), transmittance=0),
+        r"transmittance must be a finite number > 0 and ≤ 1",
+    ),
     (lambda: codes.random_binary((4, -5)), "positive integers"),
     (lambda: codes.complementary_colour_codes((4, 4, 5), 1), "n_snapshots must be an integer ≥ 2"),
     (lambda: codes.complementary_colour_codes((4, 4, 3), 4), "n_snapshots ≤ n_filters ≤ n_bands"),
-    (lambda: codes.complementary_colour_codes((4, 4, 3), 2, band_axis=3), "band_axis=3"),
+    (
+        lambda: codes.complementary_colour_codes((4, 4, 3), 2, band_axis=3),
+        "band_axis must be an integer in -3…2",
+    ),
     (lambda: codes.colour_coded_aperture((4, 5), 6, n_filters=7), "cannot exceed n_bands"),
     (lambda: codes.colour_coded_aperture((4, 5), 6, transmittance=1.5), "transmittance"),
 ]

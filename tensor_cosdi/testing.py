@@ -556,7 +556,7 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
         ("solvers", estimate_snr, (sd, np.ones(sd.measurement_shape)), {},
          {0: [None, "sd_cassi"]}),
     ]  # fmt: skip
-    table += _writer_arguments()
+    table += _writer_arguments() + _learned_arguments()
     out = []
     for module, fn, args, kwargs, bad in table:
         name = getattr(fn, "__name__", type(fn).__name__)
@@ -580,6 +580,41 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
                 label = f"{name} {arg}={_short(value)}"
                 out.append((module, label, lambda f=fn, a=tuple(a), k=k: f(*a, **k), words))
     return out
+
+
+def _learned_arguments():
+    """The learned denoiser's and D-CoSNet's public entries (where PyTorch is installed)."""
+    import importlib.util
+
+    if importlib.util.find_spec("torch") is None:
+        return []
+    import torch
+
+    from .learn import dcosnet, spectral_net
+
+    den = spectral_net.SpectralDenoiser()
+    cube = np.random.default_rng(1).random((16, 16, 8)).astype(np.float32)
+    nan_cube = cube.copy()
+    nan_cube[3, 3, 3] = np.nan
+    batch = torch.rand(1, 2, 16, 16)
+    nan, inf = float("nan"), float("inf")
+    return [
+        ("learn", den, (cube, 0.1), {}, {0: [nan_cube, None, np.zeros((0, 0, 3)),
+         cube.astype(complex)], 1: [True, "0.1", nan, -1.0]}),
+        ("learn", spectral_net.SpectralDenoiser, (), {}, {"device": ["tpu", 3, ""],
+         "joint": [2, "yes"]}),
+        ("learn", spectral_net.SubspaceDenoiserNet, (), {}, {"r_max": [0, 1e308, 65],
+         "width": [10**6, 2.5], "blocks": [True], "conv_rank": [-1]}),
+        ("learn", spectral_net.network_device, (None,), {}, {"device": ["", "CPU ", 3]}),
+        ("learn", dcosnet.ssim, (batch, batch), {}, {0: [None, np.ones((1, 2, 16, 16))],
+         1: [batch[:, :1]], "data_range": [0.0, nan, True], "sigma": [0.0, inf],
+         "win": [0, 99, 2.5]}),
+        ("learn", dcosnet.seeded_code, ((8, 8), 0), {}, {0: [(8.5, 8), (0, 8), 8],
+         1: [True, -1, None]}),
+        ("learn", dcosnet.tile_code, (np.ones((4, 4)), (8, 8)), {},
+         {0: [np.full((4, 4), nan)], 1: [(8, 8.5), (8,)]}),
+        ("learn", dcosnet.DCoSNet, (), {}, {"device": ["tpu"]}),
+    ]  # fmt: skip
 
 
 def _writer_arguments():
@@ -606,7 +641,13 @@ def _writer_arguments():
     ]  # fmt: skip
 
 
-_ARGUMENT_WORDS = {"x": ("tensor", "x must", "x holds"), "name": ("wavelet",), "n": ("n must",)}
+_ARGUMENT_WORDS = {
+    "x": ("tensor", "x must", "x holds", "cube"),
+    "y": ("one shape", "tensors"),
+    "name": ("wavelet",),
+    "n": ("n must",),
+    "shape": ("shape", "rows", "columns"),
+}
 
 
 def _short(value) -> str:
@@ -615,5 +656,7 @@ def _short(value) -> str:
         flags = [w for w, bad in (("NaN", np.isnan), ("inf", np.isinf))
                  if value.dtype.kind == "f" and bad(value).any()]  # fmt: skip
         return " ".join([f"array{value.shape}"] + flags)
+    if hasattr(value, "shape") and hasattr(value, "dtype"):  # a torch tensor, say
+        return f"{type(value).__name__}{tuple(value.shape)}"
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "…"

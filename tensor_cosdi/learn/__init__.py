@@ -17,7 +17,7 @@ raise an ``ImportError`` naming the extra to install.
 
 from __future__ import annotations
 
-__all__ = ["require_torch", "load_weights"]
+__all__ = ["require_torch", "torch_device", "load_weights"]
 
 
 def require_torch():
@@ -29,6 +29,44 @@ def require_torch():
             "this feature needs PyTorch: pip install 'tensor_cosdi[torch]' (or pip install torch)"
         ) from None
     return torch
+
+
+def torch_device(torch, device):
+    """``device`` (``None``: CUDA when available, else the CPU) as a ``torch.device`` this
+    PyTorch can run on, or a one-line ``ValueError`` naming what it has: ``"cpu"``, ``"cuda"``
+    or ``"cuda:N"`` (a string or a ``torch.device``).
+
+    >>> import torch
+    >>> torch_device(torch, "cpu")
+    device(type='cpu')
+    >>> torch_device(torch, "tpu")
+    Traceback (most recent call last):
+    ...
+    ValueError: device must be a PyTorch device such as 'cpu' or 'cuda', got 'tpu'
+    """
+    if device is None:
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if not isinstance(device, (str, torch.device)):
+        raise ValueError(f"device must be a PyTorch device such as 'cpu' or 'cuda', got {device!r}")
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError, ValueError):
+        raise ValueError(
+            f"device must be a PyTorch device such as 'cpu' or 'cuda', got {device!r}"
+        ) from None
+    if dev.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(
+                f"device {device!r}: this PyTorch ({torch.__version__}) sees no CUDA GPU; use "
+                "--device cpu"
+            )
+        if dev.index is not None and dev.index >= torch.cuda.device_count():
+            raise ValueError(
+                f"device {device!r}: only {torch.cuda.device_count()} CUDA device(s) here"
+            )
+    elif dev.type != "cpu":
+        raise ValueError(f"device must be 'cpu' or 'cuda' (or 'cuda:N'), got {device!r}")
+    return dev
 
 
 def _exception_text(exc: BaseException) -> str:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..datasets import training_scenes
 from ..validate import integer, output_folder
-from . import _exception_text, require_torch
+from . import _exception_text, require_torch, torch_device
 
 
 def atomic_save(torch, obj, path: Path):
@@ -58,32 +58,6 @@ def check_config(cfg, positive_ints) -> None:
         raise ValueError(f"lr must be a finite positive number, got {lr!r}")
     if not 0 < cfg.lr_end <= cfg.lr:
         raise ValueError(f"need 0 < lr_end ≤ lr, got {cfg.lr_end}, {cfg.lr}")
-
-
-def training_device(torch, device):
-    """``device`` (``None``: CUDA when available, else the CPU) as a ``torch.device`` this
-    PyTorch can run on, or a one-line ``ValueError`` naming what it has."""
-    if device is None:
-        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
-    try:
-        dev = torch.device(device)
-    except (RuntimeError, TypeError, ValueError):
-        raise ValueError(
-            f"device must be a PyTorch device such as 'cpu' or 'cuda', got {device!r}"
-        ) from None
-    if dev.type == "cuda":
-        if not torch.cuda.is_available():
-            raise ValueError(
-                f"device {device!r}: this PyTorch ({torch.__version__}) sees no CUDA GPU; use "
-                "--device cpu"
-            )
-        if dev.index is not None and dev.index >= torch.cuda.device_count():
-            raise ValueError(
-                f"device {device!r}: only {torch.cuda.device_count()} CUDA device(s) here"
-            )
-    elif dev.type != "cpu":
-        raise ValueError(f"device must be 'cpu' or 'cuda' (or 'cuda:N'), got {device!r}")
-    return dev
 
 
 def check_stop_after(stop_after):
@@ -158,7 +132,7 @@ def run(
 
     out, ckpt_path = check_out(out, force)
     check_stop_after(stop_after)
-    dev = training_device(torch, device)
+    dev = torch_device(torch, device)
     state = None
     if resume:
         if not ckpt_path.is_file():

@@ -47,8 +47,8 @@ import numpy as np
 import tensorly as tl
 
 from .. import _backend as B
-from ..validate import integer, number
-from . import load_weights, require_torch
+from ..validate import integer, number, real_array
+from . import load_weights, require_torch, torch_device
 
 __all__ = [
     "DCoSNet",
@@ -528,10 +528,19 @@ def seeded_code(shape, seed: int) -> np.ndarray:
     array([[0., 1., 1.],
            [1., 0., 0.]])
     """
-    rows, cols = (int(n) for n in shape)
-    if rows < 1 or cols < 1:
-        raise ValueError(f"a code needs a positive shape, got {shape}")
-    return (np.random.default_rng(seed).random((rows, cols)) < 0.5).astype(np.float64)
+    rows, cols = _code_shape(shape)
+    return (B.default_rng(integer("seed", seed, low=0)).random((rows, cols)) < 0.5).astype(
+        np.float64
+    )
+
+
+def _code_shape(shape) -> tuple[int, int]:
+    """``(rows, columns)`` of a code: two positive integers, or a one-line ``ValueError``."""
+    try:
+        rows, cols = shape
+    except (TypeError, ValueError):
+        raise ValueError(f"a code's shape must be (rows, columns), got {shape!r}") from None
+    return integer("a code's rows", rows, low=1), integer("a code's columns", cols, low=1)
 
 
 def tile_code(code, shape) -> np.ndarray:
@@ -553,10 +562,11 @@ def tile_code(code, shape) -> np.ndarray:
     array([[1, 0, 1],
            [1, 0, 1]])
     """
+    real_array("code", code)  # real and finite; tiled in its own dtype
     code = np.asarray(code)
     if code.ndim != 2 or code.size == 0:
         raise ValueError(f"need a non-empty 2-D code, got shape {code.shape}")
-    rows, cols = (int(n) for n in shape)
+    rows, cols = _code_shape(shape)
     reps = (-(-rows // code.shape[0]), -(-cols // code.shape[1]))
     return np.tile(code, reps)[:rows, :cols]
 
@@ -655,6 +665,16 @@ def ssim(x, y, *, data_range: float = 1.0, sigma: float = 1.5, win: int = 11):
     """Mean SSIM of two batches ``(B, C, H, W)``, per channel, Gaussian window (as scikit-image
     with ``gaussian_weights=True, use_sample_covariance=False``, interior pixels)."""
     torch = require_torch()
+    if not (isinstance(x, torch.Tensor) and isinstance(y, torch.Tensor)):
+        raise ValueError(
+            f"ssim needs two torch tensors, got {type(x).__name__} and {type(y).__name__}"
+        )
+    if x.shape != y.shape or x.ndim != 4:
+        raise ValueError(f"ssim needs two batches (B, C, H, W) of one shape, got {tuple(x.shape)} "
+                         f"and {tuple(y.shape)}")  # fmt: skip
+    data_range = number("data_range", data_range, low=0, low_open=True, high=1e150)
+    sigma = number("sigma", sigma, low=0, low_open=True, high=1e3)
+    win = integer("win", win, low=1, high=min(x.shape[-2:]))
     half = win // 2
     t = torch.arange(win, dtype=x.dtype, device=x.device) - half
     k1 = torch.exp(-(t**2) / (2 * sigma**2))
@@ -695,6 +715,8 @@ class DCoSNet:
         # a missing, truncated, foreign or hostile file is an error now; its contents are
         # kept for the first call (the file is read once)
         self._read = None if self.path is None else _checkpoint(self.path)
+        if device is not None:
+            torch_device(self.torch, device)  # refused now, not at the first call
         self.device = device
         self._nets = {}
 
@@ -762,7 +784,7 @@ class DCoSNet:
         torch = self.torch
         net, cfg = self._load(system.name)
         self.check(system, cfg)
-        dev = torch.device(self.device or ("cuda" if torch.cuda.is_available() else "cpu"))
+        dev = torch_device(torch, self.device)
         net.to(dev)
         sensing = Sensing([system], device=dev)
         g = torch.from_numpy(np.asarray(B.to_numpy(measurement), dtype=np.float32)).to(dev)[None]

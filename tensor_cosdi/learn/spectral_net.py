@@ -36,8 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
-from ..validate import integer
-from . import load_weights, require_torch
+from ..validate import flag, integer, number
+from . import load_weights, require_torch, torch_device
 
 __all__ = [
     "SubspaceDenoiserNet",
@@ -153,7 +153,12 @@ def SubspaceDenoiserNet(r_max: int = 12, width: int = 64, blocks: int = 4, conv_
     ``conv_rank > 0``: each 3×3 convolution in the Tucker-2 form of :func:`factorise`.
     """
     torch = require_torch()
-    return _build_net(torch, int(r_max), int(width), int(blocks), int(conv_rank))
+    given = {"r_max": r_max, "width": width, "blocks": blocks, "conv_rank": conv_rank}
+    sizes = {
+        name: integer(name, v, low=0 if name == "conv_rank" else 1, high=ARCH_LIMITS[name])
+        for name, v in given.items()
+    }  # the limits a weights file is held to (ARCH_LIMITS)
+    return _build_net(torch, **sizes)
 
 
 #: The largest network a weights file may describe (a hostile file could otherwise ask for
@@ -363,10 +368,10 @@ def network_device(x=None, device=None):
     """
     torch = require_torch()
     if device is not None:
-        return torch.device(device)
+        return torch_device(torch, device)
     if isinstance(x, torch.Tensor):
         return x.device
-    return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    return torch_device(torch, None)
 
 
 def network_precision(precision: str, device) -> str:
@@ -462,9 +467,11 @@ class SpectralDenoiser:
         self.rank = int(rank)
         if precision not in PRECISIONS:
             raise ValueError(f"precision must be one of {PRECISIONS}, got {precision!r}")
+        if device is not None:
+            torch_device(torch, device)  # refused now, not at the first call
         self.device = device
         self.path = path
-        self.joint = bool(joint)
+        self.joint = flag("joint", joint)
         self.precision = precision
         self._half = None  # the bfloat16 copy of the network, made on first use
 
@@ -484,11 +491,14 @@ class SpectralDenoiser:
 
     def __call__(self, x, sigma):
         torch = require_torch()
-        sigma = float(sigma)
-        if not np.isfinite(sigma) or sigma < 0:
-            raise ValueError(f"sigma must be a finite noise level ≥ 0, got {sigma!r}")
+        sigma = number("sigma", sigma, low=0)  # a noise level
+        if not hasattr(x, "shape") or not hasattr(x, "dtype"):
+            raise ValueError(f"expected a cube (an array or tensor), got {type(x).__name__}")
+        kind = str(x.dtype).replace("torch.", "")
+        if not kind.startswith(("float", "bfloat", "int", "uint")):
+            raise ValueError(f"expected a cube of real numbers, got dtype {kind}")
         shape = tuple(x.shape)
-        if len(shape) < 3:
+        if len(shape) < 3 or 0 in shape:
             raise ValueError(f"expected a cube (rows, columns, channels…), got shape {shape}")
         if len(shape) > 3 and not self.joint:  # one (rows, columns, bands) slice at a time
             out = [self(x[(..., *idx)], sigma) for idx in np.ndindex(*shape[3:])]
@@ -510,7 +520,9 @@ class SpectralDenoiser:
         work_dtype = torch.float32
         t = t.to(device=dev, dtype=work_dtype).reshape(shape[0], shape[1], -1)
         scale = _robust_peak(t)
-        if scale <= 0 or not np.isfinite(scale):
+        if not np.isfinite(scale):
+            raise ValueError("the cube holds NaN or inf values: nothing to denoise")
+        if scale <= 0:  # all zero: already clean
             return x
         net, net_dtype = self._network(dev)
         # A NumPy cube whose bands are contiguous planes, Fortran-ordered (the shear kernels'
@@ -535,7 +547,12 @@ class SpectralDenoiser:
             xt = t.reshape(-1, n_bands).T
         image_dims = tuple(2 + ax for ax in flips)
         with torch.no_grad():
-            y, u = _eigen_images(xt, self.rank, self.r_max, 1.0 / scale)
+            try:
+                y, u = _eigen_images(xt, self.rank, self.r_max, 1.0 / scale)
+            except torch.linalg.LinAlgError:  # a Gram matrix of NaN or inf
+                u = None
+            if u is None or not bool(torch.isfinite(u).all()):  # (a bands × k check: free)
+                raise ValueError("the cube holds NaN or inf values: nothing to denoise")
             if layout == "f":
                 y = y.reshape(1, self.r_max, shape[1], shape[0]).transpose(2, 3)
             else:

@@ -644,19 +644,22 @@ def test_training_sizes_that_cannot_run_are_refused_before_any_work():
 def test_a_device_this_torch_cannot_use_is_a_one_line_error():
     import torch
 
-    from tensor_cosdi.learn._loop import training_device
+    from tensor_cosdi.learn import torch_device
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
 
-    assert training_device(torch, "cpu") == torch.device("cpu")
-    assert training_device(torch, None).type in ("cpu", "cuda")
-    for bad in ("tpu", "gpu0", 3):
+    assert torch_device(torch, "cpu") == torch.device("cpu")
+    assert torch_device(torch, None).type in ("cpu", "cuda")
+    for bad in ("tpu", "gpu0", 3, "", "CPU "):
         with pytest.raises(ValueError, match="device must be"):
-            training_device(torch, bad)
+            torch_device(torch, bad)
+        with pytest.raises(ValueError, match="device must be"):
+            SpectralDenoiser(device=bad)  # refused when made, not at its first call
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="sees no CUDA GPU; use --device cpu"):
-            training_device(torch, "cuda")
+            torch_device(torch, "cuda")
     else:
         with pytest.raises(ValueError, match="CUDA device"):
-            training_device(torch, f"cuda:{torch.cuda.device_count()}")
+            torch_device(torch, f"cuda:{torch.cuda.device_count()}")
 
 
 @needs_torch

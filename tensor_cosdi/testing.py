@@ -556,7 +556,7 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
         ("solvers", estimate_snr, (sd, np.ones(sd.measurement_shape)), {},
          {0: [None, "sd_cassi"]}),
     ]  # fmt: skip
-    table += _writer_arguments() + _learned_arguments()
+    table += _writer_arguments() + _reader_arguments() + _learned_arguments()
     out = []
     for module, fn, args, kwargs, bad in table:
         name = getattr(fn, "__name__", type(fn).__name__)
@@ -580,6 +580,30 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
                 label = f"{name} {arg}={_short(value)}"
                 out.append((module, label, lambda f=fn, a=tuple(a), k=k: f(*a, **k), words))
     return out
+
+
+def _reader_arguments():
+    """Readers given a size limit, a key or a channel that cannot apply (each would be ignored
+    or taken as no limit)."""
+    import tempfile
+    from pathlib import Path
+
+    from .io import crop, load_bundle, read_array, read_cube, read_frame, save_bundle
+
+    folder = Path(tempfile.mkdtemp(prefix="tensor_cosdi_hostile_"))
+    np.save(folder / "cube.npy", np.ones((4, 4, 3)))
+    np.save(folder / "frame.npy", np.ones((4, 4)))
+    save_bundle(folder / "b.npz", cube=np.ones((2, 2, 2)))
+    limits = [float("nan"), float("inf"), 1e308, 0, True, "4096"]
+    return [
+        ("io.files", read_cube, (folder / "cube.npy",), {}, {"max_bytes": limits}),
+        ("io.files", read_array, (folder / "cube.npy",), {}, {"max_bytes": limits}),
+        ("io.bundle", load_bundle, (folder / "b.npz",), {}, {"max_bytes": limits}),
+        ("io.frames", read_frame, (folder / "frame.npy",), {}, {"max_bytes": limits,
+         "channel": ["x", 1, -1, 2.5], "key": ["frame", 3]}),
+        ("io.frames", crop, (np.ones((8, 8)), (0, 4, 0, 4)), {}, {1: [(0, 4.5, 0, 4),
+         ("0", 4, 0, 4), (0, 4, 0)]}),
+    ]  # fmt: skip
 
 
 def _learned_arguments():

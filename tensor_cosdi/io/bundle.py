@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _backend as B
-from ..validate import flag, output_folder
+from ..validate import flag, integer, output_folder
 from ._atomic import atomic_write
 
 #: Extensions written and read as HDF5 bundles (everything else: ``.npz``).
@@ -404,6 +404,8 @@ def load_bundle(path, *, max_bytes: int | None = None) -> Bundle:
         require_file,
     )
 
+    if max_bytes is not None:
+        max_bytes = integer("max_bytes", max_bytes, low=1)
     p = Path(path)
     require_file(p, "bundle")
     if p.suffix.lower() in H5_SUFFIXES:

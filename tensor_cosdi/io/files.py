@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from .._units import WAVELENGTH_RANGE_NM, check_wavelengths_nm
-from ..validate import flag, real_array
+from ..validate import flag, integer, real_array
 from ._atomic import atomic_write, atomic_write_folder
 from ._readers import (  # noqa: F401 - frames/bundle/CLI use them
     MAX_ARRAY_BYTES,
@@ -145,6 +145,7 @@ def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarra
     The array is returned as stored (MATLAB v7.3 transposed back to the
     order MATLAB shows); nothing is converted or clipped.
     """
+    max_bytes = integer("max_bytes", max_bytes, low=1)
     path = Path(path)
     suffix = cube_suffix(path)
     if suffix == ".hdr":
@@ -242,6 +243,7 @@ def read_cube(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES):
     variable named like :data:`WAVELENGTH_KEYS` (or ENVI metadata), must
     match the band count and lie in :data:`WAVELENGTH_RANGE_NM`.
     """
+    max_bytes = integer("max_bytes", max_bytes, low=1)
     path = Path(path)
     suffix = cube_suffix(path)
     if suffix == ".hdr":

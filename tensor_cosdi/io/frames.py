@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..validate import real_array
+from ..validate import integer, real_array
 from ._atomic import atomic_write_many
 
 __all__ = [
@@ -95,6 +95,11 @@ def read_frame(
     from ._readers import reason, require_file
     from .files import MAX_ARRAY_BYTES
 
+    max_bytes = MAX_ARRAY_BYTES if max_bytes is None else integer("max_bytes", max_bytes, low=1)
+    if channel is not None:
+        channel = integer("channel", channel, low=0, high=3)
+    if key is not None and not isinstance(key, str):
+        raise ValueError(f"key must be the name of an array (a string), got {key!r}")
     p = Path(path)
     require_file(p, "frame file")
     suffix = p.suffix.lower()
@@ -102,8 +107,10 @@ def read_frame(
         raise ValueError(
             f"{p}: unknown frame format {suffix!r}; readable: {', '.join(FRAME_SUFFIXES)}"
         )
-
-    _check_declared(p, suffix, MAX_ARRAY_BYTES if max_bytes is None else int(max_bytes))
+    if key is not None and suffix not in (".npz", ".mat"):
+        raise ValueError(f"{p}: key= names an array of an .npz or .mat file; a {suffix} frame "
+                         f"holds one (got key={key!r})")  # fmt: skip
+    _check_declared(p, suffix, max_bytes)
     try:
         if suffix in (".tif", ".tiff"):
             import tifffile
@@ -137,7 +144,11 @@ def read_frame(
                 f"{p}: colour image {a.shape}; a frame must be monochrome — pass channel= to pick "
                 f"one"
             )
+        if channel >= a.shape[-1]:
+            raise ValueError(f"{p}: channel {channel} of an image of {a.shape[-1]} channels")
         a = a[..., channel]
+    elif channel is not None:
+        raise ValueError(f"{p}: channel={channel} picks a colour channel; this frame is monochrome")
     if a.ndim != 2:
         raise ValueError(f"{p}: expected a 2-D frame, got an array of shape {a.shape}")
     if not (np.issubdtype(a.dtype, np.integer) or np.issubdtype(a.dtype, np.floating)):
@@ -152,9 +163,9 @@ def crop(frame, roi):
     clipped."""
     a = np.asarray(frame)
     try:
-        r0, r1, c0, c1 = (int(v) for v in roi)
+        r0, r1, c0, c1 = (integer("roi", v) for v in roi)  # 2.5 is no pixel index
     except (TypeError, ValueError):
-        raise ValueError(f"roi must be (row0, row1, col0, col1), got {roi!r}") from None
+        raise ValueError(f"roi must be (row0, row1, col0, col1) in pixels, got {roi!r}") from None
     h, w = a.shape[:2]
     if not (0 <= r0 < r1 <= h and 0 <= c0 < c1 <= w):
         raise ValueError(f"roi {(r0, r1, c0, c1)} does not lie inside the {h}×{w} frame")

@@ -582,15 +582,25 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
     return out
 
 
-def _reader_arguments():
-    """Readers given a size limit, a key or a channel that cannot apply (each would be ignored
-    or taken as no limit)."""
+def _scratch():
+    """A fresh temporary folder for the files of :func:`hostile_arguments`, removed when the
+    process exits."""
+    import atexit
+    import shutil
     import tempfile
     from pathlib import Path
 
+    folder = Path(tempfile.mkdtemp(prefix="tensor_cosdi_hostile_"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
+
+
+def _reader_arguments():
+    """Readers given a size limit, a key or a channel that cannot apply (each would be ignored
+    or taken as no limit)."""
     from .io import crop, load_bundle, read_array, read_cube, read_frame, save_bundle
 
-    folder = Path(tempfile.mkdtemp(prefix="tensor_cosdi_hostile_"))
+    folder = _scratch()
     np.save(folder / "cube.npy", np.ones((4, 4, 3)))
     np.save(folder / "frame.npy", np.ones((4, 4)))
     save_bundle(folder / "b.npz", cube=np.ones((2, 2, 2)))
@@ -644,13 +654,10 @@ def _learned_arguments():
 def _writer_arguments():
     """Writers given an ``overwrite`` that is not ``True``/``False`` (``"no"`` is truthy): each
     writes into a fresh temporary folder, over a file already there."""
-    import tempfile
-    from pathlib import Path
-
     from .io import save_bundle, write_cube
     from .studies import write_csv
 
-    folder = Path(tempfile.mkdtemp(prefix="tensor_cosdi_hostile_"))
+    folder = _scratch()
     cube = folder / "cube.npy"
     np.save(cube, np.ones((2, 2, 2)))
     csv, bundle = folder / "r.csv", folder / "b.npz"

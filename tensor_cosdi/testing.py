@@ -556,7 +556,13 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
         ("solvers", estimate_snr, (sd, np.ones(sd.measurement_shape)), {},
          {0: [None, "sd_cassi"]}),
     ]  # fmt: skip
-    table += _writer_arguments() + _reader_arguments() + _learned_arguments()
+    table += (
+        _system_arguments()
+        + _study_arguments()
+        + _writer_arguments()
+        + _reader_arguments()
+        + _learned_arguments()
+    )
     out = []
     for module, fn, args, kwargs, bad in table:
         name = getattr(fn, "__name__", type(fn).__name__)
@@ -580,6 +586,37 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
                 label = f"{name} {arg}={_short(value)}"
                 out.append((module, label, lambda f=fn, a=tuple(a), k=k: f(*a, **k), words))
     return out
+
+
+def _system_arguments():
+    """Imager constructors given a flag that is not one or PSFs that are not real."""
+    from .codes import complementary_colour_codes
+    from .systems import C3SLFI, CASSDIDFA
+
+    codes = (np.random.default_rng(2).random((8, 8, 3)) > 0.5).astype(float)
+    psfs = np.full((3, 3, 4, 3), 1 / 9)
+    return [
+        ("systems", C3SLFI, (complementary_colour_codes((8, 8, 4), 2, rng=0),), {},
+         {"complementary": [2, "yes", None]}),
+        ("systems", CASSDIDFA, (codes,), {"n_bands": 4}, {"psfs": [psfs.astype(complex),
+         np.full((3, 3, 4, 3), "x")]}),
+    ]  # fmt: skip
+
+
+def _study_arguments():
+    """Design studies given seeds or values that are not a list of them (refused before any
+    system is built)."""
+    from . import studies
+
+    return [
+        ("studies", studies.conditioning_design, ("sd_cassi", "shots", (1, 2)),
+         {"cube_shape": (8, 8, 4)}, {"seeds": [(), (True,), (2.5,), "0"], 2: [None, "12"]}),
+        ("studies", studies.vsi_arms, (), {"shape": (8, 8), "n_bands": 4},
+         {"seeds": [(), (-1,)]}),
+        ("studies", studies.zernike_design, (), {"modes": (5,), "amplitudes": (0.25,),
+         "psf_sizes": (15,), "shape": (16, 16), "n_bands": 4, "progress": False},
+         {"seeds": [(), (True,)]}),
+    ]  # fmt: skip
 
 
 def _scratch():

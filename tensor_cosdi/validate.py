@@ -105,8 +105,9 @@ def axis_index(name: str, value, ndim: int) -> int:
 
 def seed(name: str, value):
     """``value`` if it can seed NumPy's generator: ``None``, an integer ≥ 0 (not a boolean), a
-    ``Generator``, ``BitGenerator`` or ``SeedSequence``; else a ``ValueError`` naming ``name``
-    (NumPy would take ``True`` as the seed 1 and fail deep inside on ``2.5`` or ``"7"``).
+    sequence of them (NumPy's entropy list), a ``Generator``, ``BitGenerator`` or
+    ``SeedSequence``; else a ``ValueError`` naming ``name`` (NumPy would take ``True`` as the
+    seed 1 and fail deep inside on ``2.5`` or ``"7"``).
     """
     if value is None or isinstance(
         value, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence)
@@ -114,11 +115,17 @@ def seed(name: str, value):
         return value
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
-    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_)):
-        if value >= 0:
-            return int(value)
+
+    def count(v) -> bool:
+        return isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_)) and v >= 0
+
+    if count(value):
+        return int(value)
+    if isinstance(value, (list, tuple, np.ndarray)) and len(value) and all(map(count, value)):
+        return [int(v) for v in value]
     raise ValueError(
-        f"{name} must be None, an integer ≥ 0 or a numpy.random.Generator, got {value!r}"
+        f"{name} must be None, an integer ≥ 0 (or a sequence of them) or a "
+        f"numpy.random.Generator, got {value!r}"[:300]
     )
 
 

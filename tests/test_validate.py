@@ -213,8 +213,8 @@ def test_axis_index_counts_from_either_end_and_refuses_the_rest():
 def test_seed_is_none_a_count_or_a_generator():
     g = np.random.default_rng(3)
     assert seed("rng", None) is None and seed("rng", 7) == 7 and seed("rng", g) is g
-    assert seed("rng", np.uint32(5)) == 5
-    for bad in (True, -1, 2.5, "7", [1, 2]):
+    assert seed("rng", np.uint32(5)) == 5 and seed("rng", (3, 4)) == [3, 4]
+    for bad in (True, -1, 2.5, "7", [1, True], [], [-1]):
         with pytest.raises(ValueError, match="rng must be None, an integer ≥ 0"):
             seed("rng", bad)
     # every seeded entry goes through it: a boolean seed is not the seed 1

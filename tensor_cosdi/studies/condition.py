@@ -8,6 +8,8 @@ import numbers
 
 import numpy as np
 
+from .sweeping import seed_list
+
 __all__ = ["conditioning", "conditioning_design", "vsi_arms", "SHAPE_PARAMETERS"]
 
 #: Design parameters that are an axis of the cube: ``(system, name) → axis``.
@@ -80,9 +82,12 @@ def conditioning_design(
         raise ValueError(
             f"cube_shape of {system!r} has {len(default)} axes (e.g. {default}), got {cube_shape}"
         )
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise ValueError(f"values must be a sequence of the parameter's values, got {values!r}")
     values = list(values)
     if not values:
         raise ValueError("values is empty: give the parameter values to sweep")
+    seeds = seed_list(seeds)
     records = []
     for value in values:
         for seed in seeds:
@@ -170,6 +175,7 @@ def vsi_arms(
     if bad or not alphas:
         raise ValueError(f"alphas must be fractions in [0, 1], got {bad or alphas}")
     wl = wavelengths_for(None, n_bands)
+    seeds = seed_list(seeds)
     records = []
     for scene in scenes:
         cube = np.asarray(sc.scene_cube(scene, tuple(shape), wl))

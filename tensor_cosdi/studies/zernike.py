@@ -146,6 +146,7 @@ def zernike_design(
     >>> [(r["mode"], r["amplitude"], r["psf_size"]) for r in recs]
     [(0, 0.0, 9), (6, 0.5, 9)]
     """
+    from .sweeping import seed_list
     from .sweeping import sweep as run_grid
 
     modes = [int(m) for m in modes]
@@ -158,7 +159,7 @@ def zernike_design(
     if any(s < 1 or s % 2 == 0 or s > reference_size for s in sizes):
         raise ValueError(f"psf_sizes must be odd, 1…reference_size={reference_size}: {sizes}")
     cases = [(0, 0.0)] + [(m, a) for m in modes for a in amps]
-    grid = {"aberration": cases, "psf_size": sizes, "seed": list(seeds)}
+    grid = {"aberration": cases, "psf_size": sizes, "seed": seed_list(seeds)}
     run = partial(  # a module-level function: picklable for Dask workers
         zernike_run, scene=scene, shape=tuple(shape), n_bands=n_bands, snr_db=snr_db,
         method=method, reference_size=reference_size, sweep=bool(sweep),

@@ -9,7 +9,7 @@ import tensorly as tl
 from .. import _backend as B
 from ..codes import complementary_colour_codes
 from ..operators import LAYOUTS, Code, LightFieldLayout, ModeProduct, Stack, SumAxis
-from ..validate import real_array
+from ..validate import flag, real_array
 from ._base import System, as_code, count, wavelengths_for
 
 __all__ = ["C3SLFI"]
@@ -129,7 +129,7 @@ class C3SLFI(System):
                     f"views {self.views} do not divide the 3-D image {cube[:2]}: Ñ1 = N1·N4 and "
                     "Ñ2 = N2·N5 must be multiples of the views"
                 )
-        self.complementary = bool(complementary)
+        self.complementary = flag("complementary", complementary)
         if self.complementary:
             if K < 2:
                 raise ValueError(

@@ -101,7 +101,7 @@ class CASSDIDFA(System):
         )
         self.psfs = None
         if psfs is not None:
-            p = np.array(B.to_numpy(psfs), dtype=np.float64)
+            p = np.array(real_array("psfs", B.to_numpy(psfs), finite=False))  # a copy, real
             if p.ndim not in (2, 4, 5):
                 raise ValueError(
                     f"psfs must have shape (h, w), (h, w, Nλ, Nz) = (h, w, {nl}, {nz}) or, for a "

@@ -210,8 +210,15 @@ def depth(depth_map, *, ax=None, label: str = "depth", cmap: str = "viridis"):
     d = validate.real_array("depth_map", B.to_numpy(depth_map), finite=False)
     if d.ndim == 3 and d.shape[2] == 1:
         d = d[:, :, 0]
-    if d.ndim != 2:
-        raise ValueError(f"expected a 2-D map (or one channel), got shape {d.shape}")
+    if d.ndim != 2 or d.size == 0:
+        raise ValueError(
+            f"depth_map must be a non-empty 2-D map (or one channel), got shape {d.shape}"
+        )
+    import matplotlib
+
+    if not isinstance(cmap, str) or cmap not in matplotlib.colormaps:
+        raise ValueError(f"cmap must be a matplotlib colour map name such as 'viridis', "
+                         f"got {cmap!r}")  # fmt: skip
     if _target("ax", ax) is None:
         _, ax = plt.subplots(figsize=(4, 3.5))
     im = ax.imshow(np.ma.masked_invalid(d), cmap=cmap)
@@ -272,6 +279,7 @@ def study(records, x: str, y: str, *, by: str | None = None, ax=None, logy: bool
     >>> ax.get_lines()[0].get_ydata().tolist(), ax.get_legend().get_texts()[0].get_text()
     ([28.0, 30.0], 'k = 0.5')
     """
+    logy = validate.flag("logy", logy)
     plt = _plt()
     if isinstance(records, (str, bytes, dict)) or not hasattr(records, "__iter__"):
         raise ValueError(f"records must be a sequence of dicts, got {type(records).__name__}")

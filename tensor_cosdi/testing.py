@@ -559,6 +559,7 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
     table += (
         _system_arguments()
         + _study_arguments()
+        + _plot_arguments()
         + _writer_arguments()
         + _reader_arguments()
         + _learned_arguments()
@@ -616,6 +617,23 @@ def _study_arguments():
         ("studies", studies.zernike_design, (), {"modes": (5,), "amplitudes": (0.25,),
          "psf_sizes": (15,), "shape": (16, 16), "n_bands": 4, "progress": False},
          {"seeds": [(), (True,)]}),
+    ]  # fmt: skip
+
+
+def _plot_arguments():
+    """Figures given a colour map, a flag or a map they cannot draw (where matplotlib is
+    installed; each is refused before a figure is made)."""
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        return []
+    from . import plot
+
+    depth_map = np.random.default_rng(3).random((8, 8))
+    return [
+        ("plot", plot.depth, (depth_map,), {}, {"cmap": ["", "VIRIDIS ", 3, None],
+         0: [np.zeros((0, 8)), np.ones((8, 8, 2))]}),
+        ("plot", plot.study, ([{"x": 1, "y": 2.0}], "x", "y"), {}, {"logy": [2, "yes", None]}),
     ]  # fmt: skip
 
 

@@ -137,8 +137,8 @@ def all_finite(x) -> bool:
 
 def default_rng(seed=None) -> np.random.Generator:
     """Seeded NumPy generator; passes an existing ``Generator`` through.  A seed that is not
-    ``None``, an integer ≥ 0, a ``BitGenerator`` or a ``SeedSequence`` is a ``ValueError``
-    (see :func:`tensor_cosdi.validate.seed`)."""
+    ``None``, an integer ≥ 0 (or a list of them), a ``BitGenerator`` or a ``SeedSequence`` is
+    a ``ValueError`` (see :func:`tensor_cosdi.validate.seed`)."""
     if isinstance(seed, np.random.Generator):
         return seed
     return np.random.default_rng(check_seed("rng", seed))

@@ -125,13 +125,18 @@ def training_scenes(hold_out: int = -1) -> tuple[str, ...]:
 
 
 def _roots() -> list[Path]:
-    """Where the project's research data may be: ``$TENSOR_COSDI_DATA``, then ``../shared/data``
-    next to the source checkout this module was imported from, then ``shared/data`` in the
-    current folder or one of its three nearest parents (an installed package run from inside
-    its checkout: ``site-packages`` has no data beside it)."""
+    """Where the project's research data may be: ``$TENSOR_COSDI_DATA`` alone where it is set (a
+    folder named there that is wrong is an error, never passed over for another), else
+    ``../shared/data`` next to the source checkout this module was imported from, then
+    ``shared/data`` in the current folder or one of its three nearest parents (an installed
+    package run from inside its checkout: ``site-packages`` has no data beside it)."""
     env = os.environ.get("TENSOR_COSDI_DATA")
-    roots = [Path(env)] if env else []
-    roots.append(Path(__file__).resolve().parents[1] / ".." / "shared" / "data")
+    if env:
+        if not Path(env).is_dir():
+            state = "is not a folder" if Path(env).exists() else "does not exist"
+            raise FileNotFoundError(f"TENSOR_COSDI_DATA={env} {state}; point it at the data folder")
+        return [Path(env)]
+    roots = [Path(__file__).resolve().parents[1] / ".." / "shared" / "data"]
     try:
         here = Path.cwd().resolve()
     except OSError:  # the current folder was removed
@@ -144,7 +149,7 @@ def data_dir(path=None) -> Path:
     """The folder holding the ``NAME.npz`` scenes.
 
     ``path`` if given, else ``$TENSOR_COSDI_DATA/hsi_train`` (or
-    ``$TENSOR_COSDI_DATA`` itself when it holds the scenes), else
+    ``$TENSOR_COSDI_DATA`` itself when it holds the scenes) where that variable is set, else
     ``../shared/data/hsi_train`` next to a source checkout or near the
     current folder (:func:`_roots`).  Raises ``FileNotFoundError`` saying
     where it looked.

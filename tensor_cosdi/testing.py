@@ -452,7 +452,7 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
     nan, inf = float("nan"), float("inf")
     number_slips = [nan, inf, True, "3", 1 + 1j]  # never a number, wherever a number goes
     table = [
-        # module, function, positional args, keyword args, {argument: bad values}, words
+        # module, function, positional args, keyword args, {argument (name or position): bad values}
         ("codes", codes.random_binary, ((16, 16),), {}, {"transmittance": number_slips + [0, 1.5],
          "rng": [True, -1, 2.5, "7"]}),
         ("codes", codes.depth_codes, ((16, 16), 3), {}, {"transmittance": [True, "0.5"]}),

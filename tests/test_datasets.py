@@ -189,3 +189,21 @@ def test_crop_and_precision_are_checked(tmp_path):
         datasets.load_hsi(path, wavelengths=[0.5, 0.6])
     cube, wl = datasets.load_hsi(path, shape=(4, 4), dtype="float32")
     assert cube.shape == (4, 4, 3) and cube.dtype == np.float32 and wl.size == 3
+
+
+def test_a_wrong_tensor_cosdi_data_is_an_error_not_a_fallback(monkeypatch, tmp_path):
+    # a checkout's ../shared/data may hold the scenes; a TENSOR_COSDI_DATA set to a wrong place
+    # must not be passed over for them without a word
+    (tmp_path / "a_file").write_text("x")
+    for wrong, state in (
+        (tmp_path / "a_file", "is not a folder"),
+        (tmp_path / "gone", "does not exist"),
+    ):
+        monkeypatch.setenv("TENSOR_COSDI_DATA", str(wrong))
+        with pytest.raises(FileNotFoundError, match=f"TENSOR_COSDI_DATA={wrong} {state}"):
+            datasets.data_dir()
+        with pytest.raises(FileNotFoundError, match="TENSOR_COSDI_DATA"):
+            datasets.data_file("masks/tsa_mask256.mat")
+    monkeypatch.setenv("TENSOR_COSDI_DATA", str(tmp_path))  # a folder without scenes: only it
+    with pytest.raises(FileNotFoundError, match=f"looked in {tmp_path}/hsi_train, {tmp_path} —"):
+        datasets.data_dir()

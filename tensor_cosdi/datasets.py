@@ -164,7 +164,8 @@ def data_dir(path=None) -> Path:
     raise FileNotFoundError(
         "no hyperspectral scenes (NAME.npz) found; looked in "
         + ", ".join(map(str, candidates))
-        + " — set TENSOR_COSDI_DATA to the folder of the CAVE hsi_train scenes"
+        + " — set TENSOR_COSDI_DATA to the research data folder (the one holding hsi_train/ "
+        "and masks/)"
     )
 
 

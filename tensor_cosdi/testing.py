@@ -560,6 +560,7 @@ def hostile_arguments() -> list[tuple[str, str, Callable[[], object], tuple[str,
         _system_arguments()
         + _study_arguments()
         + _plot_arguments()
+        + _lab_arguments()
         + _writer_arguments()
         + _reader_arguments()
         + _learned_arguments()
@@ -634,6 +635,17 @@ def _plot_arguments():
         ("plot", plot.depth, (depth_map,), {}, {"cmap": ["", "VIRIDIS ", 3, None],
          0: [np.zeros((0, 8)), np.ones((8, 8, 2))]}),
         ("plot", plot.study, ([{"x": 1, "y": 2.0}], "x", "y"), {}, {"logy": [2, "yes", None]}),
+    ]  # fmt: skip
+
+
+def _lab_arguments():
+    """Acquisition plans given a frame type the readers do not know, and a camera that would
+    poll less often than it waits."""
+    from .io.triggers import AcquisitionPlan, FolderCamera
+
+    return [
+        ("io.lab", AcquisitionPlan.snapshots, (2,), {}, {"suffix": ["", "tif", ".exe", 3]}),
+        ("io.lab", FolderCamera, (_scratch(),), {}, {"poll": [1e9, 0.0]}),
     ]  # fmt: skip
 
 

@@ -45,6 +45,7 @@ from ..validate import integer, number
 from ._atomic import atomic_write
 from ._commands import DM_MAX_WAVES, _check_frame_name, check_command  # noqa: F401
 from ._framelog import LockedError, _Lock, _verified, read_log  # noqa: F401
+from .frames import FRAME_SUFFIXES
 
 log = logging.getLogger(__name__)
 
@@ -198,6 +199,11 @@ class AcquisitionPlan:
     @staticmethod
     def _frames(n, suffix):
         n = integer("the number of frames in a plan", n, low=1, high=MAX_PLAN_FRAMES)
+        if not isinstance(suffix, str) or suffix.lower() not in FRAME_SUFFIXES:
+            raise ValueError(
+                f"suffix must be a frame file type the readers know ({', '.join(FRAME_SUFFIXES)}"
+                f"), got {_short(suffix)}"
+            )
         width = max(3, len(str(n - 1)))
         return [f"frame_{i:0{width}d}{suffix}" for i in range(n)]
 
@@ -411,7 +417,7 @@ class FolderCamera:
         if not self.folder.is_dir():
             raise FileNotFoundError(f"frame folder {self.folder} does not exist")
         self.timeout = number("timeout", timeout, low=0, low_open=True)
-        self.poll = number("poll", poll, low=0, low_open=True)
+        self.poll = number("poll", poll, low=0, low_open=True, high=self.timeout)
         self._before: dict[str, tuple | None] = {}
 
     def _identity(self, p: Path):

@@ -605,6 +605,18 @@ def _system_arguments():
     ]  # fmt: skip
 
 
+def _spectral_denoise(x, sigma):
+    """``SpectralDenoiser()(x, sigma)`` with the shipped weights, made at the first call."""
+    if not _SHIPPED:
+        from .learn.spectral_net import SpectralDenoiser
+
+        _SHIPPED.append(SpectralDenoiser())
+    return _SHIPPED[0](x, sigma)
+
+
+_SHIPPED: list = []  # the denoiser of _spectral_denoise, once made
+
+
 def _study_arguments():
     """Design studies given seeds or values that are not a list of them (refused before any
     system is built)."""
@@ -693,14 +705,15 @@ def _learned_arguments():
 
     from .learn import dcosnet, spectral_net
 
-    den = spectral_net.SpectralDenoiser()
     cube = np.random.default_rng(1).random((16, 16, 8)).astype(np.float32)
     nan_cube = cube.copy()
     nan_cube[3, 3, 3] = np.nan
-    batch = torch.rand(1, 2, 16, 16)
+    # no network is made and nothing runs in torch here: a process forked after torch has
+    # started its threads (the robustness catalogue's workers) would wait on them for ever
+    batch = torch.from_numpy(np.random.default_rng(2).random((1, 2, 16, 16)).astype(np.float32))
     nan, inf = float("nan"), float("inf")
     return [
-        ("learn", den, (cube, 0.1), {}, {0: [nan_cube, None, np.zeros((0, 0, 3)),
+        ("learn", _spectral_denoise, (cube, 0.1), {}, {0: [nan_cube, None, np.zeros((0, 0, 3)),
          cube.astype(complex)], 1: [True, "0.1", nan, -1.0]}),
         ("learn", spectral_net.SpectralDenoiser, (), {}, {"device": ["tpu", 3, ""],
          "joint": [2, "yes"]}),

@@ -538,9 +538,11 @@ def _code_shape(shape) -> tuple[int, int]:
     """``(rows, columns)`` of a code: two positive integers, or a one-line ``ValueError``."""
     try:
         rows, cols = shape
+        return integer("rows", rows, low=1), integer("columns", cols, low=1)
     except (TypeError, ValueError):
-        raise ValueError(f"a code's shape must be (rows, columns), got {shape!r}") from None
-    return integer("a code's rows", rows, low=1), integer("a code's columns", cols, low=1)
+        raise ValueError(
+            f"a code's shape must be (rows, columns), two integers ≥ 1, got {shape!r}"
+        ) from None
 
 
 def tile_code(code, shape) -> np.ndarray:

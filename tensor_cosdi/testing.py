@@ -744,8 +744,17 @@ def _writer_arguments():
     csv.write_text("a\n1\n")
     save_bundle(bundle, cube=np.ones((2, 2, 2)))
     slips = ["no", "False", 1, None]
+    deep: dict = {}
+    inner = deep
+    for _ in range(5000):  # past the JSON encoder's recursion limit
+        inner["a"] = inner = {}
+    fresh = folder / "fresh.npz"
     return [
         ("io.files", write_cube, (cube, np.zeros((2, 2, 2))), {}, {"overwrite": slips}),
+        ("io.files", write_cube, (fresh, np.zeros((2, 2, 2))), {}, {"metadata": [deep, [1, 2],
+         {"x": float("nan")}], 1: [np.zeros((0, 2, 2)), np.zeros((2, 2))]}),
+        ("io.bundle", save_bundle, (fresh,), {"cube": np.zeros((2, 2, 2))},
+         {"metadata": [deep, [1, 2]]}),
         ("studies", write_csv, ([{"a": 2}], csv), {}, {"overwrite": slips}),
         ("io.bundle", save_bundle, (bundle,), {"cube": np.zeros((2, 2, 2))},
          {"overwrite": slips}),
@@ -769,5 +778,8 @@ def _short(value) -> str:
         return " ".join([f"array{value.shape}"] + flags)
     if hasattr(value, "shape") and hasattr(value, "dtype"):  # a torch tensor, say
         return f"{type(value).__name__}{tuple(value.shape)}"
-    text = repr(value)
+    try:
+        text = repr(value)
+    except RecursionError:  # a structure nested past the interpreter's limit
+        return f"{type(value).__name__} nested too deeply to print"
     return text if len(text) <= 40 else text[:37] + "…"

@@ -257,12 +257,16 @@ def save_bundle(
         a = store.get(name)
         if a is not None and a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
             raise ValueError(f"the {name} holds NaN or infinite values; bundles store finite ones")
+    if metadata is not None and not isinstance(metadata, dict):
+        raise ValueError(f"metadata must be a dict (or None), got {type(metadata).__name__}")
     try:
         doc["metadata"] = json.loads(json.dumps(metadata or {}, allow_nan=False))
     except (TypeError, ValueError) as e:
         raise ValueError(
             f"metadata must be JSON-serialisable (numbers, strings, lists, dicts): {e}"
         ) from None
+    except RecursionError:
+        raise ValueError("metadata is nested too deeply to store as JSON") from None
     doc["provenance"] = [file_digest(s) for s in sources]
     doc["kind"] = kind or (
         "reconstruction"

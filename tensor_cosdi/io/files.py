@@ -310,11 +310,17 @@ def write_cube(path, cube, wavelengths=None, *, metadata=None, overwrite: bool =
         raise ValueError(
             f"cube must be a numeric (rows, columns, bands) array, got {cube.dtype} {cube.shape}"
         )
+    if cube.size == 0:  # (a TIFF of no pages would not read back)
+        raise ValueError(f"cube has no entries (shape {cube.shape}); nothing to write")
     wl = None if wavelengths is None else _check_wavelengths(path, wavelengths, cube.shape[2])
+    if metadata is not None and not isinstance(metadata, dict):
+        raise ValueError(f"metadata must be a dict (or None), got {type(metadata).__name__}")
     try:
         meta_json = json.dumps(metadata or {}, allow_nan=False)
     except (TypeError, ValueError) as e:
         raise ValueError(f"metadata must be JSON-serialisable: {e}") from None
+    except RecursionError:
+        raise ValueError("metadata is nested too deeply to store as JSON") from None
 
     def write(tmp):
         if suffix in (".h5", ".hdf5"):

@@ -40,16 +40,27 @@ def _is_real(value) -> bool:
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 
+def _scalar(value):
+    """A 0-d array or tensor (NumPy, PyTorch, …) as the Python scalar it holds; anything else
+    as it is."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        return value[()]
+    if getattr(value, "ndim", None) == 0 and hasattr(value, "item") and not isinstance(
+        value, (np.generic, np.ndarray)
+    ):
+        return value.item()  # a 0-d torch tensor, say (a bool one stays a bool)
+    return value
+
+
 def number(name: str, value, *, low=None, high=None, low_open=False, high_open=False) -> float:
     """``value`` as a finite ``float`` in the range, or a ``ValueError`` naming ``name``.
 
     ``low``/``high`` bound it (``low_open``/``high_open``: strictly).  Accepts
-    Python and NumPy reals (0-d arrays too), never booleans or strings.
+    Python and NumPy reals (0-d arrays and tensors too), never booleans or strings.
     """
     rng = _range_text(low, high, low_open, high_open)
     want = "a finite number" + (f" {rng}" if rng else "")
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        value = value[()]
+    value = _scalar(value)
     if not _is_real(value):
         raise ValueError(f"{name} must be {want}, got {value!r}")
     v = float(value)
@@ -66,8 +77,7 @@ def integer(name: str, value, *, low=None, high=None) -> int:
     """``value`` as an ``int`` in ``[low, high]``; booleans, floats and strings are errors."""
     rng = _range_text(low, high, False, False)
     want = "an integer" + (f" {rng}" if rng else "")
-    if isinstance(value, np.ndarray) and value.ndim == 0:
-        value = value[()]
+    value = _scalar(value)
     ok = isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
     if not ok or (low is not None and value < low) or (high is not None and value > high):
         raise ValueError(f"{name} must be {want}, got {value!r}")

@@ -223,3 +223,12 @@ def test_seed_is_none_a_count_or_a_generator():
     assert np.array_equal(
         tc.codes.random_binary((4, 4), rng=1), tc.codes.random_binary((4, 4), rng=1)
     )
+
+
+def test_a_zero_dimensional_tensor_is_the_number_it_holds():
+    torch = pytest.importorskip("torch")
+    assert number("sigma", torch.tensor(0.25)) == 0.25
+    assert integer("n", torch.tensor(3), low=1) == 3
+    for bad in (torch.tensor(True), torch.tensor([0.1]), torch.tensor(float("nan"))):
+        with pytest.raises(ValueError, match="sigma must be a finite number"):
+            number("sigma", bad)

@@ -45,8 +45,10 @@ def _scalar(value):
     as it is."""
     if isinstance(value, np.ndarray) and value.ndim == 0:
         return value[()]
-    if getattr(value, "ndim", None) == 0 and hasattr(value, "item") and not isinstance(
-        value, (np.generic, np.ndarray)
+    if (
+        getattr(value, "ndim", None) == 0
+        and hasattr(value, "item")
+        and not isinstance(value, (np.generic, np.ndarray))
     ):
         return value.item()  # a 0-d torch tensor, say (a bool one stays a bool)
     return value

@@ -23,7 +23,7 @@ import numpy as np
 
 __all__ = [
     "number", "integer", "flag", "axis_index", "seed", "precision", "option_types", "real_array",
-    "increasing", "output_folder",
+    "increasing", "output_folder", "imager",
 ]  # fmt: skip
 
 
@@ -212,6 +212,24 @@ def increasing(name: str, value, *, size: int | None = None) -> np.ndarray:
     if a.size == 0 or (np.diff(a) <= 0).any():
         raise ValueError(f"{name} must be non-empty and strictly increasing, got {a.tolist()}")
     return a
+
+
+def imager(system, *attributes: str):
+    """``system`` if it has what an imager of :mod:`tensor_cosdi.systems` has (``operator``,
+    ``cube_shape``, ``measurement_shape`` and every name in ``attributes``), else a one-line
+    ``ValueError``: an entry that takes an imager says so before it touches one.
+
+    >>> imager("sd_cassi")
+    Traceback (most recent call last):
+    ...
+    ValueError: system: expected an imager (tensor_cosdi.systems), got str
+    """
+    needs = ("operator", "cube_shape", "measurement_shape", *attributes)
+    if not all(hasattr(system, a) for a in needs):
+        raise ValueError(
+            f"system: expected an imager (tensor_cosdi.systems), got {type(system).__name__}"
+        )
+    return system
 
 
 def output_folder(path, what: str = "output folder") -> None:

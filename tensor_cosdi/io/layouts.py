@@ -24,22 +24,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validate import real_array
+from ..validate import imager, real_array
 
 __all__ = ["frames_to_measurement", "measurement_to_frames", "frame_count", "dual_camera_frames"]
 
 
-def _imager(system):
-    if not hasattr(type(system), "frame_count"):
-        raise ValueError(
-            f"system: expected an imager (tensor_cosdi.systems), got {type(system).__name__}"
-        )
-    return system
-
-
 def frame_count(system) -> int:
     """How many sensor frames one measurement of ``system`` takes (``system.frame_count``)."""
-    return _imager(system).frame_count
+    return imager(system, "frame_count").frame_count
 
 
 def frames_to_measurement(system, frames):
@@ -48,13 +40,13 @@ def frames_to_measurement(system, frames):
     ``system.frames_to_measurement``; raises ``ValueError`` naming the
     expected frame count and shape when they do not match.
     """
-    return _imager(system).frames_to_measurement(frames)
+    return imager(system, "frame_count").frames_to_measurement(frames)
 
 
 def measurement_to_frames(system, measurement) -> np.ndarray:
     """``system``'s measurement → the ``(H, W, N)`` stack of sensor frames (the inverse of
     :func:`frames_to_measurement`)."""
-    return _imager(system).measurement_to_frames(measurement)
+    return imager(system, "frame_count").measurement_to_frames(measurement)
 
 
 def dual_camera_frames(cassi_frame, pan_frame) -> np.ndarray:

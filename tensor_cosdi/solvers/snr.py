@@ -71,7 +71,7 @@ import numpy as np
 
 from .. import _backend as B
 from ..noise import frame_powers, frame_rank_sigma, frame_sigmas, snr_db_from_sigma
-from ..validate import number, real_array
+from ..validate import imager, number, real_array
 from .subspace import has_many_bands, subspace_gap_tv
 
 __all__ = [
@@ -236,10 +236,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     >>> 17 < est.snr_db < 23
     True
     """
-    if not all(hasattr(system, a) for a in ("operator", "measurement_shape", "cube_shape")):
-        raise ValueError(
-            f"system: expected an imager (tensor_cosdi.systems), got {type(system).__name__}"
-        )
+    imager(system)
     if fit is True:
         fit = "auto"
     if fit is not False and not (isinstance(fit, str) and fit in FITS):

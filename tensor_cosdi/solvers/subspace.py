@@ -17,7 +17,7 @@ from tensorly import tenalg
 
 from .. import _backend as B
 from ..bases import dct
-from ..validate import real_array
+from ..validate import imager, real_array
 from . import engine
 from .priors import TV
 
@@ -103,8 +103,7 @@ def has_many_bands(system) -> bool:
     >>> has_many_bands(tc.systems.SDCASSI(code, n_bands=16))
     False
     """
-    if not all(hasattr(system, a) for a in ("axes", "cube_shape", "panchromatic_axes")):
-        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
+    imager(system, "axes", "panchromatic_axes")
     names = list(system.axes)
     longest = max((system.cube_shape[names.index(a)] for a in system.panchromatic_axes), default=0)
     return longest >= MANY_BANDS

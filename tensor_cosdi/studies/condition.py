@@ -8,6 +8,7 @@ import numbers
 
 import numpy as np
 
+from ..validate import imager
 from .sweeping import seed_list
 
 __all__ = ["conditioning", "conditioning_design", "vsi_arms", "SHAPE_PARAMETERS"]
@@ -219,6 +220,5 @@ def conditioning(system, *, exact_below: int = 4096, tol: float = 1e-8) -> dict:
     the structure of ``A Aᵀ`` and the method used (exact from the structure,
     dense below ``exact_below`` measurements, else Lanczos).
     """
-    if not callable(getattr(getattr(system, "operator", None), "conditioning", None)):
-        raise ValueError(f"expected an imager (tensor_cosdi.systems), got {type(system).__name__}")
+    imager(system)
     return system.operator.conditioning(exact_below=exact_below, tol=tol)

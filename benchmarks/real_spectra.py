@@ -109,11 +109,26 @@ def _method(label: str) -> str:
     return label.split("+", 1)[0]
 
 
+def _versus(text: str, methods) -> list[tuple[str, str]]:
+    """``--versus A:B,C:D`` as ``[(B, A), (D, C)]``: ``A`` against ``B``, each a ``--methods``
+    entry."""
+    out = []
+    for pair in (p for p in text.split(",") if p):
+        a, sep, b = pair.partition(":")
+        if not sep or a not in methods or b not in methods:
+            raise SystemExit(
+                f"--versus: {pair!r} must be METHOD:OTHER, both among --methods {methods}"
+            )
+        out.append((b, a))
+    return out
+
+
 def report(args, store, cache):
     methods = args.methods.split(",")
     options = json.loads(args.options)
     scenes = args.scenes.split(",") if args.scenes else list(datasets.REPORT_SCENES)
     conds = _conditions(args)
+    versus = _versus(args.versus, methods)  # checked before anything runs
     for scene in scenes:
         for snr, mk in conds:
             for m in methods:
@@ -124,7 +139,6 @@ def report(args, store, cache):
         + (" lead over plain_gap_tv, dB (min…max per scene) |" if base else ""),
         "|---|---|---|---|---|---|---|---|" + ("---|" if base else ""),
     ]
-    leads = {}
     for snr, mk in conds:
         for m in methods:
             rs = [store.get(s, snr, mk, _method(m), options.get(m, {})) for s in scenes]
@@ -136,25 +150,28 @@ def report(args, store, cache):
             if base:
                 ref = [store.get(s, snr, mk, base, options.get(base, {}))["psnr"] for s in scenes]
                 d = np.array([r["psnr"] for r in rs]) - np.array(ref)
-                leads.setdefault(m, []).extend(d.tolist())
                 spread = f"{d.mean():+.2f} ({d.min():+.2f}…{d.max():+.2f})"
                 row += " — |" if m == base else f" {spread} |"
             lines.append(row)
-    if base:  # one computed line per method: where it stands against the reference
+    pairs = [("plain_gap_tv", m) for m in methods if base and m != base]
+    pairs += versus
+    if pairs:  # one computed line per pair: where the method stands against the other
         lines.append("")
-        for m, d in leads.items():
-            if m == base:
-                continue
-            d = np.array(d)
-            where = (
-                "above it in every case" if d.min() > 0
-                else "under it in every case" if d.max() < 0
-                else f"above it in {int((d > 0).sum())} of {d.size} cases"
-            )  # fmt: skip
-            lines.append(
-                f"* `{m}` against `{base}`, per scene and condition: {where} "
-                f"({d.min():+.2f} to {d.max():+.2f} dB, mean {d.mean():+.2f})."
-            )
+    for ref, m in pairs:
+        d = np.array([
+            store.get(s, snr, mk, _method(m), options.get(m, {}))["psnr"]
+            - store.get(s, snr, mk, _method(ref), options.get(ref, {}))["psnr"]
+            for snr, mk in conds for s in scenes
+        ])  # fmt: skip
+        where = (
+            "above it in every case" if d.min() > 0
+            else "under it in every case" if d.max() < 0
+            else f"above it in {int((d > 0).sum())} of {d.size} cases"
+        )  # fmt: skip
+        lines.append(
+            f"* `{m}` against `{ref}`, per scene and condition: {where} "
+            f"({d.min():+.2f} to {d.max():+.2f} dB, mean {d.mean():+.2f})."
+        )
     head = (
         f"# Real spectra: {', '.join(scenes)}\n\nSD-CASSI 256×256×28 (KAIST bands), 2 px/band, "
         f"float32; options {json.dumps(options)}.\n\n"
@@ -427,6 +444,10 @@ def main(argv=None):
     ap.add_argument(
         "--budget-s", type=float, default=None, metavar="SECONDS",
         help="--cv: only candidates whose median seconds a cube are at most SECONDS compete",
+    )  # fmt: skip
+    ap.add_argument(
+        "--versus", default="", metavar="A:B,…",
+        help="report mode: also a computed line for method A against method B",
     )  # fmt: skip
     ap.add_argument("--name", default=None, help="results file stem")
     ap.add_argument(

@@ -146,6 +146,8 @@ def test_scene_views(protocol):
         ),
         (["--cv", "otd", "--grid", '{"lam": [0.1]}', "--budget-s", "0"], "--budget-s needs"),
         (["--methods", "otd", "--budget-s", "5"], "--budget-s needs --cv"),
+        (["--methods", "otd,gap_tv", "--versus", "otd:pnp_gap"], "--versus: 'otd:pnp_gap'"),
+        (["--methods", "otd,gap_tv", "--versus", "otd"], "must be METHOD:OTHER"),
     ],
 )
 def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_path):
@@ -256,6 +258,33 @@ def test_denoiser_weights_verdict_is_computed_from_the_means_and_the_seconds(mon
     assert "is not within 1 dB" in line and "(5.9 s) exceeds the 5-s budget" in line
     line = mod.verdict("candidate", [31.5, 29.9], [32.24, 30.28], snrs, [4.0, 5.0, 6.0], 1, 5)
     assert "is within 1 dB" in line and "(5.0 s) fits the 5-s budget" in line
+
+
+def test_real_spectra_versus_lines_are_computed_from_the_rows(monkeypatch):
+    """``--versus A:B``: a line for ``A`` against ``B`` over every scene and condition, from the
+    stored PSNRs, beside the lines against the reference."""
+    import argparse
+
+    mod = _script("real_spectra", monkeypatch)
+    psnr = {("plain_gap_tv", "a"): 25.0, ("plain_gap_tv", "b"): 25.0, ("otd", "a"): 27.0,
+            ("otd", "b"): 24.0, ("dcosnet", "a"): 26.0, ("dcosnet", "b"): 26.5}  # fmt: skip
+
+    class Store:
+        def ensure(self, *args, **kwargs):
+            pass
+
+        def get(self, scene, snr, mask, method, options):
+            return {"psnr": psnr[method, scene], "ssim": 0.5, "sam": 9.0, "seconds": 1.0}
+
+    args = argparse.Namespace(
+        methods="plain_gap_tv,otd,dcosnet", options="{}", scenes="a,b", snr="none",
+        masks="tsa", versus="dcosnet:otd",
+    )  # fmt: skip
+    text = mod.report(args, Store(), None)
+    assert "* `otd` against `plain_gap_tv`, per scene and condition: above it in 1 of 2 cases " \
+        "(-1.00 to +2.00 dB, mean +0.50)." in text  # fmt: skip
+    assert "* `dcosnet` against `otd`, per scene and condition: above it in 1 of 2 cases " \
+        "(-1.00 to +2.50 dB, mean +0.75)." in text  # fmt: skip
 
 
 def test_real_spectra_loads_torch_only_for_a_learned_method(monkeypatch):

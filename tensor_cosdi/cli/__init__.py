@@ -502,6 +502,11 @@ def build_parser() -> argparse.ArgumentParser:
         "the network adapts (default 0.5)",
     )  # fmt: skip
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
+    dc.add_argument(
+        "--start", default="zero",
+        help="zero (the thesis: the ADMM starts at 0) or fast (from the first-stage cube that "
+        "pnp_fast starts from, computed per sample; the method computes it too)",
+    )  # fmt: skip
     dc.set_defaults(func=run_train_dcosnet)
     return parser
 

@@ -109,5 +109,6 @@ def run_train_dcosnet(args) -> int:
         learn_code=args.learn_code,
         alpha_t=args.alpha_t,
         code_until=args.code_until,
+        start=args.start,
     )
     return _run_training(args, train_dcosnet, cfg.check())

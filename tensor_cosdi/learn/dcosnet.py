@@ -61,21 +61,34 @@ __all__ = [
     "tile_code",
     "training_code",
     "read_config",
+    "STARTS",
 ]
 
 WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
-#: Shipped weights per system name.
-DEFAULT_WEIGHTS = {"sd_cassi": WEIGHTS_DIR / "dcosnet_sd_cassi.pt"}
+#: Shipped weights per (system name, start, :data:`STARTS`): ``"fast"`` begins from the
+#: first-stage cube ``pnp_fast`` starts from, ``"zero"`` is the thesis' network from 0.
+DEFAULT_WEIGHTS = {
+    ("sd_cassi", "fast"): WEIGHTS_DIR / "dcosnet_fast_sd_cassi.pt",
+    ("sd_cassi", "zero"): WEIGHTS_DIR / "dcosnet_sd_cassi.pt",
+}
+#: The start the shipped weights of :func:`default_weights` begin from unless asked otherwise.
+DEFAULT_START = "fast"
 
 
-def default_weights(system_name: str) -> Path:
-    """The shipped weights for ``system_name``; ``FileNotFoundError`` naming the command if none."""
-    path = DEFAULT_WEIGHTS.get(system_name)
+def default_weights(system_name: str, start: str = DEFAULT_START) -> Path:
+    """The shipped weights for ``system_name`` that begin from ``start`` (:data:`STARTS`);
+    ``FileNotFoundError`` naming the command if none."""
+    if start not in STARTS:
+        raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+    path = DEFAULT_WEIGHTS.get((system_name, start))
     if path is None or not path.is_file():
+        shipped = sorted(
+            f"{k[0]} (start {k[1]})" for k, v in DEFAULT_WEIGHTS.items() if v.is_file()
+        )
         raise FileNotFoundError(
-            f"no shipped D-CoSNet weights for {system_name!r} (shipped: "
-            f"{sorted(k for k, v in DEFAULT_WEIGHTS.items() if v.is_file())}); train them with "
-            f"`tensor-cosdi train-dcosnet --system {system_name} --out weights.pt` and pass "
+            f"no shipped D-CoSNet weights for {system_name!r} with start {start!r} (shipped: "
+            f"{', '.join(shipped) or 'none'}); train them with `tensor-cosdi train-dcosnet "
+            f"--system {system_name} --start {start} --out weights.pt` and pass "
             "weights='weights.pt'"
         )
     return path
@@ -449,7 +462,9 @@ def build_dcosnet(
             return x + self.out(d1)[..., :h, :w]
 
     class DCoSNetModule(nn.Module):
-        """``forward(g, sensing) -> (F̃, G̃)`` for a normalised measurement batch ``g``."""
+        """``forward(g, sensing, start=None) -> (F̃, G̃)`` for a normalised measurement batch
+        ``g``; ``start`` (a cube batch in the same units, or ``None`` for 0) is where ``w``
+        begins (:data:`STARTS`)."""
 
         def __init__(self):
             super().__init__()
@@ -479,7 +494,7 @@ def build_dcosnet(
         def denoise(self, x, k):
             return self.unet[k](x) if self.prior == "unet" else self.spectral(x, k)
 
-        def forward(self, g, sensing):
+        def forward(self, g, sensing, start=None):
             if sensing.channels != self.channels:
                 raise ValueError(
                     f"the network was built for {self.channels} channels; the system's cube has "
@@ -488,7 +503,7 @@ def build_dcosnet(
             dbar = sensing.dbar.to(g.dtype)
             atg = sensing.adjoint(g)
             db = _per_sample(dbar, atg)
-            w = torch.zeros_like(atg)
+            w = torch.zeros_like(atg) if start is None else start.to(atg.dtype)
             u = torch.zeros_like(atg)
             for k in range(self.stages):
                 mu = nn.functional.softplus(self.mu[k]) * dbar
@@ -578,6 +593,10 @@ def tile_code(code, shape) -> np.ndarray:
 CONFIG_LIMITS = {"channels": (1, 1024), "stages": (1, 64), "width": (1, 1024),
                  "unet_width": (1, 1024), "code_seed": (0, 2**63 - 1)}  # fmt: skip
 MAX_CODE_SIDE = 8192
+#: Where the unfolded ADMM's ``w`` starts: ``"zero"`` (the thesis) or ``"fast"``
+#: (:func:`~tensor_cosdi.solvers.otd.fast_start`, the cube ``pnp_fast`` starts from; a
+#: weights file records which).
+STARTS = ("zero", "fast")
 
 
 def _checkpoint(weights):
@@ -607,6 +626,8 @@ def _checkpoint(weights):
         raise bad(exc) from None
     if cfg.get("prior", "unet") not in PRIORS:
         raise bad(f"config prior={cfg.get('prior')!r}; expected one of {PRIORS}")
+    if cfg.get("start", "zero") not in STARTS:
+        raise bad(f"config start={cfg.get('start')!r}; expected one of {STARTS}")
     return path, ckpt
 
 
@@ -621,7 +642,8 @@ def read_config(weights) -> dict:
     Returns
     -------
     dict
-        System, channels, shift, stages, widths, prior; ``alpha_t`` for
+        System, channels, shift, stages, widths, prior, start (where absent: ``"zero"``);
+        ``alpha_t`` for
         CASSI-VSI; for one seeded or learned code ``code``, ``code_shape``,
         ``code_seed``.
 
@@ -706,13 +728,19 @@ class DCoSNet:
     ----------
     weights : path, optional
         Written by :func:`train_dcosnet`; default: the shipped weights for
-        the system it is called with.
+        the system it is called with that begin from ``start``.
     device : str, optional
         ``"cpu"``, ``"cuda"``…; default CUDA when available.
+    start : {"fast", "zero"}
+        Which shipped weights (:func:`default_weights`) where ``weights`` is not given; a file
+        records its own start.
     """
 
-    def __init__(self, weights=None, *, device=None):
+    def __init__(self, weights=None, *, device=None, start: str = DEFAULT_START):
         self.torch = require_torch()
+        if start not in STARTS:
+            raise ValueError(f"start must be one of {STARTS}, got {start!r}")
+        self.start = start
         self.path = None if weights is None else Path(weights)
         # a missing, truncated, foreign or hostile file is an error now; its contents are
         # kept for the first call (the file is read once)
@@ -724,7 +752,7 @@ class DCoSNet:
 
     def _load(self, system_name):
         torch = self.torch
-        path = self.path if self.path is not None else default_weights(system_name)
+        path = self.path if self.path is not None else default_weights(system_name, self.start)
         if path in self._nets:
             return self._nets[path]
         if self._read is not None and self._read[0] == path:
@@ -791,8 +819,20 @@ class DCoSNet:
         sensing = Sensing([system], device=dev)
         g = torch.from_numpy(np.asarray(B.to_numpy(measurement), dtype=np.float32)).to(dev)[None]
         s = sensing.scale(g)
+        start = None
+        if cfg.get("start", "zero") == "fast":  # the first-stage cube the weights start from
+            from ..solvers.otd import fast_start
+
+            if system.panchromatic_exact:
+                raise ValueError(
+                    f"these D-CoSNet weights start from a first stage, and "
+                    f"{type(system).__name__} has none (its panchromatic image is exact)"
+                )
+            cube0 = np.asarray(B.to_numpy(fast_start(system, measurement)), dtype=np.float32)
+            c0 = torch.from_numpy(cube0.reshape(*cube0.shape[:2], -1)).permute(2, 0, 1)[None]
+            start = c0.to(dev) / _per_sample(s, c0)
         with torch.no_grad():
-            x, _ = net(g / _per_sample(s, g), sensing)
+            x, _ = net(g / _per_sample(s, g), sensing, start=start)
         x = x * _per_sample(s, x)
         cube = x[0].permute(1, 2, 0).reshape(system.cube_shape).cpu().numpy()
         dtype = np.asarray(B.to_numpy(measurement)).dtype

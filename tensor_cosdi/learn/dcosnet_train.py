@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .dcosnet import Sensing, _per_sample, build_dcosnet, seeded_code, ssim
+from .dcosnet import STARTS, Sensing, _per_sample, build_dcosnet, seeded_code, ssim
 
 __all__ = [
     "DCoSNetConfig",
@@ -19,6 +19,7 @@ __all__ = [
     "sample_batch",
     "TRAINABLE_SYSTEMS",
     "LOSSES",
+    "STARTS",
 ]
 
 #: Systems :func:`train_dcosnet` builds from crops of a coded aperture.
@@ -55,6 +56,11 @@ class DCoSNetConfig:
     ``spectral_denoiser.pt``, or a file of ``tensor-cosdi train-denoiser``).
     Measurements are noiseless for ``noiseless_fraction`` of the samples, else
     at an SNR drawn uniformly from ``[snr_min, snr_max]`` dB.
+    ``start``: ``"zero"`` (the thesis: the ADMM's ``w`` starts at 0) or ``"fast"`` (``w``
+    starts at :func:`~tensor_cosdi.solvers.otd.fast_start`, the first-stage cube
+    ``pnp_fast`` starts from, computed from each sample's measurement; about 0.3 s a 64×64
+    sample on one core, more than the network's step on 2 cores).  The weights record it and
+    the method computes the same start before the network runs.
     """
 
     system: str = "sd_cassi"
@@ -84,6 +90,7 @@ class DCoSNetConfig:
     learn_code: bool = False
     #: fraction of the steps during which a learned code changes (then it is held)
     code_until: float = 0.5
+    start: str = "zero"
 
     def check(self):
         if self.system not in TRAINABLE_SYSTEMS:
@@ -94,6 +101,13 @@ class DCoSNetConfig:
             raise ValueError(f"prior must be one of {PRIORS}, got {self.prior!r}")
         if self.loss not in LOSSES:
             raise ValueError(f"loss must be one of {LOSSES}, got {self.loss!r}")
+        if self.start not in STARTS:
+            raise ValueError(f"start must be one of {STARTS}, got {self.start!r}")
+        if self.start == "fast" and self.learn_code:
+            raise ValueError(
+                "start='fast' is computed outside the network, so no gradient reaches a code "
+                "being learned: use start='zero' with learn_code"
+            )
         from ._loop import check_config
 
         check_config(
@@ -310,11 +324,27 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data, step=0):
         sig = torch.from_numpy(np.where(noisy, 10 ** (-snr / 20), 0.0).astype(np.float32)).to(dev)
         g_in = g + _per_sample(sig * power.sqrt(), g) * torch.randn(g.shape).to(dev)
         s = sensing.scale(g_in)
-    est, g_est = net(g_in / _per_sample(s, g), sensing)
+        start = None
+        if cfg.start == "fast":  # the first-stage cube of each sample's own measurement
+            start = _fast_starts(cfg, codes, g_in).to(dev) / _per_sample(s, truth)
+    est, g_est = net(g_in / _per_sample(s, g), sensing, start=start)
     return _loss_terms(
         torch, est, truth / _per_sample(s, truth), g_est, g / _per_sample(s, g), sensing.dbar,
         cfg.loss,
     )  # fmt: skip
+
+
+def _fast_starts(cfg: DCoSNetConfig, codes, g):
+    """:func:`~tensor_cosdi.solvers.otd.fast_start` of each measurement of the batch ``g``
+    through its code: ``(B, C, H, W)`` float32 on the CPU."""
+    import torch
+
+    from ..solvers.otd import fast_start
+
+    gs = g.detach().cpu().numpy().astype(np.float64)
+    cubes = [np.asarray(fast_start(cfg.make_system(c), gi)) for c, gi in zip(codes, gs)]
+    out = np.stack(cubes).astype(np.float32)
+    return torch.from_numpy(out.reshape(len(cubes), *out.shape[1:3], -1)).permute(0, 3, 1, 2)
 
 
 def build_network(torch, cfg: DCoSNetConfig, data):
@@ -389,6 +419,7 @@ def train_dcosnet(
             "width": cfg.width,
             "unet_width": cfg.unet_width,
             "prior": cfg.prior,
+            "start": cfg.start,
             **({"alpha_t": cfg.alpha_t} if cfg.system == "cassi_vsi" else {}),
             **_code_record(cfg),
         },

@@ -16,13 +16,18 @@ __all__ = ["dcosnet"]
 _LOADED: dict = {}
 
 
-def dcosnet(system, measurement, *, weights=None, device=None, nonneg: bool = True):
+def dcosnet(system, measurement, *, weights=None, start="auto", device=None, nonneg: bool = True):
     """One pass of a trained D-CoSNet (thesis §7.2).  Registered as ``"dcosnet"``.
 
     ``weights``: a file written by ``tensor-cosdi train-dcosnet`` (default:
     the shipped weights for the system's kind — SD-CASSI, 28 bands, 2 px per
     band).  The weights must match the system's kind, channel count and
-    shift (a ``ValueError`` says what to train otherwise).  ``device``:
+    shift (a ``ValueError`` says what to train otherwise).  ``start``: where the
+    unfolded ADMM begins, as the weights were trained (``"auto"``: the file's own, or for
+    the shipped weights ``"fast"``): ``"fast"`` from the first-stage cube ``pnp_fast``
+    starts from (:func:`~tensor_cosdi.solvers.otd.fast_start`, about 2 s of the call at
+    256×256×28 on 2 cores), ``"zero"`` from 0 as in the thesis (the shipped
+    ``dcosnet_sd_cassi.pt``).  ``device``:
     ``"cpu"``, ``"cuda"``… (default CUDA when available).  ``nonneg`` (on: a
     cube of light) clips the network's output at 0.  Not iterative: the
     history has one entry.
@@ -32,12 +37,22 @@ def dcosnet(system, measurement, *, weights=None, device=None, nonneg: bool = Tr
     from ..learn import require_torch
 
     require_torch()
-    from ..learn.dcosnet import DCoSNet
+    from ..learn.dcosnet import DEFAULT_START, STARTS, DCoSNet, read_config
 
-    key = (None if weights is None else str(weights), device)
+    if not (isinstance(start, str) and start in ("auto", *STARTS)):
+        raise ValueError(f"start must be one of {('auto', *STARTS)}, got {start!r}")
+    if weights is not None and start != "auto":
+        own = read_config(weights).get("start", "zero")
+        if own != start:
+            raise ValueError(
+                f"start={start!r}, but {weights} were trained from start {own!r}: pass "
+                f"start='auto' (or {own!r}) with them"
+            )
+    pick = DEFAULT_START if start == "auto" else start
+    key = (None if weights is None else str(weights), device, pick)
     if key not in _LOADED:
         _LOADED.clear()  # keep one network in memory
-        _LOADED[key] = DCoSNet(weights, device=device)
+        _LOADED[key] = DCoSNet(weights, device=device, start=pick)
     t0 = time.perf_counter()
     cube = _LOADED[key](system, measurement)
     if nonneg:

@@ -52,6 +52,7 @@ __all__ = [
     "theta_step",
     "omega_step",
     "subspace_gap_tv",
+    "fast_start",
 ]
 
 SPATIAL_BASES = ("panchromatic", "wavelet", "dct")
@@ -493,6 +494,70 @@ def wdct_admm(
         weights=weights, plane_support=plane_support, nonneg=nonneg, progress=progress,
         desc="WDCT",
     )  # fmt: skip
+
+
+#: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_fast`'s ``pan_tv_steps`` (:func:`fast_start`): 3
+#: warm-started Chambolle steps per iteration of its start's first stage instead of OTD's 10. First
+#: measured against 10 and 5 (8 tuning scenes as they are and magnified 4×, 4 folds, TSA mask;
+#: ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB
+#: noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median 6.8 / 4.9 / 4.4 s on one thread), then
+#: cross-validated against 5 with each budget, timed as a user's single call (the SNR fit included),
+#: TSA mask and a random code: noisy data (30 and 20 dB,
+#: ``benchmarks/results/cv_pnp_fast_noisy_tv.md``) within 0.01 dB, median 5.11-5.29 → 4.47-4.55 s a
+#: cube; clean data (``benchmarks/results/cv_pnp_fast_clean_tv.md``, 66 or 72 iterations, the 5-s
+#: budget: only candidates whose median time fits it compete) every fold chose 3 steps and 66
+#: iterations: 35.14 → 35.06 dB through the TSA mask, 37.69 → 37.68 through the random code, median
+#: 5.16 → 4.67 s (TSA), 5.61 → 5.09 s (random: its 16 views include clean ones the SNR estimate
+#: reads noisy, which take ADMM iterations).
+FAST_PAN_TV_STEPS = 3
+
+#: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_fast`'s ``pan_spectrum`` (:func:`fast_start`):
+#: ``"gated"``, one first stage whose atoms are weighted by the fitted mean spectrum part-way
+#: through where the measurement's spectrum has sharp lines
+#: (:func:`~tensor_cosdi.solvers.panchromatic.gate_above`), at no extra cost. 8 tuning scenes as
+#: they are and lit by A, LED-B3 and FL11, 4 folds, TSA
+#: (``benchmarks/results/cv_pnp_fast_gated.md``): noiseless 34.87 → 37.48 dB over the 32 views,
+#: every fold chose it (FL11 +7.1 to +14.4 dB a view; an unlit scene whose spectrum reads rough,
+#: clay, −0.26); the report scenes' gates stay shut (their rows unchanged).  That run kept the gate
+#: shut on noisy data: open there at the clean threshold it lost 0.10 dB at 30 dB (−6.4 to +4.3 dB a
+#: view; that file at commit f6a84f8).  A higher threshold on noisy data, shut below an estimated 25
+#: dB, and a floor on the weights were then cross-validated together
+#: (:data:`~tensor_cosdi.solvers.panchromatic.GATE_ABOVE_CLEAN`,
+#: ``benchmarks/results/light_gate.md``): 30 dB +1.49 dB over the same kind of 32 views.
+FAST_PAN_SPECTRUM = "gated"
+
+
+def fast_start(system, measurement, *, progress: bool = False):
+    """The cube :func:`~tensor_cosdi.solvers.pnp_gap.pnp_fast` starts from on a clean
+    measurement: OTD's first stage alone (:func:`online_tucker_admm` with ``admm_iter=0``), its
+    TV at :data:`FAST_PAN_TV_STEPS` steps an iteration and its atoms weighted by the scene's
+    spectrum where that has sharp lines (:data:`FAST_PAN_SPECTRUM`).  D-CoSNet weights trained
+    with ``start="fast"`` (``tensor-cosdi train-dcosnet --start fast``) begin from it.
+
+    Parameters
+    ----------
+    system : tensor_cosdi.systems.System
+        A system with a first stage (``system.panchromatic_exact`` false).
+    measurement : tensor of ``system.measurement_shape``
+    progress : bool
+        A progress bar.
+
+    Returns
+    -------
+    tensor of ``system.cube_shape``
+
+    Examples
+    --------
+    >>> import tensor_cosdi as tc
+    >>> p = tc.studies.make_problem("sd_cassi", "colorchecker", snr_db=None)
+    >>> fast_start(p.system, p.measurement).shape == p.system.cube_shape
+    True
+    """
+    cube, _, _ = online_tucker_admm(
+        system, measurement, admm_iter=0, pan_tv_steps=FAST_PAN_TV_STEPS,
+        pan_spectrum=FAST_PAN_SPECTRUM, progress=progress,
+    )  # fmt: skip
+    return cube
 
 
 register_method(

@@ -37,6 +37,7 @@ from ..noise import snr_schedule
 from . import engine
 from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
+from .otd import FAST_PAN_SPECTRUM, FAST_PAN_TV_STEPS  # noqa: F401  (pnp_fast's start, defined with it)
 from .panchromatic import PAN_SPECTRA
 from .priors import LEVEL_SCALES, Denoiser
 
@@ -63,19 +64,6 @@ WARM_ITER_CLEAN = 0
 #: (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at 30 dB,
 #: 20 lose 2.9 and 1.2 dB.
 FAST_WARM_ITER = 10
-#: :func:`pnp_fast`'s ``pan_tv_steps``: 3 warm-started Chambolle steps per iteration of its
-#: start's first stage instead of OTD's 10.  First measured against 10 and 5 (8 tuning scenes as
-#: they are and magnified 4×, 4 folds, TSA mask; ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``:
-#: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median
-#: 6.8 / 4.9 / 4.4 s on one thread), then cross-validated against 5 with each budget, timed as a
-#: user's single call (the SNR fit included), TSA mask and a random code: noisy data (30 and
-#: 20 dB, ``benchmarks/results/cv_pnp_fast_noisy_tv.md``) within 0.01 dB, median 5.11-5.29 →
-#: 4.47-4.55 s a cube; clean data (``benchmarks/results/cv_pnp_fast_clean_tv.md``, 66 or 72
-#: iterations, the 5-s budget: only candidates whose median time fits it compete) every fold
-#: chose 3 steps and 66 iterations: 35.14 → 35.06 dB through the TSA mask, 37.69 → 37.68 through
-#: the random code, median 5.16 → 4.67 s (TSA), 5.61 → 5.09 s (random: its 16 views include
-#: clean ones the SNR estimate reads noisy, which take ADMM iterations).
-FAST_PAN_TV_STEPS = 3
 #: :func:`pnp_fast`'s ``max_iter``: 46 against 40 gained 0.20 dB clean and 0.11 dB at 30 dB on 12
 #: tuning scenes, 4 folds (``benchmarks/results/cv_pnp_fast_budget.md``; every fold chose 46) for
 #: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps (and
@@ -271,19 +259,6 @@ GUARD = 2.0
 #: 37.80 dB, every fold chose the clean threshold and a shut gate on noisy data (noiseless
 #: +1.23 dB, FL11 views up to +8.7; 30 dB: open on FL11 views it lost 1.0 dB on average).
 PAN_SPECTRUM = "gated_clean"
-#: :func:`pnp_fast`'s ``pan_spectrum``: ``"gated"``, one first stage whose atoms are weighted
-#: by the fitted mean spectrum part-way through where the measurement's spectrum has sharp
-#: lines (:func:`~tensor_cosdi.solvers.panchromatic.gate_above`), at no extra cost.
-#: 8 tuning scenes as they are and lit by A, LED-B3 and FL11, 4 folds, TSA
-#: (``benchmarks/results/cv_pnp_fast_gated.md``): noiseless 34.87 → 37.48 dB over the 32
-#: views, every fold chose it (FL11 +7.1 to +14.4 dB a view; an unlit scene whose spectrum
-#: reads rough, clay, −0.26); the report scenes' gates stay shut (their rows unchanged).  That
-#: run kept the gate shut on noisy data: open there at the clean threshold it lost 0.10 dB at
-#: 30 dB (−6.4 to +4.3 dB a view; that file at commit f6a84f8).  A higher threshold on noisy
-#: data, shut below an estimated 25 dB, and a floor on the weights were then cross-validated
-#: together (:data:`~tensor_cosdi.solvers.panchromatic.GATE_ABOVE_CLEAN`,
-#: ``benchmarks/results/light_gate.md``): 30 dB +1.49 dB over the same kind of 32 views.
-FAST_PAN_SPECTRUM = "gated"
 #: ``sigma_scale="auto"``: what the denoiser's level is relative to, by splitting (see
 #: :class:`~tensor_cosdi.solvers.priors.Denoiser`).  On noisy data (ADMM) the level follows
 #: the noise, and a measurement's noise at a given SNR scales with the scene's mean
@@ -394,9 +369,9 @@ def pnp_gap(
         measurement with accelerated GAP, where the system has a first stage,
         else OTD's default; 0: the first stage's cube alone, where the system
         has a first stage; the first stage is OTD's either way), from one pass
-        of the shipped
-        D-CoSNet (:func:`~.dcosnet.dcosnet`; SD-CASSI, 28 bands, 2 px per
-        band), or from the least-norm solution.
+        of the shipped thesis
+        D-CoSNet (:func:`~.dcosnet.dcosnet` with ``start="zero"``: no first stage of its
+        own; SD-CASSI, 28 bands, 2 px per band), or from the least-norm solution.
         The denoiser refines a good start; from the least-norm one it climbs
         slowly (a learned denoiser removes what looks like noise, not the
         coded-aperture pattern's large-scale errors).
@@ -645,7 +620,7 @@ def warm_started_gap(
         from ._base import History
         from .dcosnet import dcosnet
 
-        start, first, _ = dcosnet(system, g)
+        start, first, _ = dcosnet(system, g, start="zero")
         hist = History()
         hist.extend(first)
     common = {"max_iter": max_iter, "tol": tol, "progress": progress, "desc": desc}

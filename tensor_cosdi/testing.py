@@ -727,7 +727,9 @@ def _learned_arguments():
          1: [True, -1, None]}),
         ("learn", dcosnet.tile_code, (np.ones((4, 4)), (8, 8)), {},
          {0: [np.full((4, 4), nan)], 1: [(8, 8.5), (8,)]}),
-        ("learn", dcosnet.DCoSNet, (), {}, {"device": ["tpu"]}),
+        ("learn", dcosnet.DCoSNet, (), {}, {"device": ["tpu"], "start": ["warm", 3, None,
+         ["fast"]]}),
+        ("learn", dcosnet.default_weights, ("sd_cassi",), {}, {"start": ["warm", None]}),
     ]  # fmt: skip
 
 

@@ -823,11 +823,6 @@ class DCoSNet:
         if cfg.get("start", "zero") == "fast":  # the first-stage cube the weights start from
             from ..solvers.otd import fast_start
 
-            if system.panchromatic_exact:
-                raise ValueError(
-                    f"these D-CoSNet weights start from a first stage, and "
-                    f"{type(system).__name__} has none (its panchromatic image is exact)"
-                )
             cube0 = np.asarray(B.to_numpy(fast_start(system, measurement)), dtype=np.float32)
             c0 = torch.from_numpy(cube0.reshape(*cube0.shape[:2], -1)).permute(2, 0, 1)[None]
             start = c0.to(dev) / _per_sample(s, c0)

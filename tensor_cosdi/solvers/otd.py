@@ -30,7 +30,7 @@ import numpy as np
 import tensorly as tl
 
 from ..bases import DCT, Dense, Wavelet, block_hosvd, block_sizes, tucker_bases
-from ..validate import flag, integer, number
+from ..validate import flag, imager, integer, number
 from . import engine
 from ._base import History, check_positive, register_method
 from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
@@ -537,7 +537,8 @@ def fast_start(system, measurement, *, progress: bool = False):
     Parameters
     ----------
     system : tensor_cosdi.systems.System
-        A system with a first stage (``system.panchromatic_exact`` false).
+        A system with a first stage (``system.panchromatic_exact`` false; otherwise a
+        ``ValueError``).
     measurement : tensor of ``system.measurement_shape``
     progress : bool
         A progress bar.
@@ -553,6 +554,12 @@ def fast_start(system, measurement, *, progress: bool = False):
     >>> fast_start(p.system, p.measurement).shape == p.system.cube_shape
     True
     """
+    if imager(system, "panchromatic_exact").panchromatic_exact:
+        raise ValueError(
+            f"fast_start is the first stage's cube, and {type(system).__name__} has none (its "
+            "panchromatic image is exact): start such a system otherwise (e.g. OTD, "
+            "D-CoSNet weights trained with start='zero')"
+        )
     cube, _, _ = online_tucker_admm(
         system, measurement, admm_iter=0, pan_tv_steps=FAST_PAN_TV_STEPS,
         pan_spectrum=FAST_PAN_SPECTRUM, progress=progress,

@@ -37,7 +37,7 @@ from ..noise import snr_schedule
 from . import engine
 from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
-from .otd import FAST_PAN_SPECTRUM, FAST_PAN_TV_STEPS  # noqa: F401  (pnp_fast's start, defined with it)
+from .otd import FAST_PAN_SPECTRUM, FAST_PAN_TV_STEPS  # pnp_fast's start, defined with it
 from .panchromatic import PAN_SPECTRA
 from .priors import LEVEL_SCALES, Denoiser
 

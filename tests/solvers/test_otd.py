@@ -688,3 +688,29 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
             pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum=ps)[1],
             pm.panchromatic_estimate(sd, g, pan_iter=30, pan_spectrum="flat")[1],
         )
+
+
+def test_fast_start_is_pnp_fast_s_clean_start_and_needs_a_first_stage():
+    """``fast_start`` is OTD's first stage with ``pnp_fast``'s settings (the cube D-CoSNet's
+    ``start="fast"`` weights begin from); a system without a first stage, or no imager, is a
+    one-line error naming what is wrong."""
+    import importlib
+
+    from tensor_cosdi.solvers.otd import fast_start, online_tucker_admm
+
+    pnp_gap = importlib.import_module("tensor_cosdi.solvers.pnp_gap")  # the module, not the method
+
+    p = studies.make_problem("sd_cassi", "colorchecker", shape=(24, 24), n_bands=8, snr_db=None)
+    got = np.asarray(fast_start(p.system, p.measurement))
+    ref, _, _ = online_tucker_admm(
+        p.system, p.measurement, admm_iter=0, pan_tv_steps=pnp_gap.FAST_PAN_TV_STEPS,
+        pan_spectrum=pnp_gap.FAST_PAN_SPECTRUM,
+    )  # fmt: skip
+    np.testing.assert_array_equal(got, np.asarray(ref))
+    lsq = np.asarray(tc.reconstruct(p.system, p.measurement, "lsq").cube)
+    assert tc.metrics.psnr(p.cube, got) > tc.metrics.psnr(p.cube, lsq) + 6  # 20.6 vs 10.3 dB
+    dual = studies.make_problem("dual_camera_cassi", "colorchecker", shape=(16, 16), n_bands=4)
+    with pytest.raises(ValueError, match="DualCameraCASSI has none"):
+        fast_start(dual.system, dual.measurement)
+    with pytest.raises(ValueError, match="system: expected an imager"):
+        fast_start("sd_cassi", p.measurement)

@@ -41,16 +41,16 @@ def dcosnet(system, measurement, *, weights=None, start="auto", device=None, non
 
     if not (isinstance(start, str) and start in ("auto", *STARTS)):
         raise ValueError(f"start must be one of {('auto', *STARTS)}, got {start!r}")
-    if weights is not None and start != "auto":
-        own = read_config(weights).get("start", "zero")
-        if own != start:
-            raise ValueError(
-                f"start={start!r}, but {weights} were trained from start {own!r}: pass "
-                f"start='auto' (or {own!r}) with them"
-            )
     pick = DEFAULT_START if start == "auto" else start
     key = (None if weights is None else str(weights), device, pick)
     if key not in _LOADED:
+        if weights is not None and start != "auto":  # read once, with the network
+            own = read_config(weights).get("start", "zero")
+            if own != start:
+                raise ValueError(
+                    f"start={start!r}, but {weights} were trained from start {own!r}: pass "
+                    f"start='auto' (or {own!r}) with them"
+                )
         _LOADED.clear()  # keep one network in memory
         _LOADED[key] = DCoSNet(weights, device=device, start=pick)
     t0 = time.perf_counter()

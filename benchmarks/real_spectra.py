@@ -153,7 +153,7 @@ def report(args, store, cache):
                 spread = f"{d.mean():+.2f} ({d.min():+.2f}…{d.max():+.2f})"
                 row += " — |" if m == base else f" {spread} |"
             lines.append(row)
-    pairs = [("plain_gap_tv", m) for m in methods if base and m != base]
+    pairs = [(base, m) for m in methods if base and m != base]
     pairs += versus
     if pairs:  # one computed line per pair: where the method stands against the other
         lines.append("")

@@ -58,8 +58,8 @@ class DCoSNetConfig:
     at an SNR drawn uniformly from ``[snr_min, snr_max]`` dB.
     ``start``: ``"zero"`` (the thesis: the ADMM's ``w`` starts at 0) or ``"fast"`` (``w``
     starts at :func:`~tensor_cosdi.solvers.otd.fast_start`, the first-stage cube
-    ``pnp_fast`` starts from, computed from each sample's measurement; about 0.3 s a 64×64
-    sample on one core, more than the network's step on 2 cores).  The weights record it and
+    ``pnp_fast`` starts from, computed from each sample's measurement: 0.2-0.4 s a 64×64
+    sample, about two thirds of a step of 8 on 2 CPU cores).  The weights record it and
     the method computes the same start before the network runs.
     """
 

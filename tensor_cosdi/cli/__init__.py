@@ -504,8 +504,19 @@ def build_parser() -> argparse.ArgumentParser:
     dc.add_argument("--patch", type=_positive_int, default=64, help="patch side (multiple of 4)")
     dc.add_argument(
         "--start", default="zero",
-        help="zero (the thesis: the ADMM starts at 0) or fast (from the first-stage cube that "
-        "pnp_fast starts from, computed per sample; the method computes it too)",
+        help="zero (the thesis: the ADMM starts at 0), fast (from the first-stage cube that "
+        "pnp_fast starts from on clean data) or adaptive (pnp_fast's start on any data: 10 ADMM "
+        "iterations more where the sample reads noisy); computed per sample, and by the method",
+    )  # fmt: skip
+    dc.add_argument(
+        "--noise-input", action="store_true",
+        help="condition each stage's penalty and U-Net on the estimated SNR (the method "
+        "estimates it too)",
+    )  # fmt: skip
+    dc.add_argument(
+        "--init", default=None, metavar="WEIGHTS",
+        help="start from these train-dcosnet weights of the same network (a fine-tune; a noise "
+        "input they lack starts at 0)",
     )  # fmt: skip
     dc.set_defaults(func=run_train_dcosnet)
     return parser

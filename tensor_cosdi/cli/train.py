@@ -110,5 +110,7 @@ def run_train_dcosnet(args) -> int:
         alpha_t=args.alpha_t,
         code_until=args.code_until,
         start=args.start,
+        noise_input=args.noise_input,
+        init=args.init or "",
     )
     return _run_training(args, train_dcosnet, cfg.check())

@@ -62,12 +62,16 @@ __all__ = [
     "training_code",
     "read_config",
     "STARTS",
+    "noise_feature",
 ]
 
 WEIGHTS_DIR = Path(__file__).resolve().parent / "weights"
-#: Shipped weights per (system name, start, :data:`STARTS`): ``"fast"`` begins from the
-#: first-stage cube ``pnp_fast`` starts from, ``"zero"`` is the thesis' network from 0.
+#: Shipped weights per (system name, start, :data:`STARTS`): ``"adaptive"`` begins from
+#: ``pnp_fast``'s start on any data and reads the estimated SNR, ``"fast"`` from the
+#: first-stage cube ``pnp_fast`` starts from on clean data, ``"zero"`` is the thesis' network
+#: from 0.
 DEFAULT_WEIGHTS = {
+    ("sd_cassi", "adaptive"): WEIGHTS_DIR / "dcosnet_adaptive_sd_cassi.pt",
     ("sd_cassi", "fast"): WEIGHTS_DIR / "dcosnet_fast_sd_cassi.pt",
     ("sd_cassi", "zero"): WEIGHTS_DIR / "dcosnet_sd_cassi.pt",
 }
@@ -92,6 +96,11 @@ def default_weights(system_name: str, start: str = DEFAULT_START) -> Path:
             "weights='weights.pt'"
         )
     return path
+
+
+#: :meth:`Sensing.scale` reads ``g / d`` only where ``d = diag(AAᵀ)`` is at least this fraction
+#: of its mean.
+SCALE_MIN_D = 0.25
 
 
 # ---- sensing layers ---------------------------------------------------------------------------
@@ -283,11 +292,14 @@ class Sensing:
         return x if self.band_axis == 1 else x.transpose(1, 2)
 
     def scale(self, g):
-        """Per-sample ``s``: the 99.9th percentile of ``g / d`` where ``d > 0`` (``(B,)``)."""
+        """Per-sample ``s``: the 99.9th percentile of ``g / d`` where ``d`` is at least
+        :data:`SCALE_MIN_D` of its mean (``(B,)``).  Where ``d`` is a sliver of its mean (a
+        real-valued code's near-zero entries) ``g / d`` is noise magnified a thousandfold."""
         torch = require_torch()
         d = self.d.to(device=g.device, dtype=torch.float32).reshape(len(g), -1)
-        ratio = g.float().reshape(len(g), -1).abs() / torch.where(d > 0, d, 1.0)
-        v = torch.where(d > 0, ratio, torch.nan)  # one batched quantile, no host round-trip
+        keep = (d > 0) & (d >= SCALE_MIN_D * d.mean(dim=1, keepdim=True))
+        ratio = g.float().reshape(len(g), -1).abs() / torch.where(keep, d, 1.0)
+        v = torch.where(keep, ratio, torch.nan)  # one batched quantile, no host round-trip
         q = torch.nan_to_num(torch.nanquantile(v, 0.999, dim=1), nan=0.0)
         top = torch.nan_to_num(v.nan_to_num(nan=-1.0).amax(dim=1).clamp_min(0), nan=0.0)
         out = torch.where(q > 0, q, torch.where(top > 0, top, 1.0))
@@ -385,9 +397,16 @@ def _spectral_prior(torch, stages: int, r_max: int = 12, width: int = 64, blocks
 
 def build_dcosnet(
     torch, channels: int, stages: int = 1, width: int = 32, unet_width: int = 32,
-    prior: str = "unet", code_shape=None,
+    prior: str = "unet", code_shape=None, noise_input: bool = False,
 ):  # fmt: skip
     """The untrained network (a ``torch.nn.Module``) for cubes of ``channels`` channels.
+
+    ``noise_input=True`` conditions every stage on the measurement's noise: a number ``t``
+    per sample (:func:`noise_feature`, from the estimated SNR) shifts each stage's penalty,
+    ``μ̃ₖ = softplus(pₖ + qₖ·t)·d̄``, and enters each U-Net as one more input channel
+    (a constant map, as FFDNet's noise map).  ``qₖ`` and that channel's weights start at 0, so
+    weights trained without the input load into it unchanged
+    (:func:`~tensor_cosdi.learn.dcosnet_train.train_dcosnet` with ``init``).
 
     ``code_shape`` ``(rows, columns)`` adds a learnable binary coded aperture
     (thesis §7.3: the code trained with the network): real logits ``θ``
@@ -404,6 +423,10 @@ def build_dcosnet(
     """
     if prior not in PRIORS:
         raise ValueError(f"prior must be one of {PRIORS}, got {prior!r}")
+    if not isinstance(noise_input, (bool, np.bool_)):
+        raise ValueError(f"noise_input must be True or False, got {noise_input!r}")
+    if noise_input and prior != "unet":
+        raise ValueError("noise_input conditions the U-Nets: it needs prior='unet'")
     nn = torch.nn
 
     def conv_stack(n_layers):
@@ -431,7 +454,7 @@ def build_dcosnet(
         def __init__(self):
             super().__init__()
             b = unet_width
-            self.enc1 = double(channels, b)
+            self.enc1 = double(channels + int(bool(noise_input)), b)
             self.enc2 = nn.Sequential(
                 nn.Conv2d(b, 2 * b, 3, stride=2, padding=1),
                 nn.ReLU(inplace=True),
@@ -450,10 +473,12 @@ def build_dcosnet(
             nn.init.zeros_(self.out.weight)
             nn.init.zeros_(self.out.bias)
 
-        def forward(self, x):
+        def forward(self, x, t=None):
             h, w = x.shape[-2:]
             ph, pw = (-h) % 4, (-w) % 4
             xp = nn.functional.pad(x, (0, pw, 0, ph), mode="replicate") if ph or pw else x
+            if t is not None:  # the noise map: one more channel, constant per sample
+                xp = torch.cat([xp, _per_sample(t, xp).expand(-1, 1, *xp.shape[2:])], dim=1)
             e1 = self.enc1(xp)
             e2 = self.enc2(e1)
             e3 = self.enc3(e2)
@@ -462,9 +487,10 @@ def build_dcosnet(
             return x + self.out(d1)[..., :h, :w]
 
     class DCoSNetModule(nn.Module):
-        """``forward(g, sensing, start=None) -> (F̃, G̃)`` for a normalised measurement batch
-        ``g``; ``start`` (a cube batch in the same units, or ``None`` for 0) is where ``w``
-        begins (:data:`STARTS`)."""
+        """``forward(g, sensing, start=None, noise=None) -> (F̃, G̃)`` for a normalised
+        measurement batch ``g``; ``start`` (a cube batch in the same units, or ``None`` for 0)
+        is where ``w`` begins (:data:`STARTS`); ``noise`` ``(B,)``: each sample's noise input
+        (:func:`noise_feature`), needed with ``noise_input`` and refused without."""
 
         def __init__(self):
             super().__init__()
@@ -472,6 +498,9 @@ def build_dcosnet(
             self.width, self.unet_width = width, unet_width
             mu0 = math.log(math.expm1(0.1))  # μ̃ = 0.1 d̄ at the start
             self.mu = nn.Parameter(torch.full((stages,), mu0))
+            self.noise_input = bool(noise_input)
+            if self.noise_input:
+                self.mu_noise = nn.Parameter(torch.zeros(stages))
             self.c_in = nn.ModuleList([conv_stack(2) for _ in range(stages)])
             self.c_up = nn.ModuleList([conv_stack(4) for _ in range(stages)])
             self.c_lo = nn.ModuleList([conv_stack(3) for _ in range(stages)])
@@ -491,29 +520,37 @@ def build_dcosnet(
             soft = torch.sigmoid(theta / CODE_TEMPERATURE)
             return (theta > 0).to(theta.dtype) + (soft - soft.detach())  # exactly 0 / 1
 
-        def denoise(self, x, k):
-            return self.unet[k](x) if self.prior == "unet" else self.spectral(x, k)
+        def denoise(self, x, k, t=None):
+            return self.unet[k](x, t) if self.prior == "unet" else self.spectral(x, k)
 
-        def forward(self, g, sensing, start=None):
+        def forward(self, g, sensing, start=None, noise=None):
             if sensing.channels != self.channels:
                 raise ValueError(
                     f"the network was built for {self.channels} channels; the system's cube has "
                     f"{sensing.channels}"
                 )
+            if self.noise_input != (noise is not None):
+                raise ValueError(
+                    "this network takes each sample's noise input (noise=…)"
+                    if self.noise_input
+                    else "this network was built without a noise input: pass noise=None"
+                )
             dbar = sensing.dbar.to(g.dtype)
+            t = None if noise is None else noise.to(g.dtype).reshape(-1)
             atg = sensing.adjoint(g)
             db = _per_sample(dbar, atg)
             w = torch.zeros_like(atg) if start is None else start.to(atg.dtype)
             u = torch.zeros_like(atg)
             for k in range(self.stages):
-                mu = nn.functional.softplus(self.mu[k]) * dbar
+                p = self.mu[k] if t is None else self.mu[k] + self.mu_noise[k] * t
+                mu = nn.functional.softplus(p) * dbar
                 muc = _per_sample(mu, atg)
                 r = atg + muc * (w - u)
                 r = r + db * self.c_in[k](r / db)
                 s = sensing.dual_solve(sensing.forward(r), mu)
                 ats = sensing.adjoint(s)
                 f = (r - ats) / muc + self.c_lo[k](r / db) - self.c_up[k](ats / db)
-                w = self.denoise(f + u, k)
+                w = self.denoise(f + u, k, t)
                 u = u + f - w
             return w, sensing.forward(w)
 
@@ -596,7 +633,29 @@ MAX_CODE_SIDE = 8192
 #: Where the unfolded ADMM's ``w`` starts: ``"zero"`` (the thesis) or ``"fast"``
 #: (:func:`~tensor_cosdi.solvers.otd.fast_start`, the cube ``pnp_fast`` starts from; a
 #: weights file records which).
-STARTS = ("zero", "fast")
+STARTS = ("zero", "fast", "adaptive")
+#: :func:`~tensor_cosdi.solvers.otd.fast_start`'s ``admm_iter`` for each start but ``"zero"``:
+#: ``"fast"`` the first stage's cube alone, ``"adaptive"`` pnp_fast's start on any
+#: measurement (10 ADMM iterations after the first stage where it reads noisy).
+START_ADMM_ITER = {"fast": 0, "adaptive": "auto"}
+#: The network's noise input ``t = 10^((NOISE_REF_DB − SNR)/20)`` (1 at 20 dB, 0.32 at 30 dB,
+#: 0 for a clean reading), capped at :data:`NOISE_INPUT_MAX` (an SNR of 0 dB).
+NOISE_REF_DB = 20.0
+NOISE_INPUT_MAX = 10.0
+
+
+def noise_feature(snr_db) -> float:
+    """D-CoSNet's noise input for an estimated SNR of ``snr_db`` dB (:data:`NOISE_REF_DB`).
+
+    Examples
+    --------
+    >>> noise_feature(20.0), round(noise_feature(40.0), 3), noise_feature(float("inf"))
+    (1.0, 0.1, 0.0)
+    """
+    if isinstance(snr_db, (int, float, np.floating)) and snr_db == float("inf"):
+        return 0.0  # no noise at all
+    snr = number("snr_db", snr_db)
+    return float(min(10 ** ((NOISE_REF_DB - snr) / 20), NOISE_INPUT_MAX))
 
 
 def _checkpoint(weights):
@@ -628,6 +687,8 @@ def _checkpoint(weights):
         raise bad(f"config prior={cfg.get('prior')!r}; expected one of {PRIORS}")
     if cfg.get("start", "zero") not in STARTS:
         raise bad(f"config start={cfg.get('start')!r}; expected one of {STARTS}")
+    if not isinstance(cfg.get("noise_input", False), bool):
+        raise bad(f"config noise_input={cfg.get('noise_input')!r}; expected True or False")
     return path, ckpt
 
 
@@ -731,7 +792,7 @@ class DCoSNet:
         the system it is called with that begin from ``start``.
     device : str, optional
         ``"cpu"``, ``"cuda"``…; default CUDA when available.
-    start : {"fast", "zero"}
+    start : {"adaptive", "fast", "zero"}
         Which shipped weights (:func:`default_weights`) where ``weights`` is not given; a file
         records its own start.
     """
@@ -766,6 +827,7 @@ class DCoSNet:
                 torch, int(cfg["channels"]), int(cfg["stages"]), int(cfg["width"]),
                 int(cfg["unet_width"]), cfg.get("prior", "unet"),
                 code_shape=cfg["code_shape"] if learned else None,
+                noise_input=cfg.get("noise_input", False),
             )  # fmt: skip
             net.load_state_dict(ckpt["model"])
             if cfg.get("code") in ("learned", "seeded"):
@@ -819,15 +881,22 @@ class DCoSNet:
         sensing = Sensing([system], device=dev)
         g = torch.from_numpy(np.asarray(B.to_numpy(measurement), dtype=np.float32)).to(dev)[None]
         s = sensing.scale(g)
-        start = None
-        if cfg.get("start", "zero") == "fast":  # the first-stage cube the weights start from
+        start, noise = None, None
+        kind = cfg.get("start", "zero")
+        if kind != "zero":  # the cube the weights start from
             from ..solvers.otd import fast_start
 
-            cube0 = np.asarray(B.to_numpy(fast_start(system, measurement)), dtype=np.float32)
+            cube0 = fast_start(system, measurement, admm_iter=START_ADMM_ITER[kind])
+            cube0 = np.asarray(B.to_numpy(cube0), dtype=np.float32)
             c0 = torch.from_numpy(cube0.reshape(*cube0.shape[:2], -1)).permute(2, 0, 1)[None]
             start = c0.to(dev) / _per_sample(s, c0)
+        if cfg.get("noise_input", False):  # the estimated SNR (cached: the start read it too)
+            from ..solvers.snr import estimate_snr
+
+            t = noise_feature(estimate_snr(system, measurement).snr_db)
+            noise = torch.tensor([t], dtype=torch.float32, device=dev)
         with torch.no_grad():
-            x, _ = net(g / _per_sample(s, g), sensing, start=start)
+            x, _ = net(g / _per_sample(s, g), sensing, start=start, noise=noise)
         x = x * _per_sample(s, x)
         cube = x[0].permute(1, 2, 0).reshape(system.cube_shape).cpu().numpy()
         dtype = np.asarray(B.to_numpy(measurement)).dtype

@@ -10,7 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .dcosnet import STARTS, Sensing, _per_sample, build_dcosnet, seeded_code, ssim
+from .dcosnet import (
+    START_ADMM_ITER,
+    STARTS,
+    Sensing,
+    _per_sample,
+    build_dcosnet,
+    noise_feature,
+    seeded_code,
+    ssim,
+)
 
 __all__ = [
     "DCoSNetConfig",
@@ -59,8 +68,16 @@ class DCoSNetConfig:
     ``start``: ``"zero"`` (the thesis: the ADMM's ``w`` starts at 0) or ``"fast"`` (``w``
     starts at :func:`~tensor_cosdi.solvers.otd.fast_start`, the first-stage cube
     ``pnp_fast`` starts from, computed from each sample's measurement: 0.2-0.4 s a 64×64
-    sample, about two thirds of a step of 8 on 2 CPU cores).  The weights record it and
-    the method computes the same start before the network runs.
+    sample, about two thirds of a step of 8 on 2 CPU cores) or ``"adaptive"`` (pnp_fast's
+    start on any measurement: the same where the sample's estimated SNR reads clean, with 10
+    ADMM iterations after the first stage where it reads noisy,
+    ``fast_start(admm_iter="auto")``).  The weights record it and the method computes the
+    same start before the network runs.
+    ``noise_input``: condition each stage on the sample's estimated SNR
+    (:func:`~tensor_cosdi.learn.dcosnet.build_dcosnet`; the method estimates it the same
+    way).  ``init``: a weights file of ``train-dcosnet`` of the same network (system, bands,
+    shift, stages, widths, prior) to start from instead of the untrained network — a
+    fine-tune; a noise input it lacks starts at 0, so the network starts as that file's.
     """
 
     system: str = "sd_cassi"
@@ -91,6 +108,8 @@ class DCoSNetConfig:
     #: fraction of the steps during which a learned code changes (then it is held)
     code_until: float = 0.5
     start: str = "zero"
+    noise_input: bool = False
+    init: str = ""
 
     def check(self):
         if self.system not in TRAINABLE_SYSTEMS:
@@ -135,6 +154,14 @@ class DCoSNetConfig:
             raise ValueError(
                 f"noiseless_fraction must lie in [0, 1], got {self.noiseless_fraction}"
             )
+        if not isinstance(self.noise_input, bool):
+            raise ValueError(f"noise_input must be True or False, got {self.noise_input!r}")
+        if self.noise_input and self.prior != "unet":
+            raise ValueError("noise_input conditions the U-Nets: it needs prior='unet'")
+        if not isinstance(self.init, str):
+            raise ValueError(f"init must be a weights file's path or '', got {self.init!r}")
+        if self.init and self.learn_code:
+            raise ValueError("init starts from trained weights; learn_code starts a code: pick one")
         if not isinstance(self.learn_code, bool):
             raise ValueError(f"learn_code must be True or False, got {self.learn_code!r}")
         a = self.alpha_t
@@ -324,35 +351,52 @@ def _dcosnet_loss(torch, net, rng, dev, cfg: DCoSNetConfig, data, step=0):
         sig = torch.from_numpy(np.where(noisy, 10 ** (-snr / 20), 0.0).astype(np.float32)).to(dev)
         g_in = g + _per_sample(sig * power.sqrt(), g) * torch.randn(g.shape).to(dev)
         s = sensing.scale(g_in)
-        start = None
-        if cfg.start == "fast":  # the first-stage cube of each sample's own measurement
-            start = _fast_starts(cfg, codes, g_in).to(dev) / _per_sample(s, truth)
-    est, g_est = net(g_in / _per_sample(s, g), sensing, start=start)
+        start = noise = None
+        if cfg.start != "zero" or cfg.noise_input:  # from each sample's own measurement
+            start, noise = _starts(cfg, codes, g_in)
+            start = None if start is None else start.to(dev) / _per_sample(s, truth)
+            noise = None if noise is None else noise.to(dev)
+    est, g_est = net(g_in / _per_sample(s, g), sensing, start=start, noise=noise)
     return _loss_terms(
         torch, est, truth / _per_sample(s, truth), g_est, g / _per_sample(s, g), sensing.dbar,
         cfg.loss,
     )  # fmt: skip
 
 
-def _fast_starts(cfg: DCoSNetConfig, codes, g):
-    """:func:`~tensor_cosdi.solvers.otd.fast_start` of each measurement of the batch ``g``
-    through its code: ``(B, C, H, W)`` float32 on the CPU."""
+def _starts(cfg: DCoSNetConfig, codes, g):
+    """``(starts, noise)`` of the batch ``g``, each measurement through its code, as the method
+    computes them: :func:`~tensor_cosdi.solvers.otd.fast_start` for ``cfg.start``
+    (``(B, C, H, W)`` float32 on the CPU; ``None`` for ``"zero"``) and the noise input of the
+    estimated SNR (``(B,)``; ``None`` without ``noise_input``)."""
     import torch
 
     from ..solvers.otd import fast_start
+    from ..solvers.snr import estimate_snr
 
     gs = g.detach().cpu().numpy().astype(np.float64)
-    cubes = [np.asarray(fast_start(cfg.make_system(c), gi)) for c, gi in zip(codes, gs)]
-    out = np.stack(cubes).astype(np.float32)
-    return torch.from_numpy(out.reshape(len(cubes), *out.shape[1:3], -1)).permute(0, 3, 1, 2)
+    cubes, noise = [], []
+    for c, gi in zip(codes, gs):
+        system = cfg.make_system(c)
+        if cfg.noise_input:
+            noise.append(noise_feature(estimate_snr(system, gi).snr_db))
+        if cfg.start != "zero":
+            cubes.append(np.asarray(fast_start(system, gi, admm_iter=START_ADMM_ITER[cfg.start])))
+    start = None
+    if cubes:
+        out = np.stack(cubes).astype(np.float32)
+        out = out.reshape(len(cubes), *out.shape[1:3], -1)
+        start = torch.from_numpy(out).permute(0, 3, 1, 2)
+    return start, (torch.tensor(noise, dtype=torch.float32) if noise else None)
 
 
 def build_network(torch, cfg: DCoSNetConfig, data):
     """The network; the ``"spectral"`` prior starts from the pretrained denoiser's weights."""
     net = build_dcosnet(
         torch, cfg.n_bands, cfg.stages, cfg.width, cfg.unet_width, cfg.prior,
-        code_shape=data[1].shape if cfg.learn_code else None,
+        code_shape=data[1].shape if cfg.learn_code else None, noise_input=cfg.noise_input,
     )  # fmt: skip
+    if cfg.init:
+        _load_init(torch, net, cfg)
     if cfg.learn_code:  # logits ±1/2 around the starting code: a few hundred steps flip a pixel
         start = torch.from_numpy((np.asarray(data[1]) > 0).astype(np.float32) - 0.5)
         net.code_logits.data.copy_(start)
@@ -369,6 +413,44 @@ def build_network(torch, cfg: DCoSNetConfig, data):
                 f"{' '.join(str(exc).split())[:160]}"
             ) from None
     return net
+
+
+def _load_init(torch, net, cfg: DCoSNetConfig) -> None:
+    """Load ``cfg.init``'s weights into ``net`` (a fine-tune's start): the same network, or the
+    same with a noise input the file lacks (its parameters stay at their zero start)."""
+    from .dcosnet import _checkpoint
+
+    path, ckpt = _checkpoint(cfg.init)
+    theirs = dict(ckpt["config"])
+    mine = {"system": cfg.system, "channels": cfg.n_bands, "shift": cfg.shift,
+            "stages": cfg.stages, "width": cfg.width, "unet_width": cfg.unet_width,
+            "prior": cfg.prior}  # fmt: skip
+    other = {k: theirs.get(k, "unet" if k == "prior" else None) for k in mine}
+    if other != mine or (theirs.get("noise_input", False) and not cfg.noise_input):
+        raise ValueError(
+            f"init={path}: weights of another network ({other}, noise input "
+            f"{theirs.get('noise_input', False)}) than this run's ({mine}, noise input "
+            f"{cfg.noise_input})"
+        )
+    own = net.state_dict()
+    for name, value in ckpt["model"].items():
+        if not isinstance(value, torch.Tensor) or name not in own:
+            raise ValueError(f"init={path}: parameter {name!r} is not one of this network's")
+        target = own[name]
+        if value.shape == target.shape:
+            target.copy_(value)
+        elif (
+            value.ndim == 4
+            and value.shape[1] + 1 == target.shape[1]
+            and name.endswith("enc1.0.weight")
+        ):  # the U-Net's first convolution: the noise map's input channel starts at 0
+            target.zero_()
+            target[:, : value.shape[1]].copy_(value)
+        else:
+            raise ValueError(
+                f"init={path}: parameter {name!r} is {tuple(value.shape)}, this network's "
+                f"{tuple(target.shape)}"
+            )
 
 
 def _code_record(cfg: DCoSNetConfig) -> dict:
@@ -420,6 +502,8 @@ def train_dcosnet(
             "unet_width": cfg.unet_width,
             "prior": cfg.prior,
             "start": cfg.start,
+            "noise_input": cfg.noise_input,
+            **({"init": Path(cfg.init).name} if cfg.init else {}),
             **({"alpha_t": cfg.alpha_t} if cfg.system == "cassi_vsi" else {}),
             **_code_record(cfg),
         },

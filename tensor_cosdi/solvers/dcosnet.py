@@ -24,10 +24,13 @@ def dcosnet(system, measurement, *, weights=None, start="auto", device=None, non
     band).  The weights must match the system's kind, channel count and
     shift (a ``ValueError`` says what to train otherwise).  ``start``: where the
     unfolded ADMM begins, as the weights were trained (``"auto"``: the file's own, or for
-    the shipped weights ``"fast"``): ``"fast"`` from the first-stage cube ``pnp_fast``
-    starts from (:func:`~tensor_cosdi.solvers.otd.fast_start`, about 2 s of the call at
-    256×256×28 on 2 cores), ``"zero"`` from 0 as in the thesis (the shipped
-    ``dcosnet_sd_cassi.pt``).  ``device``:
+    the shipped weights :data:`~tensor_cosdi.learn.dcosnet.DEFAULT_START`): ``"fast"`` from
+    the first-stage cube ``pnp_fast`` starts from on clean data
+    (:func:`~tensor_cosdi.solvers.otd.fast_start`, about 2 s of the call at 256×256×28 on 2
+    cores), ``"adaptive"`` from ``pnp_fast``'s start on any data (the same, with 10 ADMM
+    iterations more where the estimated SNR reads noisy; the shipped
+    ``dcosnet_adaptive_sd_cassi.pt`` also reads that SNR), ``"zero"`` from 0 as in the
+    thesis (the shipped ``dcosnet_sd_cassi.pt``).  ``device``:
     ``"cpu"``, ``"cuda"``… (default CUDA when available).  ``nonneg`` (on: a
     cube of light) clips the network's output at 0.  Not iterative: the
     history has one entry.

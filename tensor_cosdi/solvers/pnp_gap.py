@@ -37,7 +37,12 @@ from ..noise import snr_schedule
 from . import engine
 from ._base import check_positive, register_method
 from .denoisers import resolve, self_ensemble, spectral_net
-from .otd import FAST_PAN_SPECTRUM, FAST_PAN_TV_STEPS  # pnp_fast's start, defined with it
+from .otd import (  # pnp_fast's start, defined with it
+    ACCELERATE_ABOVE_DB,
+    FAST_PAN_SPECTRUM,
+    FAST_PAN_TV_STEPS,
+    FAST_WARM_ITER,
+)
 from .panchromatic import PAN_SPECTRA
 from .priors import LEVEL_SCALES, Denoiser
 
@@ -53,17 +58,6 @@ GAP_TV_WARM_ITER = 80
 #: tuning mean 36.26 dB after OTD's ADMM stage, 36.28 without it, every fold chose it; median
 #: 13.34 → 10.85 s a cube.
 WARM_ITER_CLEAN = 0
-#: :func:`pnp_fast`'s ``warm_iter`` on noisy data: OTD's ADMM stage cut from 45 iterations to
-#: 10.  On noisy data the stage does the first denoising (dropped altogether, 30 dB on face:
-#: 34.4 → 30.1 dB), but 10 iterations do what 20 did: 8 tuning scenes as they are and magnified
-#: 4×, 4 folds, 30 and 20 dB, TSA mask and a random code
-#: (``benchmarks/results/cv_pnp_fast_noisy_start.md``): tuning means 32.08 / 29.41 / 35.50 /
-#: 31.67 dB with 20 iterations, 32.08 / 29.39 / 35.49 / 31.68 with 10, median 5.51-5.80 →
-#: 5.11-5.29 s a cube; every fold chose 10 (ties within 0.05 dB won by the faster).  Its first
-#: stage keeps OTD's 90 iterations (``pan_iter``): 12 tuning scenes, 4 folds
-#: (``benchmarks/results/cv_pnp_fast_pan.md``), 60 lose 0.16 dB clean and 0.15 dB at 30 dB,
-#: 20 lose 2.9 and 1.2 dB.
-FAST_WARM_ITER = 10
 #: :func:`pnp_fast`'s ``max_iter``: 46 against 40 gained 0.20 dB clean and 0.11 dB at 30 dB on 12
 #: tuning scenes, 4 folds (``benchmarks/results/cv_pnp_fast_budget.md``; every fold chose 46) for
 #: six more denoiser calls, which fit the 5-s budget once its start's TV took 5 steps (and
@@ -278,11 +272,6 @@ PAN_SPECTRUM = "gated_clean"
 SIGMA_SCALE = {"gap": "peak", "admm": "rms"}
 #: ``ensemble="auto"``: denoiser calls per iteration (see :func:`pnp_gap`).
 ENSEMBLE = 1
-#: ``accelerate="auto"``: accelerated GAP only above this estimated SNR (dB).  Tuning scenes
-#: (balloons, clay; TSA mask; OTD start, σ 0.1): noiseless, accelerated 31.45 dB against 29.68
-#: plain; at 30 dB accelerated GAP lets the noise through the small code sums (18.6 dB), plain GAP
-#: with ``ε = 0.1`` gives 28.29 dB (0.05: 24.4 accelerated; 0.2: 28.21; 0.5: 28.03).
-ACCELERATE_ABOVE_DB = 38.0
 #: ``eps="auto"`` without acceleration: ε against the estimated SNR (with it: 1e-6).
 EPS = {30.0: 0.1, 20.0: 0.3}
 

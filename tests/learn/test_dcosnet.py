@@ -386,6 +386,137 @@ def test_weights_trained_from_the_fast_start_begin_from_it(tmp_path):
 
 
 @needs_torch
+def test_the_scale_ignores_pixels_a_real_valued_code_barely_lights():
+    """``Sensing.scale`` reads the measurement's level off ``g / d``.  Through a real-valued
+    code with near-zero entries (as the TSA mask) noise divided by a tiny ``d`` once set the
+    scale of a noisy measurement to many times a clean one's (751 against about 1 for a 20-dB
+    crop of balloons through the TSA mask), and the network saw an input that much too dark.
+    Now a 20-dB measurement reads within 20 % of the clean one, where the 99.9th percentile
+    over every lit pixel reads more than 3 times it."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing
+
+    rng = np.random.default_rng(0)
+    code = rng.random((32, 32)) ** 6  # mostly near 0, like a real mask's dim entries
+    system = tc.systems.SDCASSI(code, n_bands=8, shifts=1)
+    cube = 0.2 + 0.6 * rng.random(system.cube_shape)
+    sen = Sensing([system])
+    clean = system.forward(cube)
+    noisy = np.asarray(system.simulate(cube, snr_db=20, rng=1))
+    s_clean, s_noisy = (float(sen.scale(torch.from_numpy(g)[None])[0]) for g in (clean, noisy))
+    assert abs(s_noisy / s_clean - 1) < 0.2, (s_clean, s_noisy)
+    d = sen.d.numpy().ravel()
+    every_lit = np.quantile(np.abs(noisy).ravel()[d > 0] / d[d > 0], 0.999)
+    assert every_lit > 3 * s_clean, (every_lit, s_clean)  # the trap the scale avoids
+
+
+@needs_torch
+def test_a_noise_input_and_the_adaptive_start_reach_the_network_as_the_method_computes_them(
+    tmp_path,
+):
+    """``start="adaptive"`` with ``noise_input``: training samples and the method begin from
+    ``fast_start(admm_iter="auto")`` and feed ``noise_feature`` of the estimated SNR; the
+    method's cube is the network's from exactly those; the noise input moves the penalty and
+    the U-Net (a network built with it refuses to run without it, and one built without it
+    refuses it)."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing, build_dcosnet, noise_feature, read_config
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, train_dcosnet
+    from tensor_cosdi.solvers.otd import fast_start
+    from tensor_cosdi.solvers.snr import estimate_snr
+
+    _real()
+    cfg = DCoSNetConfig(
+        n_bands=4, shift=1, stages=1, width=4, unet_width=4, steps=2, batch=2, patch=16,
+        mask="random", checkpoint_every=1, warmup=1, start="adaptive", noise_input=True,
+    )  # fmt: skip
+    out = train_dcosnet(tmp_path / "a.pt", cfg, progress=False, device="cpu")
+    assert out["finished"] and np.isfinite(out["final_loss"])
+    rec = read_config(tmp_path / "a.pt")
+    assert rec["start"] == "adaptive" and rec["noise_input"] is True
+    # make the noise input matter (a penalty and a U-Net that read it), so that the method's
+    # cube tells which noise input and start it ran the network with
+    ckpt = torch.load(tmp_path / "a.pt", weights_only=True)
+    ckpt["model"]["mu_noise"].fill_(2.0)
+    ckpt["model"]["unet.0.enc1.0.weight"][:, -1] += 1.0
+    torch.save(ckpt, tmp_path / "loud.pt")
+    system = cfg.make_system(np.random.default_rng(0).random((16, 16)) < 0.5)
+    g = system.simulate(np.random.default_rng(1).random(system.cube_shape), snr_db=20, rng=0)
+    got = np.asarray(tc.reconstruct(system, g, "dcosnet", weights=tmp_path / "loud.pt").cube)
+    net = build_dcosnet(torch, 4, 1, 4, 4, noise_input=True).eval()
+    net.load_state_dict(ckpt["model"])
+    sen = Sensing([system])
+    gt = torch.from_numpy(np.asarray(g, dtype=np.float32))[None]
+    s = float(sen.scale(gt)[0])
+
+    def run(admm_iter, t):
+        x0 = np.asarray(fast_start(system, g, admm_iter=admm_iter), dtype=np.float32)
+        x0 = torch.from_numpy(x0).permute(2, 0, 1)[None] / s
+        with torch.no_grad():
+            x = net(gt / s, sen, start=x0, noise=torch.tensor([t]))[0][0]
+        return np.maximum(x.permute(1, 2, 0).numpy() * s, 0)
+
+    t = noise_feature(estimate_snr(system, g).snr_db)
+    assert t > 0.5  # a 20 dB measurement: t about 1
+    ours = run("auto", t)
+    np.testing.assert_allclose(got, ours, atol=2e-4)  # float32 ADMM in the start: ~3e-5
+    assert np.abs(ours - run("auto", 0.0)).max() > 1e-2  # the noise input matters
+    assert np.abs(ours - run(0, t)).max() > 1e-2  # and so do the start's ADMM iterations
+    x0 = torch.zeros(1, 4, 16, 16)
+    with pytest.raises(ValueError, match="takes each sample's noise input"):
+        net(gt / s, sen, start=x0)
+    with pytest.raises(ValueError, match="built without a noise input"):
+        build_dcosnet(torch, 4, 1, 4, 4)(gt / s, sen, noise=torch.tensor([t]))
+    with pytest.raises(ValueError, match="noise_input must be True or False"):
+        DCoSNetConfig(noise_input=1).check()
+    with pytest.raises(ValueError, match="needs prior='unet'"):
+        DCoSNetConfig(noise_input=True, prior="spectral").check()
+    with pytest.raises(ValueError, match="noise_input must be True or False"):
+        build_dcosnet(torch, 4, noise_input="yes")
+
+
+@needs_torch
+def test_init_fine_tunes_from_a_file_and_starts_as_its_network(tmp_path):
+    """``init``: a run starts from a file's weights — with a noise input the file lacks, that
+    input starts at 0, so the network's first output is the file's for every noise level; a
+    file of another network, or one with a noise input into a run without, is refused."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import Sensing, build_dcosnet
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, build_network, train_dcosnet
+
+    _real()
+    small = dict(n_bands=4, shift=1, stages=1, width=4, unet_width=4, batch=2, patch=16,
+                 mask="random", checkpoint_every=1, warmup=1)  # fmt: skip
+    train_dcosnet(tmp_path / "b.pt", DCoSNetConfig(steps=2, **small), progress=False)
+    cfg = DCoSNetConfig(steps=2, noise_input=True, init=str(tmp_path / "b.pt"), **small)
+    net = build_network(torch, cfg.check(), (None, None, None)).eval()
+    base = build_dcosnet(torch, 4, 1, 4, 4).eval()
+    base.load_state_dict(torch.load(tmp_path / "b.pt", weights_only=True)["model"])
+    system = cfg.make_system(np.random.default_rng(0).random((16, 16)) < 0.5)
+    g = torch.from_numpy(system.forward(np.random.default_rng(1).random(system.cube_shape)))
+    sen = Sensing([system])
+    g = g[None].float()
+    with torch.no_grad():
+        want = base(g, sen)[0]
+        for t in (0.0, 1.0, 5.0):
+            np.testing.assert_allclose(net(g, sen, noise=torch.tensor([t]))[0], want, atol=1e-6)
+    out = train_dcosnet(tmp_path / "c.pt", cfg, progress=False)
+    assert out["finished"] and np.isfinite(out["final_loss"])
+    with pytest.raises(ValueError, match="weights of another network"):
+        build_network(torch, DCoSNetConfig(init=str(tmp_path / "b.pt"), **{**small, "stages": 2}),
+                      (None, None, None))  # fmt: skip
+    with pytest.raises(ValueError, match="weights of another network"):
+        build_network(torch, DCoSNetConfig(init=str(tmp_path / "c.pt"), **small), (None,) * 3)
+    with pytest.raises(FileNotFoundError):
+        build_network(torch, DCoSNetConfig(init=str(tmp_path / "none.pt"), **small), (None,) * 3)
+    with pytest.raises(ValueError, match="pick one"):
+        DCoSNetConfig(init="b.pt", mask="seeded", learn_code=True).check()
+
+
+@needs_torch
 def test_a_learned_code_changes_then_is_held_and_travels_with_the_weights(tmp_path):
     """``learn_code``: the seeded code's logits move during the first ``code_until`` of the steps
     only; the weights record the binary code, reconstruct through it (tiled) and refuse any

@@ -714,3 +714,31 @@ def test_fast_start_is_pnp_fast_s_clean_start_and_needs_a_first_stage():
         fast_start(dual.system, dual.measurement)
     with pytest.raises(ValueError, match="system: expected an imager"):
         fast_start("sd_cassi", p.measurement)
+
+
+def test_fast_start_auto_takes_pnp_fast_s_noisy_admm_iterations_where_the_data_reads_noisy():
+    """``admm_iter="auto"``: the first stage alone on a clean measurement, then
+    ``FAST_WARM_ITER`` ADMM iterations where the estimated SNR is under
+    ``ACCELERATE_ABOVE_DB`` (pnp_fast's start on any data, D-CoSNet's ``start="adaptive"``).
+    What those iterations gain on real scenes is measured in ``benchmarks/results/``."""
+    from tensor_cosdi.solvers import otd
+
+    clean = studies.make_problem(
+        "sd_cassi", "colorchecker", shape=(48, 48), n_bands=16, snr_db=None
+    )
+    noisy = studies.make_problem("sd_cassi", "colorchecker", shape=(48, 48), n_bands=16, snr_db=20)
+    assert otd.fast_start_iterations(clean.system, clean.measurement) == 0
+    assert otd.fast_start_iterations(noisy.system, noisy.measurement) == otd.FAST_WARM_ITER == 10
+    np.testing.assert_array_equal(
+        np.asarray(otd.fast_start(clean.system, clean.measurement, admm_iter="auto")),
+        np.asarray(otd.fast_start(clean.system, clean.measurement)),
+    )
+    auto = np.asarray(otd.fast_start(noisy.system, noisy.measurement, admm_iter="auto"))
+    ref, _, _ = otd.online_tucker_admm(
+        noisy.system, noisy.measurement, admm_iter=10, pan_tv_steps=otd.FAST_PAN_TV_STEPS,
+        pan_spectrum=otd.FAST_PAN_SPECTRUM,
+    )  # fmt: skip
+    np.testing.assert_array_equal(auto, np.asarray(ref))
+    for bad in ("fast", -1, 2.5, True):
+        with pytest.raises(ValueError, match="admm_iter must be"):
+            otd.fast_start(noisy.system, noisy.measurement, admm_iter=bad)

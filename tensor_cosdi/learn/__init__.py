@@ -98,7 +98,7 @@ def load_weights(path, kind: str, command: str) -> dict:
         No such file.
     ValueError
         An empty, truncated or foreign file (one line naming ``kind`` and
-        ``command``).
+        ``command``), or one whose parameters hold NaN or inf.
     """
     from pathlib import Path
 
@@ -116,4 +116,16 @@ def load_weights(path, kind: str, command: str) -> dict:
         raise ValueError(
             f"{path} is not a {kind} checkpoint of tensor-cosdi {command} (no config and model)"
         )
+    if not isinstance(ckpt["model"], dict):
+        raise ValueError(
+            f"{path} is not a {kind} checkpoint of tensor-cosdi {command} (its model is a "
+            f"{type(ckpt['model']).__name__}, not a dict of parameters)"
+        )
+    for name, value in ckpt["model"].items():  # a diverged training's file runs, into NaN
+        if isinstance(value, torch.Tensor) and value.is_floating_point():
+            if not bool(torch.isfinite(value).all()):
+                raise ValueError(
+                    f"{path}: {kind} parameter {name!r} holds NaN or inf; expected the finite "
+                    f"weights of a finished tensor-cosdi {command}"
+                )
     return ckpt

@@ -76,7 +76,7 @@ DEFAULT_WEIGHTS = {
     ("sd_cassi", "zero"): WEIGHTS_DIR / "dcosnet_sd_cassi.pt",
 }
 #: The start the shipped weights of :func:`default_weights` begin from unless asked otherwise.
-DEFAULT_START = "fast"
+DEFAULT_START = "adaptive"
 
 
 def default_weights(system_name: str, start: str = DEFAULT_START) -> Path:

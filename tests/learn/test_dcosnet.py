@@ -317,13 +317,18 @@ def test_shipped_weights_beat_least_squares_on_a_held_back_real_crop(code, snr, 
 
 
 @needs_torch
-@pytest.mark.parametrize("code, snr", [("tsa", None), ("random", 30)])
-def test_shipped_fast_start_weights_improve_on_their_start_on_a_held_back_real_crop(code, snr):
-    """The default weights (``start="fast"``) on a 64×64 crop of a report scene (never trained
-    on) improve on the first-stage cube they begin from and pass GAP-TV.  Measured: the TSA crop,
-    noiseless, start 40.74 dB → 42.53 (GAP-TV 36.10); a seeded random code at 30 dB 43.17 →
-    44.53 (37.82).  Through the TSA crop at 30 dB they do not (31.78 → 31.71, GAP-TV 35.61; the
-    report table, ``benchmarks/results/dcosnet.md``, shows the same)."""
+@pytest.mark.parametrize(
+    "code, snr, start_gain",
+    [("tsa", None, 2.0), ("tsa", 30, 1.0), ("random", 30, 0.6)],
+)
+def test_shipped_default_weights_improve_on_their_start_on_a_held_back_real_crop(
+    code, snr, start_gain
+):
+    """The default weights (``start="adaptive"``) on a 64×64 crop of a report scene (never
+    trained on) improve on the cube they begin from (``fast_start(admm_iter="auto")``) and pass
+    GAP-TV by more than 3 dB.  Measured: the TSA crop, noiseless, start 40.74 dB → 43.78
+    (GAP-TV 36.10); the TSA crop at 30 dB 38.71 → 40.40 (35.61); a seeded random code at 30 dB
+    42.39 → 43.63 (37.82)."""
     from tensor_cosdi.solvers.otd import fast_start
 
     cube = _real("real_and_fake_apples", (64, 64))
@@ -334,10 +339,10 @@ def test_shipped_fast_start_weights_improve_on_their_start_on_a_held_back_real_c
     def psnr(x):
         return metrics.psnr(cube, np.clip(np.asarray(x), 0, 1), data_range=1.0)
 
-    start = psnr(fast_start(system, g))
+    start = psnr(fast_start(system, g, admm_iter="auto"))
     net = psnr(tc.reconstruct(system, g, "dcosnet").cube)
     gap = psnr(tc.reconstruct(system, g, "gap_tv").cube)
-    assert net > start + 0.8 and net > gap + 3.0, (net, start, gap)
+    assert net > start + start_gain and net > gap + 3.0, (net, start, gap)
 
 
 @needs_torch
@@ -656,6 +661,29 @@ def test_a_weights_file_that_is_not_one_is_a_clear_error(tmp_path, data):
         training_code(path)
     with pytest.raises(ValueError, match="not a D-CoSNet checkpoint"):
         DCoSNet(path)(_sd(), np.random.default_rng(0).random(_sd().measurement_shape))
+
+
+@needs_torch
+def test_weights_holding_nan_are_refused_when_read_not_run_into_nan(tmp_path):
+    """A file whose parameters hold NaN (a diverged training's) is refused by every reader of
+    weights files, naming the file and the parameter, before any network runs."""
+    import torch
+
+    from tensor_cosdi.learn.dcosnet import DEFAULT_WEIGHTS, DCoSNet, read_config
+    from tensor_cosdi.learn.spectral_net import DEFAULT_WEIGHTS as DENOISER
+    from tensor_cosdi.learn.spectral_net import SpectralDenoiser
+
+    for source, name in [(DEFAULT_WEIGHTS[("sd_cassi", "adaptive")], "d.pt"), (DENOISER, "s.pt")]:
+        ckpt = torch.load(source, map_location="cpu", weights_only=True)
+        first = next(iter(ckpt["model"]))
+        ckpt["model"][first] = torch.full_like(ckpt["model"][first], float("nan"))
+        torch.save(ckpt, tmp_path / name)
+    with pytest.raises(ValueError, match=r"d\.pt: D-CoSNet parameter .* holds NaN or inf"):
+        read_config(tmp_path / "d.pt")
+    with pytest.raises(ValueError, match="holds NaN or inf"):
+        DCoSNet(tmp_path / "d.pt")(_sd(), np.random.default_rng(0).random(_sd().measurement_shape))
+    with pytest.raises(ValueError, match=r"s\.pt: spectral-denoiser parameter .* holds NaN"):
+        SpectralDenoiser(tmp_path / "s.pt")
 
 
 @needs_torch

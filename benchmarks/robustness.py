@@ -970,7 +970,38 @@ def _weights_file_cases(folder: Path, sd):
                         lambda c=ckpt: train_denoiser(c.with_suffix(""), resume=True,
                                                       progress=False, device="cpu"),
                         ("not a readable checkpoint",)))  # fmt: skip
+    out += _nan_weights_cases(folder, sd, g)
     return out
+
+
+def _nan_weights_cases(folder: Path, sd, g):
+    """The shipped weights with one parameter set to NaN (a diverged training's file)."""
+    import torch
+
+    from tensor_cosdi.learn import dcosnet, spectral_net
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, train_dcosnet
+
+    paths = {}
+    for what, source in (("dcosnet", dcosnet.default_weights("sd_cassi")),
+                         ("denoiser", spectral_net.default_weights())):  # fmt: skip
+        ckpt = torch.load(source, map_location="cpu", weights_only=True)
+        first = next(iter(ckpt["model"]))
+        ckpt["model"][first] = torch.full_like(ckpt["model"][first], float("nan"))
+        paths[what] = folder / f"nan_{what}.pt"
+        torch.save(ckpt, paths[what])
+    init = DCoSNetConfig(init=str(paths["dcosnet"]), stages=3, steps=1, start="adaptive",
+                         noise_input=True)  # fmt: skip
+    return [
+        Case("learn.hostile", "dcosnet weights= holding NaN",
+             lambda: tc.reconstruct(sd, g, "dcosnet", weights=paths["dcosnet"]), ("nan",)),
+        Case("learn.hostile", "read_config of D-CoSNet weights holding NaN",
+             lambda: dcosnet.read_config(paths["dcosnet"]), ("nan",)),
+        Case("learn.hostile", "SpectralDenoiser of weights holding NaN",
+             lambda: spectral_net.SpectralDenoiser(paths["denoiser"]), ("nan",)),
+        Case("learn.hostile", "train_dcosnet init= weights holding NaN",
+             lambda: train_dcosnet(folder / "from_nan.pt", init, progress=False, device="cpu"),
+             ("nan",)),
+    ]  # fmt: skip
 
 
 def _apply(doc: dict, change: dict) -> None:

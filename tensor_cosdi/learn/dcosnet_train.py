@@ -415,9 +415,9 @@ def build_network(torch, cfg: DCoSNetConfig, data):
     return net
 
 
-def _load_init(torch, net, cfg: DCoSNetConfig) -> None:
-    """Load ``cfg.init``'s weights into ``net`` (a fine-tune's start): the same network, or the
-    same with a noise input the file lacks (its parameters stay at their zero start)."""
+def _init_checkpoint(cfg: DCoSNetConfig):
+    """``(path, checkpoint)`` of ``cfg.init``, read and checked against this run's network (the
+    same, or the same without the noise input) before any training data are read."""
     from .dcosnet import _checkpoint
 
     path, ckpt = _checkpoint(cfg.init)
@@ -432,6 +432,13 @@ def _load_init(torch, net, cfg: DCoSNetConfig) -> None:
             f"{theirs.get('noise_input', False)}) than this run's ({mine}, noise input "
             f"{cfg.noise_input})"
         )
+    return path, ckpt
+
+
+def _load_init(torch, net, cfg: DCoSNetConfig) -> None:
+    """Load ``cfg.init``'s weights into ``net`` (a fine-tune's start): the same network, or the
+    same with a noise input the file lacks (its parameters stay at their zero start)."""
+    path, ckpt = _init_checkpoint(cfg)
     own = net.state_dict()
     for name, value in ckpt["model"].items():
         if not isinstance(value, torch.Tensor) or name not in own:
@@ -485,6 +492,8 @@ def train_dcosnet(
     """
     from ._loop import run
 
+    if isinstance(config, DCoSNetConfig) and config.init:  # a bad file fails before the data load
+        _init_checkpoint(config.check())
     return run(
         desc="train-dcosnet",
         out=out,

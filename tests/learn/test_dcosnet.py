@@ -670,6 +670,7 @@ def test_weights_holding_nan_are_refused_when_read_not_run_into_nan(tmp_path):
     import torch
 
     from tensor_cosdi.learn.dcosnet import DEFAULT_WEIGHTS, DCoSNet, read_config
+    from tensor_cosdi.learn.dcosnet_train import DCoSNetConfig, train_dcosnet
     from tensor_cosdi.learn.spectral_net import DEFAULT_WEIGHTS as DENOISER
     from tensor_cosdi.learn.spectral_net import SpectralDenoiser
 
@@ -684,6 +685,11 @@ def test_weights_holding_nan_are_refused_when_read_not_run_into_nan(tmp_path):
         DCoSNet(tmp_path / "d.pt")(_sd(), np.random.default_rng(0).random(_sd().measurement_shape))
     with pytest.raises(ValueError, match=r"s\.pt: spectral-denoiser parameter .* holds NaN"):
         SpectralDenoiser(tmp_path / "s.pt")
+    # a fine-tune from it fails at once, before the training scenes are read
+    cfg = DCoSNetConfig(init=str(tmp_path / "d.pt"), stages=3, start="adaptive", noise_input=True)
+    with pytest.raises(ValueError, match="holds NaN or inf"):
+        train_dcosnet(tmp_path / "out.pt", cfg, folder=tmp_path / "no_scenes", progress=False)
+    assert not (tmp_path / "out.pt").exists()
 
 
 @needs_torch

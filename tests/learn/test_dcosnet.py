@@ -326,9 +326,9 @@ def test_shipped_default_weights_improve_on_their_start_on_a_held_back_real_crop
 ):
     """The default weights (``start="adaptive"``) on a 64×64 crop of a report scene (never
     trained on) improve on the cube they begin from (``fast_start(admm_iter="auto")``) and pass
-    GAP-TV by more than 3 dB.  Measured: the TSA crop, noiseless, start 40.74 dB → 43.78
-    (GAP-TV 36.10); the TSA crop at 30 dB 38.71 → 40.40 (35.61); a seeded random code at 30 dB
-    42.39 → 43.63 (37.82)."""
+    GAP-TV by more than 3 dB.  Measured: the TSA crop, noiseless, start 40.74 dB → 44.07
+    (GAP-TV 36.10); the TSA crop at 30 dB 38.71 → 40.56 (35.61); a seeded random code at 30 dB
+    42.39 → 43.27 (37.82)."""
     from tensor_cosdi.solvers.otd import fast_start
 
     cube = _real("real_and_fake_apples", (64, 64))

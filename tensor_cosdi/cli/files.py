@@ -342,6 +342,8 @@ def run_info(args) -> int:
         entries = files.array_entries(path, suffix)
     for name, (shape, dtype, _) in entries.items():
         print(f"  {name}: {tuple(int(n) for n in shape)} {np.dtype(dtype)}")
+    for name, (why, _) in getattr(entries, "skipped", {}).items():
+        print(f"  {name}: not read ({why})")
     doc = bundle_document(path)
     if doc is None and suffix != ".hdr":
         try:

@@ -27,6 +27,30 @@ class UnsafeFile(Refused):
     or inflate beyond ``max_bytes``: refused before anything is read."""
 
 
+class Entries(dict):
+    """``{name: (shape, dtype, load)}``: the numeric arrays a file holds.  ``skipped`` maps each
+    other variable the listing met (text, a cell or struct, records, complex values, a link that
+    can point into another file) to ``(what it is, the error class refusing it)``, so that an
+    error can say what a name holds instead of that it is missing."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.skipped: dict[str, tuple[str, type]] = {}
+
+
+def _matlab_text(cls: str) -> str:
+    return "MATLAB text (char)" if cls == "char" else f"a MATLAB {cls}"
+
+
+def _dtype_text(dtype) -> str:
+    """What a non-numeric dtype holds, in words (``"text of dtype |S3"``)."""
+    dtype = np.dtype(dtype)
+    if dtype.fields is not None:
+        return "compound records"
+    kind = {"S": "text", "U": "text", "O": "objects", "c": "complex values"}
+    return f"{kind.get(dtype.kind, 'values')} of dtype {dtype.str}"
+
+
 def require_file(path, what: str = "file") -> None:
     """Return if ``path`` is a regular file (or a link to one); else ``FileNotFoundError`` when
     nothing is there, :class:`UnsafeFile` when something else is (a folder, a FIFO, a device,
@@ -139,22 +163,21 @@ def _entries_mat(path, max_bytes=MAX_ARRAY_BYTES):
     import scipy.io
 
     _check_mat_inflation(path, max_bytes)
-    out = {}
+    out = Entries()
     for name, shape, cls in scipy.io.whosmat(path):
         if cls == "sparse":
             raise Refused(
                 f"{path}: {name!r} is a MATLAB sparse matrix; save it with full({name}) "
                 "to read it as an array"
             )
-        if cls in ("cell", "struct", "object", "function_handle", "opaque"):
+        if cls in ("cell", "struct", "object", "function_handle", "opaque", "char"):
+            out.skipped[name] = (_matlab_text(cls), Refused)
             continue
         dtype = {
-            "logical": np.bool_, "char": np.str_, "int8": np.int8, "uint8": np.uint8,
+            "logical": np.bool_, "int8": np.int8, "uint8": np.uint8,
             "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32,
             "int64": np.int64, "uint64": np.uint64, "single": np.float32,
         }.get(cls, np.float64)  # fmt: skip
-        if dtype is np.str_:
-            continue
 
         def load(name=name):
             return np.asarray(scipy.io.loadmat(path, variable_names=[name])[name])
@@ -205,17 +228,27 @@ def hard_linked(f, name: str, path) -> None:
 
 def _entries_h5(path, max_bytes=MAX_ARRAY_BYTES, *, matlab=False):
     h5py = _require_h5py()
-    out = {}
+    out = Entries()
     with h5py.File(path, "r") as f:
+
+        def link(name, obj):  # visits links without following them (h5py ≥ 3.11)
+            if not isinstance(obj, h5py.HardLink) and not name.startswith("#"):
+                kind = {"SoftLink": "a soft link", "ExternalLink": "an external link"}
+                what = kind.get(type(obj).__name__, f"a link ({type(obj).__name__})")
+                why = f"{what}, which can point into another file"
+                out.skipped[name] = (why, UnsafeFile)
 
         def visit(name, obj):
             if not isinstance(obj, h5py.Dataset) or name.startswith("#"):
                 return
+            cls = obj.attrs.get("MATLAB_class", b"") if matlab else b""
+            if matlab and cls in (b"char", b"cell", b"struct"):
+                out.skipped[name] = (_matlab_text(cls.decode()), Refused)
+                return
             if obj.dtype.kind not in "biuf":
+                out.skipped[name] = (_dtype_text(obj.dtype), Refused)
                 return
             check_h5_dataset(path, name, obj, max_bytes)
-            if matlab and obj.attrs.get("MATLAB_class", b"") in (b"char", b"cell", b"struct"):
-                return
             shape = tuple(reversed(obj.shape)) if matlab else tuple(obj.shape)
 
             def load(name=name):
@@ -228,6 +261,8 @@ def _entries_h5(path, max_bytes=MAX_ARRAY_BYTES, *, matlab=False):
             out[name] = (shape, obj.dtype, load)
 
         f.visititems(visit)
+        if hasattr(f, "visititems_links"):
+            f.visititems_links(link)
     return out
 
 

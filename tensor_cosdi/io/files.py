@@ -118,13 +118,27 @@ def _check_size(path, name, shape, dtype, max_bytes):
         )
 
 
+def _listing(entries) -> str:
+    """The arrays of ``entries`` with their shapes, then what else the file holds and why it is
+    not read (``"cube (256, 256, 28); not read: name (MATLAB text (char))"``)."""
+    text = ", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays"
+    skipped = getattr(entries, "skipped", {})
+    if skipped:
+        text += "; not read: " + ", ".join(f"{k} ({why})" for k, (why, _) in skipped.items())
+    return text
+
+
 def _pick(path, entries, key, want_ndim=None):
     if key is not None:
-        if key not in entries:
-            raise KeyError(
-                f"{path}: no array {key!r}; it holds "
-                + (", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays")
+        skipped = getattr(entries, "skipped", {})
+        if key in skipped:
+            why, refusal = skipped[key]
+            raise refusal(
+                f"{path}: {key!r} is {why}, not a numeric array stored in the file; only "
+                "numeric arrays are read"
             )
+        if key not in entries:
+            raise KeyError(f"{path}: no array {key!r}; it holds {_listing(entries)}")
         return key
     wl = {k for k in entries if k.lower().rsplit("/", 1)[-1] in WAVELENGTH_KEYS}
     cands = [k for k, v in entries.items() if k not in wl and len(v[0]) >= 1]
@@ -132,7 +146,7 @@ def _pick(path, entries, key, want_ndim=None):
         cands = [k for k in cands if len(entries[k][0]) >= want_ndim]
     if len(cands) == 1:
         return cands[0]
-    listing = ", ".join(f"{k} {tuple(v[0])}" for k, v in entries.items()) or "no arrays"
+    listing = _listing(entries)
     what = "no candidate" if not cands else "several candidates"
     raise ValueError(
         f"{path}: {what} for the array to read ({listing}); pass key=NAME (CLI: FILE:NAME)"

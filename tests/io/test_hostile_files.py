@@ -7,6 +7,7 @@ import zipfile
 import h5py
 import numpy as np
 import pytest
+import scipy.io
 
 from tensor_cosdi.io import load_bundle, save_bundle
 from tensor_cosdi.io.files import read_array, read_cube, write_cube
@@ -36,10 +37,44 @@ def test_hdf5_virtual_dataset_is_refused(hostile):
 
 def test_hdf5_links_out_of_the_file_are_refused(hostile):
     # an external link is never followed: the file holds no array of its own
-    with pytest.raises(ValueError, match="no arrays"):
+    # and the error says what the name is instead of that it is missing
+    with pytest.raises(ValueError, match="no arrays; not read: cube .an external link"):
         read_array(hostile["hdf5_link"])
-    with pytest.raises(KeyError, match="no array 'cube'; it holds no arrays"):
+    with pytest.raises(ValueError, match="'cube' is an external link, which can point into"):
         read_array(hostile["hdf5_link"], "cube")
+
+
+def test_hdf5_soft_links_and_non_numeric_datasets_are_named(tmp_path):
+    path = tmp_path / "odd.h5"
+    with h5py.File(path, "w") as f:
+        f["cube"] = np.ones((2, 2, 2))
+        f["alias"] = h5py.SoftLink("/cube")
+        f["label"] = np.array([b"abc", b"def"])
+        f["pairs"] = np.zeros(3, dtype=[("a", "f4"), ("b", "f4")])
+        f["phase"] = np.ones(3, dtype=np.complex128)
+    np.testing.assert_array_equal(read_array(path), np.ones((2, 2, 2)))  # the one number array
+    with pytest.raises(ValueError, match="'alias' is a soft link"):
+        read_array(path, "alias")
+    with pytest.raises(ValueError, match=r"'label' is text of dtype \|S3, not a numeric array"):
+        read_array(path, "label")
+    with pytest.raises(ValueError, match="'pairs' is compound records"):
+        read_array(path, "pairs")
+    with pytest.raises(ValueError, match="'phase' is complex values of dtype <c16"):
+        read_cube(path, "phase")
+    with pytest.raises(KeyError, match=r"no array 'nope'; it holds cube \(2, 2, 2\); not read: "):
+        read_array(path, "nope")
+
+
+def test_matlab_text_and_cells_are_named(tmp_path):
+    path = tmp_path / "v5.mat"
+    scipy.io.savemat(
+        path, {"mask": np.ones((4, 4)), "note": "hi", "c": np.array([[1, "a"]], dtype=object)}
+    )
+    with pytest.raises(ValueError, match=r"'note' is MATLAB text \(char\)"):
+        read_array(path, "note")
+    with pytest.raises(ValueError, match="'c' is a MATLAB cell"):
+        read_array(path, "c")
+    np.testing.assert_array_equal(read_array(path), np.ones((4, 4)))
 
 
 def test_hdf5_chunks_larger_than_the_limit_are_refused(hostile):

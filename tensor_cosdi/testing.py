@@ -245,7 +245,9 @@ def hostile_files(folder) -> dict:
 
     ``hdf5_external`` (a dataset whose data is another file), ``hdf5_virtual``
     and ``hdf5_virtual_missing`` (virtual datasets, the second's source gone),
-    ``hdf5_link`` (an external link named ``cube``), ``hdf5_chunks`` (2×2×2
+    ``hdf5_link`` (an external link named ``cube``), ``hdf5_soft`` (a soft link named ``cube``
+    to a dataset of the file), ``hdf5_text`` and ``mat_text`` (text named ``cube``),
+    ``hdf5_chunks`` (2×2×2
     data in 128³-element gzip chunks), ``npz_bomb`` (4 MiB of zeros in a few
     KiB), ``mat_bomb`` (2 MiB compressed), ``mat_padded`` (an 8 MiB padded
     compressed element), ``mat_sparse``, ``npz_complex``, ``mat_complex`` (MATLAB v5
@@ -277,7 +279,8 @@ def hostile_files(folder) -> dict:
         ("hdf5_link", ".h5"), ("hdf5_chunks", ".h5"), ("npz_bomb", ".npz"),
         ("mat_bomb", ".mat"), ("mat_padded", ".mat"), ("mat_sparse", ".mat"),
         ("npz_complex", ".npz"), ("mat_complex", ".mat"), ("npz_wavelengths", ".npz"),
-        ("tiff_mixed", ".tif"), ("tiff_rgb", ".tif"),
+        ("tiff_mixed", ".tif"), ("tiff_rgb", ".tif"), ("hdf5_soft", ".h5"),
+        ("hdf5_text", ".h5"), ("mat_text", ".mat"),
     )}  # fmt: skip
     secret = folder / "secret.bin"
     np.full(64, 7.0).tofile(secret)
@@ -293,6 +296,12 @@ def hostile_files(folder) -> dict:
             f.create_virtual_dataset("cube", layout, fillvalue=0)
     with h5py.File(out["hdf5_link"], "w") as f:
         f["cube"] = h5py.ExternalLink(str(source), "/data")
+    with h5py.File(out["hdf5_soft"], "w") as f:  # a soft link named cube, to a cube in the file
+        f["data"] = np.ones((4, 4, 4))
+        f["cube"] = h5py.SoftLink("/data")
+    with h5py.File(out["hdf5_text"], "w") as f:
+        f["cube"] = np.array([b"not", b"numbers"])
+    scipy.io.savemat(out["mat_text"], {"cube": "not numbers"})
     with h5py.File(out["hdf5_chunks"], "w") as f:
         ds = f.create_dataset("cube", shape=(2, 2, 2), maxshape=(None,) * 3, chunks=(128,) * 3,
                               dtype="f8", compression="gzip")  # fmt: skip

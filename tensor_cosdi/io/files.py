@@ -148,9 +148,8 @@ def _pick(path, entries, key, want_ndim=None):
         return cands[0]
     listing = _listing(entries)
     what = "no candidate" if not cands else "several candidates"
-    raise ValueError(
-        f"{path}: {what} for the array to read ({listing}); pass key=NAME (CLI: FILE:NAME)"
-    )
+    target = "the array to read" if want_ndim is None else f"a cube ({want_ndim} axes or more)"
+    raise ValueError(f"{path}: {what} for {target} ({listing}); pass key=NAME (CLI: FILE:NAME)")
 
 
 def read_array(path, key=None, *, max_bytes: int = MAX_ARRAY_BYTES) -> np.ndarray:

@@ -251,3 +251,11 @@ def test_commands_and_frame_names_longer_than_a_line_or_a_file_name_are_refused(
         AcquisitionPlan((Step({"k": 0}, ("X" * 10**6,), "f.tif"),))
     with pytest.raises(ValueError, match="a frame name is at most 255 bytes .*, got 304 s"):
         AcquisitionPlan((Step({"k": 0}, ("DMD 0",), "f" * 300 + ".tif"),))
+
+
+def test_a_cube_is_asked_for_by_its_axes(tmp_path):
+    path = tmp_path / "mask.npz"
+    np.savez(path, mask=np.ones((4, 4)))
+    with pytest.raises(ValueError, match=r"no candidate for a cube \(3 axes or more\) \(mask"):
+        read_cube(path)
+    np.testing.assert_array_equal(read_array(path), np.ones((4, 4)))

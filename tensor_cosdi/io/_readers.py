@@ -232,11 +232,16 @@ def _entries_h5(path, max_bytes=MAX_ARRAY_BYTES, *, matlab=False):
     with h5py.File(path, "r") as f:
 
         def link(name, obj):  # visits links without following them (h5py ≥ 3.11)
-            if not isinstance(obj, h5py.HardLink) and not name.startswith("#"):
-                kind = {"SoftLink": "a soft link", "ExternalLink": "an external link"}
-                what = kind.get(type(obj).__name__, f"a link ({type(obj).__name__})")
-                why = f"{what}, which can point into another file"
-                out.skipped[name] = (why, UnsafeFile)
+            if isinstance(obj, h5py.HardLink) or name.startswith("#"):
+                return
+            if isinstance(obj, h5py.SoftLink):  # an alias: name what it stands for
+                target = str(obj.path).lstrip("/")
+                hint = f"; pass key={target!r}" if target in out else ""  # datasets come first
+                why = f"a soft link to {target!r} (links are not followed{hint})"
+                out.skipped[name] = (why, Refused)
+            else:
+                what = "an external link" if isinstance(obj, h5py.ExternalLink) else "a link"
+                out.skipped[name] = (f"{what}, which points into another file", UnsafeFile)
 
         def visit(name, obj):
             if not isinstance(obj, h5py.Dataset) or name.startswith("#"):

@@ -95,6 +95,13 @@ def test_info_lists_arrays_and_bundle_provenance(files, capsys):
     assert f'metadata.mask: "{d / "mask.mat"}"' in out  # a long path whole, never cut
 
 
+def test_info_names_what_it_does_not_read(tmp_path, capsys):
+    scipy.io.savemat(tmp_path / "m.mat", {"mask": np.ones((4, 4)), "note": "hi"})
+    assert cli.main(["info", str(tmp_path / "m.mat")]) == 0
+    out = capsys.readouterr().out
+    assert "mask: (4, 4) float64" in out and "note: not read (MATLAB text (char))" in out
+
+
 def test_a_256x256x28_reconstruction_file_is_at_most_12_mb(tmp_path):
     # a full-size SD-CASSI result: float32 cube, measurement, mask, provenance (issue target
     # ≤ 12 MB; float64 uncompressed it was 105 MB at 660×714)

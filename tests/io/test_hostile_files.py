@@ -40,7 +40,7 @@ def test_hdf5_links_out_of_the_file_are_refused(hostile):
     # and the error says what the name is instead of that it is missing
     with pytest.raises(ValueError, match="no arrays; not read: cube .an external link"):
         read_array(hostile["hdf5_link"])
-    with pytest.raises(ValueError, match="'cube' is an external link, which can point into"):
+    with pytest.raises(ValueError, match="'cube' is an external link, which points into"):
         read_array(hostile["hdf5_link"], "cube")
 
 
@@ -53,7 +53,7 @@ def test_hdf5_soft_links_and_non_numeric_datasets_are_named(tmp_path):
         f["pairs"] = np.zeros(3, dtype=[("a", "f4"), ("b", "f4")])
         f["phase"] = np.ones(3, dtype=np.complex128)
     np.testing.assert_array_equal(read_array(path), np.ones((2, 2, 2)))  # the one number array
-    with pytest.raises(ValueError, match="'alias' is a soft link"):
+    with pytest.raises(ValueError, match="'alias' is a soft link to 'cube' .* pass key='cube'"):
         read_array(path, "alias")
     with pytest.raises(ValueError, match=r"'label' is text of dtype \|S3, not a numeric array"):
         read_array(path, "label")

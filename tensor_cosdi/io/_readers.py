@@ -29,9 +29,9 @@ class UnsafeFile(Refused):
 
 class Entries(dict):
     """``{name: (shape, dtype, load)}``: the numeric arrays a file holds.  ``skipped`` maps each
-    other variable the listing met (text, a cell or struct, records, complex values, a link that
-    can point into another file) to ``(what it is, the error class refusing it)``, so that an
-    error can say what a name holds instead of that it is missing."""
+    other variable the listing met (text, a cell or struct, records, complex values, a soft or
+    external link, which is never followed) to ``(what it is, the error class refusing it)``, so
+    that an error can say what a name holds instead of that it is missing."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -239,9 +239,10 @@ def _entries_h5(path, max_bytes=MAX_ARRAY_BYTES, *, matlab=False):
                 hint = f"; pass key={target!r}" if target in out else ""  # datasets come first
                 why = f"a soft link to {target!r} (links are not followed{hint})"
                 out.skipped[name] = (why, Refused)
-            else:
-                what = "an external link" if isinstance(obj, h5py.ExternalLink) else "a link"
-                out.skipped[name] = (f"{what}, which points into another file", UnsafeFile)
+            elif isinstance(obj, h5py.ExternalLink):
+                out.skipped[name] = ("an external link, which points into another file", UnsafeFile)
+            else:  # a link class of the HDF5 library's own that h5py cannot resolve
+                out.skipped[name] = (f"a link ({type(obj).__name__}), never followed", UnsafeFile)
 
         def visit(name, obj):
             if not isinstance(obj, h5py.Dataset) or name.startswith("#"):

@@ -22,8 +22,9 @@ squared error of the predicted eigen-image noise as a fraction of the noise
 energy (so every level weighs the same).  Adam (gradients clipped to norm
 1) with a linear warm-up and a cosine-decayed step, from a seeded random
 start or, to fine-tune, from the shipped or another network of the same
-shape (``init``; the shipped network is its base fine-tuned on 128×128
-patches, closer to the whole-image subspaces the denoiser meets).
+shape (``init``; the shipped network is its base fine-tuned on 128×128 and
+then 256×256 patches, closer to the whole-image subspaces the denoiser
+meets).
 
 Checkpoints (model, optimiser, step, random states) are written atomically
 to ``OUT.ckpt`` every ``checkpoint_every`` steps; ``resume=True`` continues

@@ -11,7 +11,7 @@ ARGS = ["demo", "--size", "16", "--bands", "6", "--quiet"]
 
 def _rows(text):
     return re.findall(
-        r"^(\w+)\s+(\w+)\s+([\d×]+)\s+(otd|gap_tv)\s+(-?\d+\.\d+)\s+(\d\.\d+)\s+(\d+\.\d+)\s+"
+        r"^(\w+)\s+(\w+)\s+([\d×]+)\s+(\d+\.\d+)\s+(otd|gap_tv)\s+(-?\d+\.\d+)\s+(\d\.\d+)\s+(\d+\.\d+)\s+"
         r"(\d+\.\d+)\s+(\d+% planes|\d+\.\d+ px|\d+\.\d+ rad|-)$",
         text,
         flags=re.M,
@@ -24,13 +24,18 @@ def test_demo_prints_table_writes_pngs_and_refuses_to_overwrite(tmp_path, capsys
     assert main(args) == 0
     text = capsys.readouterr().out
     rows = _rows(text)
-    assert [(r[0], r[3]) for r in rows] == [
+    assert [(r[0], r[4]) for r in rows] == [
         (c[0], m) for c in DEMO_CASES for m in ("otd", "gap_tv")
     ]
     assert {r[0] for r in rows} >= {"cassi_vsi", "cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
-    assert all(float(r[4]) > 10 and 0 < float(r[5]) <= 1 for r in rows), rows
+    assert all(float(r[5]) > 10 and 0 < float(r[6]) <= 1 for r in rows), rows
     # every depth-capable imager reports its depth error, the spectral ones none
-    assert {r[0] for r in rows if r[8] != "-"} == {"cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
+    assert {r[0] for r in rows if r[9] != "-"} == {"cassdi_dfa", "c3slfi", "cs2li", "mu_cosdi"}
+    # samples per voxel: one SD-CASSI snapshot of 16×16×6 through 1 px per band is 16×21
+    ratio = {r[0]: float(r[3]) for r in rows}
+    assert ratio["sd_cassi"] == pytest.approx(16 * 21 / (16 * 16 * 6), abs=5e-4), ratio
+    # CASSDI-DFA: the same snapshot for a cube of 3 depth planes
+    assert ratio["cassdi_dfa"] == pytest.approx(ratio["sd_cassi"] / 3, abs=5e-4), ratio
     names = sorted(p.name for p in out.iterdir())
     # 5 PNGs per system, 4 depth panels, and (matplotlib present) a labelled comparison per
     # system and the summary

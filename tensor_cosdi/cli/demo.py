@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["run_demo", "demo_cases", "DEMO_METHODS"]
+__all__ = ["run_demo", "demo_cases", "samples_per_voxel", "DEMO_METHODS"]
 
 
 def demo_cases():
@@ -29,6 +29,22 @@ def demo_cases():
 
 
 DEMO_METHODS = ("otd", "gap_tv")
+
+
+def samples_per_voxel(system) -> float:
+    """Measured samples per voxel of ``system``'s cube: the size of its measurement (every
+    snapshot and camera) over the size of its cube.  Below 1 the prior supplies what the
+    measurement lacks; a single SD-CASSI snapshot of ``n`` bands through a shear of 1 px per
+    band has about ``1/n``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from tensor_cosdi.systems import SDCASSI
+    >>> round(samples_per_voxel(SDCASSI(np.ones((64, 64)), n_bands=28)), 4)  # 64×91 / 64×64×28
+    0.0508
+    """
+    return float(np.prod(system.measurement_shape) / np.prod(system.cube_shape))
 
 
 def _to_uint8(img: np.ndarray, lo=None, hi=None) -> np.ndarray:
@@ -175,6 +191,7 @@ def run_demo(args) -> int:
         matplotlib.use("Agg")
     t_all = time.perf_counter()
     bar = tqdm(total=len(cases) * len(DEMO_METHODS), desc="reconstructing", disable=args.quiet)
+    ratios = {}
     for system, scene, extra in cases:
         problem = make_problem(
             system,
@@ -185,6 +202,7 @@ def run_demo(args) -> int:
             rng=args.seed,
             **extra,
         )
+        ratios[system] = samples_per_voxel(problem.system)
         results = []
         for method in DEMO_METHODS:
             results += compare(problem, [method])
@@ -238,7 +256,8 @@ def run_demo(args) -> int:
         plt.close(fig)
 
     head = (
-        f"{'system':12s} {'scene':13s} {'cube':>16s} {'method':>7s} {'PSNR dB':>8s} {'SSIM':>6s} "
+        f"{'system':12s} {'scene':13s} {'cube':>16s} {'meas/vox':>8s} {'method':>7s} "
+        f"{'PSNR dB':>8s} {'SSIM':>6s} "
         f"{'SAM °':>6s} "
         f"{'seconds':>8s}  {'depth error':>11s}"
     )
@@ -248,11 +267,14 @@ def run_demo(args) -> int:
     for system, scene, r in rows:
         shape = shapes.setdefault(system, "×".join(map(str, r["result"].cube.shape)))
         print(
-            f"{system:12s} {scene:13s} {shape:>16s} {r['method']:>7s} {r['psnr']:8.2f} "
+            f"{system:12s} {scene:13s} {shape:>16s} {ratios[system]:8.3f} {r['method']:>7s} "
+            f"{r['psnr']:8.2f} "
             f"{r['ssim']:6.3f} "
             f"{r['sam']:6.2f} {r['seconds']:8.2f}  {_depth_text(r['depth']):>11s}"
         )
     print(
+        "meas/vox: measured samples per voxel of the cube (all snapshots and cameras together; "
+        "the fewer, the more the prior must supply). "
         "PSNR/SSIM per band (extra axes folded into bands), data range = the truth's peak; SAM in "
         "degrees. "
         "Depth error (Result.depth): DFA depth planes right, C3SLFI disparity error (px per view), "

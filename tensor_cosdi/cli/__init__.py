@@ -11,8 +11,8 @@ Sub-commands:
     Mu-CoSDI) and the SD-CASSI baseline, each simulated on a seeded scene
     built from real data (:func:`tensor_cosdi.studies.make_problem`) and
     reconstructed with the online Tucker dictionary ADMM (``otd``) and
-    GAP-TV.  Prints a table (system, method, PSNR, SSIM, SAM, seconds) and
-    writes PNG figures per system — measurement, sRGB of the truth and of
+    GAP-TV.  Prints a table (system, measured samples per voxel, method, PSNR,
+    SSIM, SAM, seconds) and writes PNG figures per system — measurement, sRGB of the truth and of
     each reconstruction (CIE 1931 2° + D65 via colour-science), the OTD
     error map and, for the depth imagers, the depth channel (truth | OTD)
     with its error in the table — into an output folder it reports.  Never overwrites files

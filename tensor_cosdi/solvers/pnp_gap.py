@@ -102,7 +102,10 @@ FAST_WARM_ITER_FLOAT32 = {28.5: 5, 19.5: 10}
 #: CIE FL2 (24 views), TSA mask and a random code
 #: (``benchmarks/results/cv_pnp_fast_float32_sigma_end.md``): tuning means 32.30 / 32.36 /
 #: 32.29 / 32.14 dB (TSA) and 36.07 / 36.24 / 36.06 / 35.65 (random); one setting for both
-#: codes chose 0.055 on every fold.  The 20-dB anchor is :data:`SIGMA_END_ADMM_SHORT`'s.
+#: codes chose 0.055 on every fold.  Checked again with the network fine-tuned on 256×256
+#: patches (``cv_pnp_fast_float32_sigma_end_ft256.md``, the same 24 views): 0.04 / 0.055 / 0.07
+#: → 32.30 / 32.34 / 32.24 dB (TSA) and 36.15 / 36.31 / 36.13 (random), every fold 0.055.
+#: The 20-dB anchor is :data:`SIGMA_END_ADMM_SHORT`'s.
 FAST_SIGMA_END_FLOAT32 = {28.5: 0.055, 19.5: 0.2}
 #: :func:`fast_budget` on clean data where the network runs in float32 on a CPU: the first
 #: stage's cube alone, as :data:`FAST_WARM_ITER_CLEAN`, and 28 iterations ending at 0.04,

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["run_demo", "demo_cases", "samples_per_voxel", "DEMO_METHODS"]
+__all__ = ["run_demo", "demo_cases", "DEMO_METHODS"]
 
 
 def demo_cases():
@@ -31,7 +31,7 @@ def demo_cases():
 DEMO_METHODS = ("otd", "gap_tv")
 
 
-def samples_per_voxel(system) -> float:
+def _samples_per_voxel(system) -> float:
     """Measured samples per voxel of ``system``'s cube: the size of its measurement (every
     snapshot and camera) over the size of its cube.  Below 1 the prior supplies what the
     measurement lacks; a single SD-CASSI snapshot of ``n`` bands through a shear of 1 px per
@@ -41,7 +41,7 @@ def samples_per_voxel(system) -> float:
     --------
     >>> import numpy as np
     >>> from tensor_cosdi.systems import SDCASSI
-    >>> round(samples_per_voxel(SDCASSI(np.ones((64, 64)), n_bands=28)), 4)  # 64×91 / 64×64×28
+    >>> round(_samples_per_voxel(SDCASSI(np.ones((64, 64)), n_bands=28)), 4)  # 64×91 / 64×64×28
     0.0508
     """
     return float(np.prod(system.measurement_shape) / np.prod(system.cube_shape))
@@ -202,7 +202,7 @@ def run_demo(args) -> int:
             rng=args.seed,
             **extra,
         )
-        ratios[system] = samples_per_voxel(problem.system)
+        ratios[system] = _samples_per_voxel(problem.system)
         results = []
         for method in DEMO_METHODS:
             results += compare(problem, [method])

@@ -72,14 +72,21 @@ def problem(scene: str, snr, mask, seed: int = 0, zoom: float = 1.0, illuminant=
     the reflectance lit by that light and scaled to a peak of 1
     (:func:`tensor_cosdi.colour.radiance`), as radiance databases are.
     """
+    system, cube, (g,) = problems(scene, [snr], mask, seed, zoom, illuminant)
+    return system, cube, g
+
+
+def problems(scene: str, snrs, mask, seed: int = 0, zoom: float = 1.0, illuminant=None):
+    """``(system, cube, measurements)``: :func:`problem` at each SNR of ``snrs`` (the scene
+    loaded once)."""
     cube, wl = datasets.load_hsi(scene, "kaist", dtype="float32")
     if zoom != 1:
         cube = magnified(cube, zoom)
     if illuminant is not None:
         cube = tc.colour.radiance(cube, wl, illuminant).astype(np.float32)
     system = tc.systems.SDCASSI(mask, n_bands=28, shifts=2, wavelengths=wl)
-    g = system.simulate(cube, snr_db=snr, rng=seed)
-    return system, cube, np.asarray(g, dtype=np.float32)
+    gs = [np.asarray(system.simulate(cube, snr_db=snr, rng=seed), dtype=np.float32) for snr in snrs]
+    return system, cube, gs
 
 
 def magnified(cube, zoom: float):

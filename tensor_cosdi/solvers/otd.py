@@ -41,6 +41,7 @@ from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
     subspace_gap_tv,
 )
 from .priors import FixedBasis, NonNegative, TuckerDictionary, omega_step, with_plane_support
+from .snr import CLEAN_ABOVE_DB
 
 __all__ = [
     "online_tucker_admm",
@@ -541,7 +542,7 @@ FAST_WARM_ITER = 10
 #: (balloons, clay; TSA mask; OTD start, σ 0.1): noiseless, accelerated 31.45 dB against 29.68
 #: plain; at 30 dB accelerated GAP lets the noise through the small code sums (18.6 dB), plain GAP
 #: with ``ε = 0.1`` gives 28.29 dB (0.05: 24.4 accelerated; 0.2: 28.21; 0.5: 28.03).
-ACCELERATE_ABOVE_DB = 38.0
+ACCELERATE_ABOVE_DB = CLEAN_ABOVE_DB
 
 
 def fast_start(system, measurement, *, admm_iter=0, progress: bool = False):

@@ -35,7 +35,11 @@ The fit is the system's ``snr_fit``:
   a sheared diagonal is what the subspace cannot hold, so the fit leaves it
   in the residual.  Under a light with sharp lines (a fluorescent lamp) the fit's atoms
   follow the fitted mean spectrum after :data:`SUBSPACE_FIT_REFIT`
-  iterations, else it would read the lines it cannot hold as noise.
+  iterations, else it would read the lines it cannot hold as noise.  Where the
+  first estimate is ambiguous (:data:`RECHECK_FROM_DB` to :data:`RECHECK_CLEAN_DB`)
+  a longer, lighter fit takes a second look and decides between the clean and
+  the noisy path: a textured noiseless scene reads clean, a true 40 dB reads
+  noisy (the clean path lets that much noise through).
 * ``"gap_tv"`` (every other system): :data:`FIT_ITER` plain GAP-TV
   iterations.  Where a pixel's voxels share one position — DD-CASSI,
   Mu-CoSDI, CASSI-VSI's direct arm — the accelerated subspace fit takes up
@@ -79,6 +83,7 @@ __all__ = [
     "FITS", "FIT_ITER",
     "FIT_TV",
     "SUBSPACE_FIT_ITER", "SUBSPACE_FIT_TV", "SUBSPACE_FIT_REFIT", "SUBSPACE_FIT_FLOOR",
+    "CLEAN_ABOVE_DB", "RECHECK_FROM_DB", "RECHECK_CLEAN_DB", "RECHECK_ITER", "RECHECK_TV",
 ]  # fmt: skip
 
 #: Plain GAP-TV iterations of the fit (5 Chambolle steps each).
@@ -111,6 +116,30 @@ SUBSPACE_FIT_REFIT = 8
 #: as measured there; the first stage's own floor is
 #: :data:`~tensor_cosdi.solvers.subspace.GATE_FLOOR`.
 SUBSPACE_FIT_FLOOR = 1e-3
+#: The estimated SNR (dB) from which a measurement counts as clean: the solvers' clean path
+#: (accelerated GAP, OTD's first stage as the start;
+#: :data:`~tensor_cosdi.solvers.otd.ACCELERATE_ABOVE_DB`).
+CLEAN_ABOVE_DB = 38.0
+#: The second look of the subspace fit.  The short, heavy fit leaves a textured scene's detail
+#: in its residual, read as noise, so a noiseless scene through a random code could read under
+#: :data:`CLEAN_ABOVE_DB` (6 of the 28 tuning scenes, down to 32.3 dB) and take the noisy
+#: path; and a true 40 dB read up to 40.0 dB and took the clean path, whose accelerated GAP
+#: lets even that much noise through (``pnp_gap`` on clay, TSA mask: 29.87 dB against 36.97 on
+#: the noisy path).  Where the first estimate lies in ``[RECHECK_FROM_DB, RECHECK_CLEAN_DB)``
+#: a longer, lighter fit (:data:`RECHECK_ITER` iterations at TV :data:`RECHECK_TV`) reads the
+#: residual again; it follows the detail and reads a noiseless scene far cleaner, a noisy one
+#: only a little (it takes up some noise too), and the estimate becomes its reading less
+#: ``RECHECK_CLEAN_DB - CLEAN_ABOVE_DB``: clean where it reads :data:`RECHECK_CLEAN_DB` or
+#: more.  On the 28 tuning scenes as they are and lit by CIE FL11, both codes
+#: (``benchmarks/results/snr_fit_recheck.md``, where the two thresholds are chosen by 4-fold
+#: cross-validation): noiseless views clean 74 → 80 of 112, 40 dB views clean 17 → 0, no 30 or
+#: 20 dB view's estimate changed; the second fit costs about 1.3 s where it runs.  Like the
+#: light gate, only with one panchromatic axis of
+#: :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` samples or more, where it was measured.
+RECHECK_FROM_DB = 33.0
+RECHECK_CLEAN_DB = 42.0
+RECHECK_ITER = 40
+RECHECK_TV = 0.1
 _CACHE: OrderedDict = OrderedDict()
 _CACHE_SIZE = 4
 
@@ -127,6 +156,8 @@ class SNREstimate(NamedTuple):
     #: The reading from the frames' smallest singular value (``nan`` where the system's
     #: ``snr_frames_low_rank`` is false).
     from_frames_db: float = float("nan")
+    #: The subspace fit's second look (:data:`RECHECK_FROM_DB`; ``nan`` where it did not run).
+    rechecked_db: float = float("nan")
 
 
 def clear_cache() -> None:
@@ -279,12 +310,7 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
     # noiseless / 30 / 20 dB); the residual is taken in float64.
     g32 = B.as_tensor(g_unit, "float32")
     if fit == "subspace":
-        gated = len(system.panchromatic_axes) == 1 and has_many_bands(system)
-        x = subspace_gap_tv(
-            system, g32, max_iter=SUBSPACE_FIT_ITER, tv_weight=SUBSPACE_FIT_TV, tv_steps=5,
-            refit_at=SUBSPACE_FIT_REFIT if gated else None,
-            refit_floor=SUBSPACE_FIT_FLOOR if gated else None,
-        )  # fmt: skip
+        x = _subspace_fit(system, g32, SUBSPACE_FIT_ITER, SUBSPACE_FIT_TV)
     else:
         from .gap_tv import gap_tv
 
@@ -293,8 +319,32 @@ def estimate_snr(system, measurement, *, fit=True) -> SNREstimate:
             tv_weight=fit_tv, tv_iter=5, plane_support=False, nonneg=False,
         )  # fmt: skip
     res_db = residual_reading_db(system, g_unit, x)
-    est = SNREstimate(max(unfitted_db, res_db), meas_db, res_db, fit, frames_db)
+    snr_db, rechecked = max(unfitted_db, res_db), float("nan")
+    if fit == "subspace" and _gated(system) and RECHECK_FROM_DB <= snr_db < RECHECK_CLEAN_DB:
+        del x
+        rechecked = residual_reading_db(
+            system, g_unit, _subspace_fit(system, g32, RECHECK_ITER, RECHECK_TV)
+        )
+        snr_db = max(unfitted_db, rechecked - (RECHECK_CLEAN_DB - CLEAN_ABOVE_DB))
+    est = SNREstimate(snr_db, meas_db, res_db, fit, frames_db, rechecked)
     _CACHE[key] = (system, est)  # the system is held so that its id is not reused
     while len(_CACHE) > _CACHE_SIZE:
         _CACHE.popitem(last=False)
     return est
+
+
+def _subspace_fit(system, g32, n_iter: int, tv_weight: float):
+    """The subspace fit of :func:`estimate_snr` (``n_iter`` iterations at ``tv_weight``, 5
+    Chambolle steps each, the light gate where one panchromatic axis has many bands)."""
+    gated = _gated(system)
+    return subspace_gap_tv(
+        system, g32, max_iter=n_iter, tv_weight=tv_weight, tv_steps=5,
+        refit_at=SUBSPACE_FIT_REFIT if gated else None,
+        refit_floor=SUBSPACE_FIT_FLOOR if gated else None,
+    )  # fmt: skip
+
+
+def _gated(system) -> bool:
+    """One panchromatic axis of :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` samples or
+    more: where the subspace fit's light gate and second look were measured."""
+    return len(system.panchromatic_axes) == 1 and has_many_bands(system)

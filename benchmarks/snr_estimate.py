@@ -313,6 +313,13 @@ def protocol_table() -> list[str]:
     return lines
 
 
+def with_without_header(first: list[str], methods) -> list[str]:
+    """A markdown table's header and rule: the ``first`` columns, then each method without,
+    with and its gain."""
+    cols = first + [f"{m} {c}" for m in methods for c in ("without", "with", "gain dB")]
+    return ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+
+
 def effect_table(methods, scenes) -> list[str]:
     """Mean PSNR of each method with and without the frames' reading of the SNR, per system and
     noise level, with the mean estimate of each arm."""
@@ -327,10 +334,7 @@ def effect_table(methods, scenes) -> list[str]:
         "(the estimate of the earlier releases).  Mean PSNR dB over the scenes (the study's "
         "score) and the mean estimate.",
         "",
-        "| system | true SNR | estimate dB without / with | "
-        + " | ".join(f"{m} without | {m} with | {m} gain dB" for m in methods)
-        + " |",
-        "|---|---|---|" + "---|---|---|" * len(methods),
+        *with_without_header(["system", "true SNR", "estimate dB without / with"], methods),
     ]
     for name in systems:
         cls = reg[name]
@@ -770,10 +774,7 @@ def recheck_effect_table(methods, rows, max_views, store: Path) -> list[str]:
         "patched away: the earlier estimate) and *with* it; PSNR dB (the second fit's time is "
         "in `snr_fit_recheck.md`).",
         "",
-        "| view | code | true SNR | estimate dB without → with | "
-        + " | ".join(f"{m} without | {m} with | {m} gain dB" for m in methods)
-        + " |",
-        "|---|---|---|---|" + "---|---|---|" * len(methods),
+        *with_without_header(["view", "code", "true SNR", "estimate dB without → with"], methods),
     ]
     gains = {m: [] for m in methods}
     for v in views:

@@ -120,22 +120,22 @@ SUBSPACE_FIT_FLOOR = 1e-3
 #: (accelerated GAP, OTD's first stage as the start;
 #: :data:`~tensor_cosdi.solvers.otd.ACCELERATE_ABOVE_DB`).
 CLEAN_ABOVE_DB = 38.0
-#: The second look of the subspace fit. The short, heavy fit leaves a textured scene's detail in its
-#: residual, read as noise, so a noiseless scene through a random code could read under
-#: :data:`CLEAN_ABOVE_DB` (6 of the 28 tuning scenes, down to 32.3 dB) and take the noisy path; and
-#: a true 40 dB read up to 40.0 dB and took the clean path, whose accelerated GAP lets even that
-#: much noise through (``pnp_gap`` on balloons, TSA mask: 26.66 dB against 32.49 on the noisy path,
-#: ``benchmarks/results/snr_recheck_effect.md``). Where the first estimate lies in
-#: ``[RECHECK_FROM_DB, RECHECK_CLEAN_DB)`` a longer, lighter fit (:data:`RECHECK_ITER` iterations at
-#: TV :data:`RECHECK_TV`) reads the residual again; it follows the detail and reads a noiseless
-#: scene far cleaner, a noisy one only a little (it takes up some noise too), and the estimate
-#: becomes its reading less ``RECHECK_CLEAN_DB - CLEAN_ABOVE_DB``: clean where it reads
-#: :data:`RECHECK_CLEAN_DB` or more. On the 28 tuning scenes as they are and lit by CIE FL11, both
-#: codes (``benchmarks/results/snr_fit_recheck.md``, where the two thresholds are chosen by 4-fold
-#: cross-validation): noiseless views clean 74 → 80 of 112, 40 dB views clean 17 → 0, no 30 or 20 dB
-#: view's estimate changed; the second fit costs about 1.3 s where it runs. Like the light gate,
-#: only with one panchromatic axis of :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` samples or
-#: more, where it was measured.
+#: The second look of the subspace fit.  The short, heavy fit leaves a textured scene's detail
+#: in its residual, read as noise, so a noiseless scene through a random code could read under
+#: :data:`CLEAN_ABOVE_DB` (6 of the 28 tuning scenes, down to 32.3 dB) and take the noisy path;
+#: and a true 40 dB read up to 40.0 dB and took the clean path, whose accelerated GAP lets even
+#: that much noise through (``pnp_gap`` on balloons, TSA mask: 26.66 dB against 32.49 on the
+#: noisy path, ``benchmarks/results/snr_recheck_effect.md``).  Where the first estimate lies in
+#: ``[RECHECK_FROM_DB, RECHECK_CLEAN_DB)`` a longer, lighter fit (:data:`RECHECK_ITER`
+#: iterations at TV :data:`RECHECK_TV`) reads the residual again; it follows the detail and
+#: reads a noiseless scene far cleaner, a noisy one only a little (it takes up some noise too),
+#: and the estimate becomes its reading less ``RECHECK_CLEAN_DB - CLEAN_ABOVE_DB``: clean where
+#: it reads :data:`RECHECK_CLEAN_DB` or more.  On the 28 tuning scenes as they are and lit by
+#: CIE FL11, both codes (``benchmarks/results/snr_fit_recheck.md``, where the two thresholds are
+#: chosen by 4-fold cross-validation): noiseless views clean 74 → 80 of 112, 40 dB views clean
+#: 17 → 0, no 30 or 20 dB view's estimate changed; the second fit costs about 1.3 s where it
+#: runs.  Like the light gate, only with one panchromatic axis of
+#: :data:`~tensor_cosdi.solvers.subspace.MANY_BANDS` samples or more, where it was measured.
 RECHECK_FROM_DB = 33.0
 RECHECK_CLEAN_DB = 42.0
 RECHECK_ITER = 40

@@ -222,10 +222,24 @@ def provenance() -> dict:
         "machine": machine(),
         "python": platform.python_version(),
         "numpy": np.__version__,
+        "numba": _numba_version(),
         "tensor_cosdi": tc.__version__,
         "commit": commit,
         "command": "python " + shlex.join([Path(sys.argv[0]).as_posix(), *sys.argv[1:]]),
     }
+
+
+def _numba_version() -> str:
+    """numba's version where the compiled TV steps run (``fast`` extra), else ``"off"``: the
+    warm TV steps of OTD's and ``pnp_fast``'s first stages are about 4× faster with them
+    (``results/tv_speed.md``), so a time means little without it."""
+    from tensor_cosdi.solvers.denoisers import _compiled_kernel
+
+    if _compiled_kernel() is None:
+        return "off"
+    import numba
+
+    return numba.__version__
 
 
 def cpu_model() -> str:
@@ -257,7 +271,8 @@ def machine() -> str:
 def provenance_lines(prov: dict) -> str:
     return (
         f"Run {prov['date']} on {prov['machine']} (Python {prov['python']}, NumPy "
-        f"{prov['numpy']}, tensor_cosdi {prov['tensor_cosdi']}, commit {prov['commit']}).  \n"
+        f"{prov['numpy']}, numba {prov.get('numba', 'off')}, tensor_cosdi "
+        f"{prov['tensor_cosdi']}, commit {prov['commit']}).  \n"
         f"Command: `{prov['command']}`"
     )
 

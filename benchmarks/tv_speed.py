@@ -4,9 +4,11 @@ stage, the SNR estimate's subspace fit and the split-TV solver run every iterati
 For float32 images of 256×256 with 6 planes (the six spectral atoms of a 28-band first stage)
 and 28 planes (every band of a 28-band cube), prints the median time of 5 steps:
 
-* ``one plane at a time``: ``WarmTV``'s step loop (each plane takes all its steps before the
-  next, every temporary a reused buffer), on one thread (``OMP_NUM_THREADS=1``) and with the
-  planes split over its thread pool;
+* ``one plane at a time``: ``WarmTV``'s NumPy step loop (each plane takes all its steps before
+  the next, every temporary a reused buffer), on one thread (``OMP_NUM_THREADS=1``) and with
+  the planes split over its thread pool;
+* ``compiled``: ``WarmTV`` with the numba kernel (the ``fast`` extra; one sweep over the
+  plane a step), on one thread and on its thread pool (rows left out without numba);
 * ``all planes per operation``: the reference, the same arithmetic with each NumPy operation
   over every plane at once and fresh temporaries,
 
@@ -29,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tensor_cosdi.solvers import denoisers
 from tensor_cosdi.solvers.denoisers import WarmTV
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -55,6 +58,21 @@ def all_planes_steps(f, p, out, w, n_iter):
         norm += 1.0
         p -= tau * g
         p /= norm
+
+
+def with_kernel(kernel, fn):
+    """``fn`` run with ``WarmTV``'s compiled kernel set to ``kernel`` (``None``: NumPy steps)."""
+
+    def run():
+        saved = dict(denoisers._KERNEL)
+        denoisers._KERNEL["kernel"] = kernel
+        try:
+            return fn()
+        finally:
+            denoisers._KERNEL.clear()
+            denoisers._KERNEL.update(saved)
+
+    return run
 
 
 def median_ms(fn, repeats, threads=None):
@@ -87,12 +105,19 @@ def main(argv=None):
     if args.repeats < 1:
         raise SystemExit(f"--repeats must be ≥ 1, got {args.repeats}")
     rng = np.random.default_rng(0)
+    compiled = denoisers._compiled_kernel()
+    try:
+        import numba
+
+        jit_text = f"numba {numba.__version__}"
+    except ImportError:
+        jit_text = "numba not installed: no compiled rows"
     lines = [
         "# Warm-started Chambolle TV steps",
         "",
         f"{STEPS} steps, weight {WEIGHT}, float32 256×256 planes; median of {args.repeats} "
         "runs, ms and × a copy of the planes in the same run; `same`: primal and dual "
-        "equal to the reference's bit for bit.",
+        f"equal to the reference's bit for bit; {jit_text}.",
         "",
         "| planes | variant | ms | × copy | same |",
         "|---|---|---|---|---|",
@@ -103,18 +128,32 @@ def main(argv=None):
         copy_ms = median_ms(lambda: np.copy(f), args.repeats)
         p_ref, out_ref = np.zeros((2, *f.shape), np.float32), np.empty_like(f)
         all_planes_steps(f, p_ref, out_ref, WEIGHT, STEPS)  # one cold call each, then compare
-        cold = WarmTV(STEPS)
-        out = cold(image, WEIGHT)
-        same = np.array_equal(np.moveaxis(out, 2, 0), out_ref) and np.array_equal(cold.p, p_ref)
-        flag = "yes" if same else "NO"
+        flags = {}
+        for label, kernel in (("numpy", None), ("compiled", compiled)):
+            if label == "compiled" and kernel is None:
+                continue
+            cold = WarmTV(STEPS)
+            out = with_kernel(kernel, lambda: cold(image, WEIGHT))()
+            same = np.array_equal(np.moveaxis(out, 2, 0), out_ref) and np.array_equal(cold.p, p_ref)
+            flags[label] = "yes" if same else "NO"
         single, pooled = WarmTV(STEPS), WarmTV(STEPS)
-        variants = (
+        jit_single, jit_pooled = WarmTV(STEPS), WarmTV(STEPS)
+        cpus = os.cpu_count()
+        variants = [
             ("all planes per operation (reference), 1 thread",
              lambda: all_planes_steps(f, p_ref, out_ref, WEIGHT, STEPS), "—", None),
-            ("one plane at a time (WarmTV), 1 thread", lambda: single(image, WEIGHT), flag, "1"),
-            (f"one plane at a time (WarmTV), its thread pool ({os.cpu_count()} CPUs)",
-             lambda: pooled(image, WEIGHT), flag, ""),
-        )  # fmt: skip
+            ("one plane at a time (WarmTV, NumPy), 1 thread",
+             with_kernel(None, lambda: single(image, WEIGHT)), flags["numpy"], "1"),
+            (f"one plane at a time (WarmTV, NumPy), its thread pool ({cpus} CPUs)",
+             with_kernel(None, lambda: pooled(image, WEIGHT)), flags["numpy"], ""),
+        ]  # fmt: skip
+        if compiled is not None:
+            variants += [
+                ("compiled kernel (WarmTV, numba), 1 thread",
+                 with_kernel(compiled, lambda: jit_single(image, WEIGHT)), flags["compiled"], "1"),
+                (f"compiled kernel (WarmTV, numba), its thread pool ({cpus} CPUs)",
+                 with_kernel(compiled, lambda: jit_pooled(image, WEIGHT)), flags["compiled"], ""),
+            ]  # fmt: skip
         for name, fn, shown, threads in variants:
             ms = median_ms(fn, args.repeats, threads)
             lines.append(f"| {planes} | {name} | {ms:.2f} | {ms / copy_ms:.1f} | {shown} |")

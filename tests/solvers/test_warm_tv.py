@@ -135,3 +135,51 @@ def test_threads_follow_the_environments_limit(monkeypatch):
     with mock.patch.object(scipy.fft, "rfftn", wraps=scipy.fft.rfftn) as spy:
         _backend.rfftn(x, s=(32, 32), axes=(0, 1))
     assert spy.call_args.kwargs["workers"] == 1
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("shape", [(3, 40, 30), (2, 1, 7), (2, 6, 1), (1, 1, 1), (4, 33, 17)])
+def test_compiled_steps_are_the_numpy_steps_bit_for_bit(shape, dtype, monkeypatch):
+    """The numba kernel (the ``fast`` extra) rewrites the dual in place in one sweep a step;
+    its primal and dual equal the NumPy steps' exactly, warm calls included, edges included
+    (one row, one column)."""
+    pytest.importorskip("numba")
+    from tensor_cosdi.solvers import denoisers
+
+    monkeypatch.setenv("TENSOR_COSDI_JIT", "1")
+    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    assert denoisers._compiled_kernel() is not None
+    rng = np.random.default_rng(5)
+    f = rng.random(shape).astype(dtype)
+    p_ref, out_ref = np.zeros((2, *shape), dtype), np.empty(shape, dtype)
+    p, out = p_ref.copy(), out_ref.copy()
+    for w in (0.07, 0.3, 0.07):  # three warm calls, the weight changing between them
+        denoisers._numpy_steps(f, p_ref, out_ref, w, 4)
+        denoisers._chambolle_steps(f, p, out, w, 4)
+        np.testing.assert_array_equal(out, out_ref)
+        np.testing.assert_array_equal(p, p_ref)
+    # the steps moved the dual (a single pixel has no gradient: its dual stays 0)
+    assert (np.abs(p_ref).max() > 0) == (shape[1] * shape[2] > 1)
+    # a non-contiguous dual (a slice of planes along the last axis) takes the NumPy steps
+    p_strided = np.zeros((2, *shape[:2], 2 * shape[2]), dtype)[..., ::2]
+    denoisers._chambolle_steps(f, p_strided, out, 0.07, 4)
+    fresh_p, fresh_out = np.zeros((2, *shape), dtype), np.empty(shape, dtype)
+    denoisers._numpy_steps(f, fresh_p, fresh_out, 0.07, 4)
+    np.testing.assert_array_equal(out, fresh_out)
+
+
+def test_the_compiled_kernel_is_switched_by_the_environment(monkeypatch):
+    from tensor_cosdi.solvers import denoisers
+
+    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    monkeypatch.setenv("TENSOR_COSDI_JIT", "0")
+    assert denoisers._compiled_kernel() is None
+    x = np.random.default_rng(6).random((20, 16, 3)).astype(np.float32)
+    plain = WarmTV(3)(x, 0.1)
+    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    monkeypatch.setenv("TENSOR_COSDI_JIT", "yes")
+    with pytest.raises(ValueError, match="TENSOR_COSDI_JIT must be 0 or 1, got 'yes'"):
+        WarmTV(3)(x, 0.1)
+    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    monkeypatch.setenv("TENSOR_COSDI_JIT", "1")
+    np.testing.assert_array_equal(WarmTV(3)(x, 0.1), plain)

@@ -67,6 +67,18 @@ OTD_MAX_ITER = {True: 45, False: 60}
 _check_int = engine.check_int
 
 
+#: OTD's ``pan_tv_steps``: warm-started Chambolle steps per iteration of its first stage.
+#: Cross-validated 10 / 15 / 20 with one setting for every condition (8 tuning scenes as they are
+#: and magnified 4×, 4 folds, TSA mask and a random code, noiseless and 30 dB;
+#: ``benchmarks/results/cv_otd_pan_tv_steps.md``): every fold chose 20; tuning means TSA
+#: noiseless 31.79 / 31.89 / 31.93 dB, random noiseless 34.74 / 34.75 / 34.77, at 30 dB within
+#: 0.02 dB; median 7.9 → 8.9 s a cube noiseless (TSA, 2 cores, compiled TV steps).
+#: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_gap`'s OTD start keeps 10
+#: (:data:`~tensor_cosdi.solvers.pnp_gap.START_PAN_TV_STEPS`), the value its own defaults were
+#: chosen with.
+PAN_TV_STEPS = 20
+
+
 def initial_bases(
     system,
     measurement,
@@ -77,7 +89,7 @@ def initial_bases(
     pan_iter: int = 60,
     pan_atoms="auto",
     pan_weight="auto",
-    pan_tv_steps: int | None = 10,
+    pan_tv_steps: int | None = PAN_TV_STEPS,
     pan_spectrum: str = "flat",
     spatial_block: int | None = None,
     progress: bool = False,
@@ -333,7 +345,7 @@ def online_tucker_admm(
     pan_iter: int = 90,
     pan_atoms="auto",
     pan_weight="auto",
-    pan_tv_steps=10,
+    pan_tv_steps=PAN_TV_STEPS,
     pan_spectrum="auto",
     spatial_block=None,
     lam="auto",
@@ -379,7 +391,8 @@ def online_tucker_admm(
     (``pan_iter``/``max_iter`` 90/45: 27.28 / 26.88 dB in 4.1 / 4.4 s;
     120/40: 27.54 / 26.71 dB in 5.3 s; 30/60: 26.17 / 25.81 dB).  Where ``Z``
     is exact (dual-camera CASSI at 96×96×16, 30 dB) 45 ADMM iterations lost
-    0.3-0.4 dB against 60, hence "auto".
+    0.3-0.4 dB against 60, hence "auto".  ``pan_tv_steps`` is now
+    :data:`PAN_TV_STEPS` (20), cross-validated against 10 and 15.
 
     ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also tried with
     its spectral atoms weighted by the scene's fitted mean spectrum, the better fit kept): 4-fold
@@ -499,7 +512,7 @@ def wdct_admm(
 
 
 #: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_fast`'s ``pan_tv_steps`` (:func:`fast_start`): 3
-#: warm-started Chambolle steps per iteration of its start's first stage instead of OTD's 10. First
+#: warm-started Chambolle steps per iteration of its start's first stage instead of 10. First
 #: measured against 10 and 5 (8 tuning scenes as they are and magnified 4×, 4 folds, TSA mask;
 #: ``benchmarks/results/pnp_fast_tv_steps_zoom4.md``: 10 / 5 / 3 steps → 33.50 / 33.50 / 33.42 dB
 #: noiseless, 31.42 / 31.44 / 31.43 at 30 dB, median 6.8 / 4.9 / 4.4 s on one thread), then

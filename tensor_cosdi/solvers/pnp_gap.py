@@ -49,6 +49,12 @@ from .priors import LEVEL_SCALES, Denoiser
 __all__ = ["pnp_gap", "pnp_fast", "fast_settings", "fast_budget", "float32_on_cpu"]
 
 WARM_STARTS = ("gap_tv", "otd", "dcosnet", "none")
+#: ``warm="otd"`` with ``pan_tv_steps="auto"``: 10 Chambolle steps per iteration of the start's
+#: first stage, the value :func:`pnp_gap`'s defaults were cross-validated with.  OTD's own
+#: (:data:`~tensor_cosdi.solvers.otd.PAN_TV_STEPS`, 20) was chosen on OTD's cube, which here
+#: only starts 80 or more denoiser iterations; :func:`pnp_fast` takes 3
+#: (:data:`~tensor_cosdi.solvers.otd.FAST_PAN_TV_STEPS`).
+START_PAN_TV_STEPS = 10
 #: ``warm="gap_tv"`` with ``warm_iter="auto"``: GAP-TV iterations of the start.
 GAP_TV_WARM_ITER = 80
 #: ``warm="otd"`` with ``warm_iter="auto"`` on a clean measurement (accelerated GAP): OTD's
@@ -375,7 +381,8 @@ def pnp_gap(
         integer here.
     pan_tv_steps : int or "auto"
         With ``warm="otd"``: the warm-started Chambolle steps per iteration of
-        that first stage (OTD's ``pan_tv_steps``; ``"auto"``: OTD's default).
+        that first stage (OTD's ``pan_tv_steps``; ``"auto"``:
+        :data:`START_PAN_TV_STEPS`).
     pan_atoms : int or "auto"
         With ``warm="otd"``: the spectral DCT atoms of that first stage (OTD's
         ``pan_atoms``; ``"auto"``: OTD's default,
@@ -581,9 +588,9 @@ def warm_started_gap(
     defaults, OTD with ``warm_iter`` iterations of its ADMM stage, the shipped D-CoSNet, or the
     least-norm solution; ``"auto"``: :data:`GAP_TV_WARM_ITER`, OTD's own; ``pan_iter``: OTD's
     first-stage iterations, ``pan_tv_steps`` its Chambolle steps and ``pan_atoms`` its spectral
-    atoms, ``"auto"`` its own; ``pan_spectrum`` its spectral atoms' weighting, ``"flat"`` by
-    default); one history for both stages; ``relax``: the ADMM's over-relaxation (not the
-    start's).  Returns ``(x, history, converged)``."""
+    atoms, ``"auto"`` its own (the steps: :data:`START_PAN_TV_STEPS`); ``pan_spectrum`` its
+    spectral atoms' weighting, ``"flat"`` by default); one history for both stages; ``relax``:
+    the ADMM's over-relaxation (not the start's).  Returns ``(x, history, converged)``."""
     if warm not in WARM_STARTS:
         raise ValueError(f"warm must be one of {WARM_STARTS}, got {warm!r}")
     warm_iter = _check_warm_iter(warm_iter, warm)
@@ -605,7 +612,8 @@ def warm_started_gap(
     elif warm == "otd":
         from .otd import online_tucker_admm
 
-        first = {"pan_iter": pan_iter, "pan_tv_steps": pan_tv_steps, "pan_atoms": pan_atoms}
+        steps = START_PAN_TV_STEPS if pan_tv_steps == "auto" else pan_tv_steps
+        first = {"pan_iter": pan_iter, "pan_tv_steps": steps, "pan_atoms": pan_atoms}
         pan = {k: v for k, v in first.items() if v != "auto"}
         start, hist, _ = online_tucker_admm(
             system, g, admm_iter=warm_iter, progress=progress, pan_spectrum=pan_spectrum, **pan

@@ -326,7 +326,7 @@ def test_admm_iter_0_returns_the_first_stage_cube_projected_as_admm_would(monkey
     from tensor_cosdi.solvers import otd
 
     p = studies.make_problem("sd_cassi", "colorchecker", shape=(16, 16), n_bands=4, snr_db=30)
-    _, start = initial_bases(p.system, p.measurement, pan_iter=90, pan_tv_steps=10)
+    _, start = initial_bases(p.system, p.measurement, pan_iter=90, pan_tv_steps=otd.PAN_TV_STEPS)
     start = np.asarray(start)
     assert start.min() < 0  # the first stage's own cube is signed here: the projection shows
     res = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, pan_spectrum="flat")

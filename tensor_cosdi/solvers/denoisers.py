@@ -242,7 +242,11 @@ def _chambolle_steps(f, p, out, w: float, n_iter: int) -> None:
     steps, else :func:`_numpy_steps`; both give the same primal and dual bit for bit (tested).
     """
     kernel = _compiled_kernel()
-    if kernel is None or not all(a.flags.c_contiguous for a in (f, p[0], p[1], out)):
+    if (
+        kernel is None
+        or f.size == 0  # the kernel reads the first pixel of every plane
+        or not all(a.flags.c_contiguous for a in (f, p[0], p[1], out))
+    ):
         _numpy_steps(f, p, out, w, n_iter)
         return
     t = f.dtype.type  # every constant in the planes' precision, as NumPy casts a Python float

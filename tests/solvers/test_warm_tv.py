@@ -160,6 +160,9 @@ def test_compiled_steps_are_the_numpy_steps_bit_for_bit(shape, dtype, monkeypatc
         np.testing.assert_array_equal(p, p_ref)
     # the steps moved the dual (a single pixel has no gradient: its dual stays 0)
     assert (np.abs(p_ref).max() > 0) == (shape[1] * shape[2] > 1)
+    # empty planes are left alone (the kernel would read a first pixel that is not there)
+    empty = np.zeros((2, 0, 5), dtype)
+    denoisers._chambolle_steps(empty, np.zeros((2, *empty.shape), dtype), empty.copy(), 0.1, 3)
     # a non-contiguous dual (a slice of planes along the last axis) takes the NumPy steps
     p_strided = np.zeros((2, *shape[:2], 2 * shape[2]), dtype)[..., ::2]
     denoisers._chambolle_steps(f, p_strided, out, 0.07, 4)

@@ -231,11 +231,11 @@ def provenance() -> dict:
 
 def _numba_version() -> str:
     """numba's version where the compiled TV steps run (``fast`` extra), else ``"off"``: the
-    warm TV steps of OTD's and ``pnp_fast``'s first stages are about 4× faster with them
+    warm TV steps of OTD's and ``pnp_fast``'s first stages are 3–4× faster with them
     (``results/tv_speed.md``), so a time means little without it."""
-    from tensor_cosdi.solvers.denoisers import _compiled_kernel
+    from tensor_cosdi.solvers.denoisers import compiled_tv
 
-    if _compiled_kernel() is None:
+    if not compiled_tv():
         return "off"
     import numba
 

@@ -31,8 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tensor_cosdi.solvers import denoisers
-from tensor_cosdi.solvers.denoisers import WarmTV
+from tensor_cosdi.solvers.denoisers import WarmTV, compiled_tv
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import RESULTS, write_results  # noqa: E402
@@ -58,21 +57,6 @@ def all_planes_steps(f, p, out, w, n_iter):
         norm += 1.0
         p -= tau * g
         p /= norm
-
-
-def with_kernel(kernel, fn):
-    """``fn`` run with ``WarmTV``'s compiled kernel set to ``kernel`` (``None``: NumPy steps)."""
-
-    def run():
-        saved = dict(denoisers._KERNEL)
-        denoisers._KERNEL["kernel"] = kernel
-        try:
-            return fn()
-        finally:
-            denoisers._KERNEL.clear()
-            denoisers._KERNEL.update(saved)
-
-    return run
 
 
 def median_ms(fn, repeats, threads=None):
@@ -105,13 +89,12 @@ def main(argv=None):
     if args.repeats < 1:
         raise SystemExit(f"--repeats must be ≥ 1, got {args.repeats}")
     rng = np.random.default_rng(0)
-    compiled = denoisers._compiled_kernel()
-    try:
+    compiled = compiled_tv()
+    jit_text = "no compiled rows (numba not installed, or TENSOR_COSDI_JIT=0)"
+    if compiled:
         import numba
 
         jit_text = f"numba {numba.__version__}"
-    except ImportError:
-        jit_text = "numba not installed: no compiled rows"
     lines = [
         "# Warm-started Chambolle TV steps",
         "",
@@ -129,30 +112,30 @@ def main(argv=None):
         p_ref, out_ref = np.zeros((2, *f.shape), np.float32), np.empty_like(f)
         all_planes_steps(f, p_ref, out_ref, WEIGHT, STEPS)  # one cold call each, then compare
         flags = {}
-        for label, kernel in (("numpy", None), ("compiled", compiled)):
-            if label == "compiled" and kernel is None:
+        for label, mode in (("numpy", False), ("compiled", True)):
+            if mode and not compiled:
                 continue
-            cold = WarmTV(STEPS)
-            out = with_kernel(kernel, lambda: cold(image, WEIGHT))()
+            cold = WarmTV(STEPS, compiled=mode)
+            out = cold(image, WEIGHT)
             same = np.array_equal(np.moveaxis(out, 2, 0), out_ref) and np.array_equal(cold.p, p_ref)
             flags[label] = "yes" if same else "NO"
-        single, pooled = WarmTV(STEPS), WarmTV(STEPS)
-        jit_single, jit_pooled = WarmTV(STEPS), WarmTV(STEPS)
+        single, pooled = WarmTV(STEPS, compiled=False), WarmTV(STEPS, compiled=False)
         cpus = os.cpu_count()
         variants = [
             ("all planes per operation (reference), 1 thread",
              lambda: all_planes_steps(f, p_ref, out_ref, WEIGHT, STEPS), "—", None),
             ("one plane at a time (WarmTV, NumPy), 1 thread",
-             with_kernel(None, lambda: single(image, WEIGHT)), flags["numpy"], "1"),
+             lambda: single(image, WEIGHT), flags["numpy"], "1"),
             (f"one plane at a time (WarmTV, NumPy), its thread pool ({cpus} CPUs)",
-             with_kernel(None, lambda: pooled(image, WEIGHT)), flags["numpy"], ""),
+             lambda: pooled(image, WEIGHT), flags["numpy"], ""),
         ]  # fmt: skip
-        if compiled is not None:
+        if compiled:
+            jit_single, jit_pooled = WarmTV(STEPS, compiled=True), WarmTV(STEPS, compiled=True)
             variants += [
                 ("compiled kernel (WarmTV, numba), 1 thread",
-                 with_kernel(compiled, lambda: jit_single(image, WEIGHT)), flags["compiled"], "1"),
+                 lambda: jit_single(image, WEIGHT), flags["compiled"], "1"),
                 (f"compiled kernel (WarmTV, numba), its thread pool ({cpus} CPUs)",
-                 with_kernel(compiled, lambda: jit_pooled(image, WEIGHT)), flags["compiled"], ""),
+                 lambda: jit_pooled(image, WEIGHT), flags["compiled"], ""),
             ]  # fmt: skip
         for name, fn, shown, threads in variants:
             ms = median_ms(fn, args.repeats, threads)

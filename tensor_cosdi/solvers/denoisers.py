@@ -25,6 +25,7 @@ __all__ = [
     "denoisers",
     "tv",
     "WarmTV",
+    "compiled_tv",
     "wavelet",
     "spectral_net",
     "self_ensemble",
@@ -172,19 +173,26 @@ class WarmTV:
     ``denoise_tv_chambolle(x, weight=sigma, max_num_iter=n_iter, eps=0,
     channel_axis=-1)`` (tested).  The channels (axes ≥ 2) form one channel-first
     stack, split over threads, each channel taking its steps in turn; the dual
-    is dropped when the shape changes.  With numba installed (the ``fast``
-    extra) a compiled kernel takes the steps, about 4× faster with the same
-    results bit for bit (``benchmarks/results/tv_speed.md``);
-    ``TENSOR_COSDI_JIT=0`` keeps the NumPy steps.
+    is dropped when the shape changes.
     scikit-image has no warm start, hence this loop.
+
+    ``compiled``: ``"auto"`` (default) takes a compiled kernel's steps where
+    :func:`compiled_tv` is true (numba installed, the ``fast`` extra, and
+    ``TENSOR_COSDI_JIT`` not ``0``), 3–4× faster with the same results bit
+    for bit (``benchmarks/results/tv_speed.md``); ``True`` requires it (an
+    ``ImportError`` without numba), ``False`` keeps the NumPy steps.
     """
 
-    def __init__(self, n_iter: int = 10):
+    def __init__(self, n_iter: int = 10, *, compiled="auto"):
         if not (isinstance(n_iter, (int, np.integer)) and not isinstance(n_iter, bool)):
             raise TypeError(f"n_iter must be an int ≥ 1, got {n_iter!r}")
         if n_iter < 1:
             raise ValueError(f"n_iter must be ≥ 1, got {n_iter}")
-        self.n_iter, self.p = int(n_iter), None
+        if not (compiled is True or compiled is False or compiled == "auto"):
+            raise ValueError(f"compiled must be True, False or 'auto', got {compiled!r}")
+        if compiled is True and _numba_kernel() is None:
+            raise ImportError("WarmTV(compiled=True) needs numba: pip install 'tensor_cosdi[fast]'")
+        self.n_iter, self.p, self.compiled = int(n_iter), None, compiled
 
     def reset(self):
         self.p = None
@@ -201,13 +209,18 @@ class WarmTV:
             self.p = self.p.astype(f.dtype)
         out = np.empty_like(f)
         n = _workers(f.shape[0])
+        kernel = _numba_kernel() if self.compiled is True else None
+        if self.compiled == "auto":
+            kernel = _numba_kernel() if compiled_tv() else None
         if n == 1:
-            _chambolle_steps(f, self.p, out, w, self.n_iter)
-        else:  # channels are independent: chunks in threads (NumPy releases the GIL)
+            _chambolle_steps(f, self.p, out, w, self.n_iter, kernel)
+        else:  # channels are independent: chunks in threads (both step loops release the GIL)
             cuts = np.linspace(0, f.shape[0], n + 1).astype(int)
             pool = _pool()
             jobs = [
-                pool.submit(_chambolle_steps, f[a:b], self.p[:, a:b], out[a:b], w, self.n_iter)
+                pool.submit(
+                    _chambolle_steps, f[a:b], self.p[:, a:b], out[a:b], w, self.n_iter, kernel
+                )
                 for a, b in zip(cuts[:-1], cuts[1:])
             ]
             for job in jobs:
@@ -234,14 +247,14 @@ class WarmTV:
         return tl.reshape(tl.moveaxis(out, 0, 2), shape)
 
 
-def _chambolle_steps(f, p, out, w: float, n_iter: int) -> None:
+def _chambolle_steps(f, p, out, w: float, n_iter: int, kernel=None) -> None:
     """``n_iter`` Chambolle steps on channel-first planes ``f``, updating the dual ``p`` (shape
     ``(2,) + f.shape``) in place; ``out`` receives the primal of the last step.
 
-    With numba installed (the ``fast`` extra) the compiled :func:`_chambolle_kernel` takes the
-    steps, else :func:`_numpy_steps`; both give the same primal and dual bit for bit (tested).
+    ``kernel``: the compiled :func:`_chambolle_kernel` (:func:`_numba_kernel`) takes the steps,
+    else (``None``) :func:`_numpy_steps`; both give the same primal and dual bit for bit
+    (tested through :class:`WarmTV`).
     """
-    kernel = _compiled_kernel()
     if (
         kernel is None
         or f.size == 0  # the kernel reads the first pixel of every plane
@@ -333,30 +346,38 @@ def _chambolle_kernel(f, p0, p1, out, k, tau, one, zero, n_iter):  # pragma: no 
                 b[i, w - 1] = (b[i, w - 1] - zero * tau) / nrm
 
 
-#: The compiled kernel (or ``None``), made on first use: see :func:`_compiled_kernel`.
+#: The compiled kernel (or ``None`` without numba), made on first use: :func:`_numba_kernel`.
 _KERNEL: dict = {}
 
 
-def _compiled_kernel():
+def _numba_kernel():
     """:func:`_chambolle_kernel` compiled by numba (cached on disk: the first call on a machine
-    compiles it, a few seconds), or ``None`` where numba is not installed or the environment
-    sets ``TENSOR_COSDI_JIT=0``."""
+    compiles it, a few seconds), or ``None`` where numba is not installed."""
     if "kernel" not in _KERNEL:
-        flag = os.environ.get("TENSOR_COSDI_JIT", "1").strip()
-        if flag not in ("0", "1", ""):
-            raise ValueError(f"TENSOR_COSDI_JIT must be 0 or 1, got {flag!r}")
-        kernel = None
-        if flag != "0":
-            try:
-                import numba
-            except ImportError:
-                numba = None
-            if numba is not None:
-                kernel = numba.njit(nogil=True, cache=True, boundscheck=False, error_model="numpy")(
-                    _chambolle_kernel
-                )
-        _KERNEL["kernel"] = kernel
+        try:
+            import numba
+        except ImportError:
+            _KERNEL["kernel"] = None
+        else:
+            _KERNEL["kernel"] = numba.njit(
+                nogil=True, cache=True, boundscheck=False, error_model="numpy"
+            )(_chambolle_kernel)
     return _KERNEL["kernel"]
+
+
+def compiled_tv() -> bool:
+    """Whether :class:`WarmTV` takes compiled Chambolle steps by default (``compiled="auto"``):
+    numba is installed (``pip install "tensor_cosdi[fast]"``) and the environment variable
+    ``TENSOR_COSDI_JIT`` is unset, ``1`` or empty (``0`` keeps the NumPy steps; any other
+    value is a ``ValueError``).
+
+    >>> isinstance(compiled_tv(), bool)
+    True
+    """
+    flag = os.environ.get("TENSOR_COSDI_JIT", "1").strip()
+    if flag not in ("0", "1", ""):
+        raise ValueError(f"TENSOR_COSDI_JIT must be 0 or 1, got {flag!r}")
+    return flag != "0" and _numba_kernel() is not None
 
 
 def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):

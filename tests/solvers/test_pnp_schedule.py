@@ -87,7 +87,8 @@ def test_first_stage_options_reach_the_otd_start_and_other_starts_refuse_them(op
             tc.reconstruct(p.system, p.measurement, "pnp_fast", max_iter=1, warm_iter=2,
                            **{option: 5})  # fmt: skip
             assert seen.pop() == 5
-    assert seen == ["default", 7]
+    # pnp_gap's own start takes 10 TV steps where OTD's default is 20 (START_PAN_TV_STEPS)
+    assert seen == [M.START_PAN_TV_STEPS if option == "pan_tv_steps" else "default", 7]
     with pytest.raises(ValueError, match=f"{option} sets the first stage of the OTD start"):
         tc.reconstruct(p.system, p.measurement, "pnp_gap", denoiser="tv", warm="gap_tv",
                        **{option: 30})  # fmt: skip
@@ -279,7 +280,8 @@ def test_warm_iter_0_starts_from_the_first_stage_alone(monkeypatch):
     (what ``otd(admm_iter=0)`` returns); refused, naming the system, where there is no first
     stage."""
     p = tc.studies.make_problem("sd_cassi", "chelsea", shape=(16, 16), n_bands=4)
-    first = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, pan_spectrum="flat")
+    first = tc.reconstruct(p.system, p.measurement, "otd", admm_iter=0, pan_spectrum="flat",
+                           pan_tv_steps=M.START_PAN_TV_STEPS)  # fmt: skip
     starts, real = [], M.engine.gap
 
     def gap(operator, g, prior, *, start=None, **kwargs):

@@ -1,5 +1,7 @@
 """WarmTV: scikit-image's Chambolle iteration, with its dual carried from call to call."""
 
+import importlib.util
+
 import numpy as np
 import pytest
 from skimage.restoration import denoise_tv_chambolle
@@ -138,51 +140,48 @@ def test_threads_follow_the_environments_limit(monkeypatch):
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
-@pytest.mark.parametrize("shape", [(3, 40, 30), (2, 1, 7), (2, 6, 1), (1, 1, 1), (4, 33, 17)])
-def test_compiled_steps_are_the_numpy_steps_bit_for_bit(shape, dtype, monkeypatch):
+@pytest.mark.parametrize("shape", [(40, 30, 3), (1, 7, 2), (6, 1, 2), (1, 1), (33, 17, 4)])
+def test_compiled_steps_are_the_numpy_steps_bit_for_bit(shape, dtype):
     """The numba kernel (the ``fast`` extra) rewrites the dual in place in one sweep a step;
     its primal and dual equal the NumPy steps' exactly, warm calls included, edges included
-    (one row, one column)."""
+    (one row, one column, one pixel)."""
     pytest.importorskip("numba")
-    from tensor_cosdi.solvers import denoisers
-
-    monkeypatch.setenv("TENSOR_COSDI_JIT", "1")
-    monkeypatch.setattr(denoisers, "_KERNEL", {})
-    assert denoisers._compiled_kernel() is not None
-    rng = np.random.default_rng(5)
-    f = rng.random(shape).astype(dtype)
-    p_ref, out_ref = np.zeros((2, *shape), dtype), np.empty(shape, dtype)
-    p, out = p_ref.copy(), out_ref.copy()
+    x = np.random.default_rng(5).random(shape).astype(dtype)
+    plain, fast = WarmTV(4, compiled=False), WarmTV(4, compiled=True)
     for w in (0.07, 0.3, 0.07):  # three warm calls, the weight changing between them
-        denoisers._numpy_steps(f, p_ref, out_ref, w, 4)
-        denoisers._chambolle_steps(f, p, out, w, 4)
-        np.testing.assert_array_equal(out, out_ref)
-        np.testing.assert_array_equal(p, p_ref)
+        a, b = plain(x, w), fast(x, w)
+        assert b.dtype == dtype
+        np.testing.assert_array_equal(b, a)
+        np.testing.assert_array_equal(fast.p, plain.p)
     # the steps moved the dual (a single pixel has no gradient: its dual stays 0)
-    assert (np.abs(p_ref).max() > 0) == (shape[1] * shape[2] > 1)
-    # empty planes are left alone (the kernel would read a first pixel that is not there)
-    empty = np.zeros((2, 0, 5), dtype)
-    denoisers._chambolle_steps(empty, np.zeros((2, *empty.shape), dtype), empty.copy(), 0.1, 3)
-    # a non-contiguous dual (a slice of planes along the last axis) takes the NumPy steps
-    p_strided = np.zeros((2, *shape[:2], 2 * shape[2]), dtype)[..., ::2]
-    denoisers._chambolle_steps(f, p_strided, out, 0.07, 4)
-    fresh_p, fresh_out = np.zeros((2, *shape), dtype), np.empty(shape, dtype)
-    denoisers._numpy_steps(f, fresh_p, fresh_out, 0.07, 4)
-    np.testing.assert_array_equal(out, fresh_out)
+    assert (np.abs(plain.p).max() > 0) == (shape[0] * shape[1] > 1)
 
 
-def test_the_compiled_kernel_is_switched_by_the_environment(monkeypatch):
-    from tensor_cosdi.solvers import denoisers
+def test_compiled_option_and_environment(monkeypatch):
+    from tensor_cosdi.solvers.denoisers import compiled_tv
 
-    monkeypatch.setattr(denoisers, "_KERNEL", {})
-    monkeypatch.setenv("TENSOR_COSDI_JIT", "0")
-    assert denoisers._compiled_kernel() is None
+    with pytest.raises(ValueError, match="compiled must be True, False or 'auto', got 'yes'"):
+        WarmTV(3, compiled="yes")
     x = np.random.default_rng(6).random((20, 16, 3)).astype(np.float32)
-    plain = WarmTV(3)(x, 0.1)
-    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    plain = WarmTV(3, compiled=False)(x, 0.1)
+    monkeypatch.setenv("TENSOR_COSDI_JIT", "0")
+    assert compiled_tv() is False
+    np.testing.assert_array_equal(WarmTV(3)(x, 0.1), plain)
     monkeypatch.setenv("TENSOR_COSDI_JIT", "yes")
     with pytest.raises(ValueError, match="TENSOR_COSDI_JIT must be 0 or 1, got 'yes'"):
         WarmTV(3)(x, 0.1)
-    monkeypatch.setattr(denoisers, "_KERNEL", {})
     monkeypatch.setenv("TENSOR_COSDI_JIT", "1")
+    assert compiled_tv() is (importlib.util.find_spec("numba") is not None)
     np.testing.assert_array_equal(WarmTV(3)(x, 0.1), plain)
+
+
+def test_compiled_true_without_numba_names_the_extra(monkeypatch):
+    import sys
+
+    from tensor_cosdi.solvers import denoisers
+
+    monkeypatch.setitem(sys.modules, "numba", None)  # as if numba were not installed
+    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    with pytest.raises(ImportError, match=r"needs numba: pip install 'tensor_cosdi\[fast\]'"):
+        WarmTV(3, compiled=True)
+    assert denoisers.compiled_tv() is False

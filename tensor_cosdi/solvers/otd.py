@@ -395,8 +395,8 @@ def online_tucker_admm(
     (``pan_iter``/``max_iter`` 90/45: 27.28 / 26.88 dB in 4.1 / 4.4 s;
     120/40: 27.54 / 26.71 dB in 5.3 s; 30/60: 26.17 / 25.81 dB).  Where ``Z``
     is exact (dual-camera CASSI at 96×96×16, 30 dB) 45 ADMM iterations lost
-    0.3-0.4 dB against 60, hence "auto".  ``pan_tv_steps`` is now
-    :data:`PAN_TV_STEPS` (20), cross-validated against 10 and 15.
+    0.3-0.4 dB against 60, hence "auto".  ``pan_tv_steps``: :data:`PAN_TV_STEPS`
+    (20, cross-validated against 10 and 15).
 
     ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also tried with
     its spectral atoms weighted by the scene's fitted mean spectrum, the better fit kept): 4-fold

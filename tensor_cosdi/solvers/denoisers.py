@@ -209,9 +209,8 @@ class WarmTV:
             self.p = self.p.astype(f.dtype)
         out = np.empty_like(f)
         n = _workers(f.shape[0])
-        kernel = _numba_kernel() if self.compiled is True else None
-        if self.compiled == "auto":
-            kernel = _numba_kernel() if compiled_tv() else None
+        use = compiled_tv() if self.compiled == "auto" else self.compiled
+        kernel = _numba_kernel() if use else None
         if n == 1:
             _chambolle_steps(f, self.p, out, w, self.n_iter, kernel)
         else:  # channels are independent: chunks in threads (both step loops release the GIL)
@@ -371,6 +370,14 @@ def compiled_tv() -> bool:
     ``TENSOR_COSDI_JIT`` is unset, ``1`` or empty (``0`` keeps the NumPy steps; any other
     value is a ``ValueError``).
 
+    Returns
+    -------
+    bool
+        ``True`` where ``WarmTV(n)`` runs the compiled kernel (the same results as the NumPy
+        steps bit for bit, 3–4× faster: ``benchmarks/results/tv_speed.md``).
+
+    Examples
+    --------
     >>> isinstance(compiled_tv(), bool)
     True
     """

@@ -399,7 +399,8 @@ def online_tucker_admm(
     (20, cross-validated against 10 and 15).
 
     ``pan_spectrum="auto"`` (from 24 bands, on a clean measurement: the first stage also tried with
-    its spectral atoms weighted by the scene's fitted mean spectrum, the better fit kept): 4-fold
+    its spectral atoms weighted by the scene's fitted mean spectrum, kept unless its residual
+    exceeds the plain stage's by more than :data:`~.panchromatic.FITTED_MARGIN`): 4-fold
     cross-validation over 8 tuning scenes as they are and lit by CIE LED-B3 and A
     (``benchmarks/results/cv_otd_pan_spectrum.md``, run with the second stage at both noise levels):
     noiseless 31.32 → 31.99 dB over the 24 views, every fold chose it; at 30 dB a tie (30.28 both);

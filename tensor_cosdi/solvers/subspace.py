@@ -347,8 +347,9 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
     columns ``A(a ⊗ e_l)``).  A light's sharp spectral features (a white LED's blue peak)
     survive the fit, though the estimate itself had to be smooth; on a scene whose mean
     spectrum is flat the fit is mostly noise, which is why
-    :func:`~tensor_cosdi.solvers.panchromatic.panchromatic_estimate` keeps whichever basis
-    fits the measurement better.
+    :func:`~tensor_cosdi.solvers.panchromatic.panchromatic_estimate` keeps the weighted basis
+    only while it fits the measurement nearly as well as the plain one
+    (:func:`~tensor_cosdi.solvers.panchromatic.keeps_fitted`).
 
     Parameters
     ----------

@@ -690,6 +690,36 @@ def test_gated_first_stage_follows_a_lamp_at_30_db_not_at_20(monkeypatch):
         )
 
 
+def test_auto_first_stage_keeps_the_weighted_one_within_the_margin(monkeypatch):
+    """On a clean measurement ``pan_spectrum="auto"`` keeps the weighted first stage unless its
+    residual exceeds the plain stage's by more than ``FITTED_MARGIN``: on an unlit chart the
+    weighted stage's residual is 2.6 % higher here, so a margin of 0 keeps the plain stage and
+    one of 0.05 the weighted one.  A margin that is not a number ≥ 0 is a one-line error."""
+    from tensor_cosdi.scenes import colorchecker
+    from tensor_cosdi.solvers import panchromatic as pm
+
+    wl = np.linspace(453.3, 648.1, 28)
+    sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
+    g = sd.forward(colorchecker((32, 32), wl))
+    monkeypatch.setattr(pm, "FITTED_SPECTRUM_ABOVE_DB", 0.0)  # count it clean at this size
+    stage = {
+        ps: pm.panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=ps)[1]
+        for ps in ("flat", "fitted")
+    }
+    misfit = {ps: np.linalg.norm(sd.forward(x) - g) for ps, x in stage.items()}
+    ratio = misfit["fitted"] / misfit["flat"] - 1.0
+    assert 0.01 < ratio < 0.04, ratio  # the case the margin decides
+    for margin, kept in ((0.0, "flat"), (ratio / 2, "flat"), (0.05, "fitted")):
+        monkeypatch.setattr(pm, "FITTED_MARGIN", margin)
+        assert pm.keeps_fitted(misfit["fitted"], misfit["flat"]) is (kept == "fitted")
+        np.testing.assert_array_equal(
+            pm.panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum="auto")[1], stage[kept]
+        )
+    for bad in (-0.1, float("nan"), float("inf"), "0.1", True):
+        with pytest.raises(ValueError, match="margin must be a finite number"):
+            pm.keeps_fitted(1.0, 1.0, bad)
+
+
 def test_fast_start_is_pnp_fast_s_clean_start_and_needs_a_first_stage():
     """``fast_start`` is OTD's first stage with ``pnp_fast``'s settings (the cube D-CoSNet's
     ``start="fast"`` weights begin from); a system without a first stage, or no imager, is a

@@ -147,6 +147,11 @@ def main(argv=None):
     if args.scenes_per_fold < 1:
         raise SystemExit(f"--scenes-per-fold must be ≥ 1, got {args.scenes_per_fold}")
     lights = tuple(v for v in args.light.split(",") if v)
+    for light in lights:  # refused before any run
+        try:
+            scene_view(f"scene~{light}")
+        except ValueError as exc:
+            raise SystemExit(f"--light: {exc}") from None
     out = Path(args.out)
     store = Store(out / f"{args.name}.json")
     stage_store = StageStore(out / f"{args.name}_stages.json")

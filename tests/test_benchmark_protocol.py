@@ -196,6 +196,34 @@ def test_otd_lam_systems_refuses_bad_options_before_any_run(
     assert not any(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--margins", "0,-0.1"], "--margins and --against take numbers ≥ 0"),
+        (["--margins", "x"], "--margins and --against take numbers ≥ 0"),
+        (["--against", "nan"], "--margins and --against take numbers ≥ 0"),
+        (["--masks", "tsa,kaist"], "--masks takes a comma list of tsa, random"),
+        (["--scenes-per-fold", "0"], "--scenes-per-fold must be ≥ 1"),
+        (["--light", "A,daylight"], "--light: .*must be a key of colour.SDS_ILLUMINANTS"),
+    ],
+)
+def test_pan_spectrum_pick_refuses_bad_options_before_any_run(argv, message, monkeypatch, tmp_path):
+    mod = _script("pan_spectrum_pick", monkeypatch)
+    with pytest.raises(SystemExit, match=message):
+        mod.main([*argv, "--out", str(tmp_path)])
+    assert not any(tmp_path.iterdir())
+
+
+def test_pan_spectrum_pick_margin_rule_is_the_library_s(monkeypatch):
+    """A margin picks the weighted stage exactly where ``keeps_fitted`` does; ``inf`` always."""
+    mod = _script("pan_spectrum_pick", monkeypatch)
+    row = {"misfit_flat": 2.0, "misfit_fitted": 2.1}  # 5 % above
+    assert [mod.kept(row, m) for m in (0.0, 0.04, 0.05, 0.2, float("inf"))] == [
+        False, False, True, True, True
+    ]  # fmt: skip
+    assert mod.kept({"misfit_flat": 2.0, "misfit_fitted": 1.0}, 0.0)
+
+
 def test_denoiser_weights_refuses_an_unknown_illuminant(monkeypatch, tmp_path):
     pytest.importorskip("torch")
     mod = _script("denoiser_weights", monkeypatch)

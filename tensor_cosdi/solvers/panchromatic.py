@@ -269,14 +269,29 @@ def gate_above(system, measurement) -> float | None:
 
 def keeps_fitted(misfit_fitted: float, misfit_flat: float, margin: float | None = None) -> bool:
     """``pan_spectrum="auto"``'s pick on a clean measurement: whether the first stage with
-    weighted atoms (residual ``misfit_fitted``) is kept over the plain one (``misfit_flat``),
-    i.e. ``misfit_fitted ≤ (1 + margin) · misfit_flat`` (``margin``: :data:`FITTED_MARGIN`).
+    weighted atoms is kept over the plain one, ``misfit_fitted ≤ (1 + margin) · misfit_flat``.
 
+    Parameters
+    ----------
+    misfit_fitted, misfit_flat : float
+        The residuals ``‖A x − g‖`` of the weighted and the plain first stage (finite, ≥ 0).
+    margin : float, optional
+        How much worse (relative) the weighted stage may fit and still be kept: a finite
+        number ≥ 0; default :data:`FITTED_MARGIN`.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
     >>> keeps_fitted(1.02, 1.0, 0.05), keeps_fitted(1.1, 1.0, 0.05)
     (True, False)
     """
+    fitted = number("misfit_fitted", misfit_fitted, low=0)
+    flat = number("misfit_flat", misfit_flat, low=0)
     margin = number("margin", FITTED_MARGIN if margin is None else margin, low=0)
-    return bool(misfit_fitted <= (1.0 + margin) * misfit_flat)
+    return bool(fitted <= (1.0 + margin) * flat)
 
 
 def _misfit(system, x, g) -> float:

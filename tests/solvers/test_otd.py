@@ -694,7 +694,8 @@ def test_auto_first_stage_keeps_the_weighted_one_within_the_margin(monkeypatch):
     """On a clean measurement ``pan_spectrum="auto"`` keeps the weighted first stage unless its
     residual exceeds the plain stage's by more than ``FITTED_MARGIN``: on an unlit chart the
     weighted stage's residual is 2.6 % higher here, so a margin of 0 keeps the plain stage and
-    one of 0.05 the weighted one.  A margin that is not a number ≥ 0 is a one-line error."""
+    one of 0.05 the weighted one.  A margin or residual that is not a finite number ≥ 0 is a
+    one-line error."""
     from tensor_cosdi.scenes import colorchecker
     from tensor_cosdi.solvers import panchromatic as pm
 
@@ -718,6 +719,8 @@ def test_auto_first_stage_keeps_the_weighted_one_within_the_margin(monkeypatch):
     for bad in (-0.1, float("nan"), float("inf"), "0.1", True):
         with pytest.raises(ValueError, match="margin must be a finite number"):
             pm.keeps_fitted(1.0, 1.0, bad)
+        with pytest.raises(ValueError, match="misfit_flat must be a finite number ≥ 0"):
+            pm.keeps_fitted(1.0, bad)
 
 
 def test_fast_start_is_pnp_fast_s_clean_start_and_needs_a_first_stage():

@@ -3,15 +3,15 @@ measurement: cross-validated over scene folds.
 
 On a clean measurement with many bands, ``pan_spectrum="auto"`` runs the first stage twice,
 with plain DCT spectral atoms and with atoms weighted by the scene's fitted mean spectrum
-(:func:`tensor_cosdi.solvers.subspace.fitted_mean_spectrum`), and keeps the one whose
-residual ``‖A x − g‖`` is the smaller unless the weighted one's exceeds the plain one's by
-more than a relative margin (:data:`tensor_cosdi.solvers.panchromatic.FITTED_MARGIN`).  Both
+(:func:`tensor_cosdi.solvers.subspace.fitted_mean_spectrum`), and keeps the weighted stage
+unless its residual ``‖A x − g‖`` exceeds the plain one's by more than a relative margin
+(:data:`tensor_cosdi.solvers.panchromatic.FITTED_MARGIN`).  Both
 stages nearly interpolate a noiseless measurement, so their residuals are close and the
 plain comparison (margin 0) is close to a coin flip.
 
 For every view (tuning scenes of :func:`tensor_cosdi.datasets.tune_folds`, as they are and lit
 by CIE illuminants, both codes, noiseless) this runs OTD with ``pan_spectrum="flat"`` and
-``"fitted"`` (stored beside ``real_spectra.py``'s runs, in ``results/<name>.json``) and the
+``"fitted"`` (rows as ``real_spectra.py`` stores them, in ``results/<name>.json``) and the
 two first stages alone (their residuals and the fitted spectrum's roughness:
 ``results/<name>_stages.json``); every margin of ``--margins`` is then a rule that picks one
 of the two stored OTD results per view.  Per code, for each of the 4 folds, the margin best

@@ -74,9 +74,9 @@ _check_int = engine.check_int
 #: noiseless 31.79 / 31.89 / 31.93 dB, random noiseless 34.74 / 34.75 / 34.77, at 30 dB within
 #: 0.02 dB; with the 8 scenes also lit by CIE LED-B3, A and FL11 (32 views, TSA, noiseless;
 #: ``cv_otd_pan_tv_steps_lit.md``) every fold chose 20 again, 35.11 → 35.15 dB.  On the report
-#: scenes (``real_spectra.md``) every cell moved by +0.00 to +0.07 dB, and
-#: a noiseless cube takes a median 8.2 s (TSA) / 8.0 s (random code) on 2 cores with the
-#: compiled TV steps (per-run seconds of both runs in their ``.json`` files).
+#: scenes (``real_spectra.md``) every cell moved by +0.00 to +0.07 dB; that table's medians
+#: (2 cores, compiled TV steps, the 30-line GAP-TV timed in the same run) put a noiseless cube
+#: at 0.69-0.72× GAP-TV's seconds.
 #: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_gap`'s OTD start keeps 10
 #: (:data:`~tensor_cosdi.solvers.pnp_gap.START_PAN_TV_STEPS`), the value its own defaults were
 #: chosen with.

@@ -34,6 +34,7 @@ from ..validate import flag, imager, integer, number
 from . import engine
 from ._base import History, check_positive, register_method
 from .panchromatic import (  # noqa: F401  (stage 1 of OTD, re-exported here)
+    FIT_TV_STEPS,
     PAN_WEIGHTS,
     has_many_bands,
     pan_weight_for,
@@ -95,6 +96,7 @@ def initial_bases(
     pan_weight="auto",
     pan_tv_steps: int | None = PAN_TV_STEPS,
     pan_spectrum: str = "flat",
+    pan_fit_tv_steps: int | None = FIT_TV_STEPS,
     spatial_block: int | None = None,
     progress: bool = False,
 ):
@@ -115,7 +117,7 @@ def initial_bases(
     wavelet_level : int, "auto" or "boundary"
         Its depth (:func:`tensor_cosdi.bases.wavelet`; ``"auto"``: as deep as
         the periodised transform allows).
-    pan_iter, pan_atoms, pan_weight, pan_tv_steps, pan_spectrum
+    pan_iter, pan_atoms, pan_weight, pan_tv_steps, pan_spectrum, pan_fit_tv_steps
         See :func:`panchromatic_estimate` (``pan_weight``: TV weight of the
         subspace GAP-TV, relative; ``"auto"`` follows the measurement's
         estimated SNR, :data:`PAN_WEIGHTS`; ``pan_atoms``: spectral DCT atoms,
@@ -150,6 +152,7 @@ def initial_bases(
             pan_weight=pan_weight,
             pan_tv_steps=pan_tv_steps,
             pan_spectrum=pan_spectrum,
+            pan_fit_tv_steps=pan_fit_tv_steps,
             progress=progress,
         )
         for m in (0, 1):
@@ -351,6 +354,7 @@ def online_tucker_admm(
     pan_weight="auto",
     pan_tv_steps=PAN_TV_STEPS,
     pan_spectrum="auto",
+    pan_fit_tv_steps=FIT_TV_STEPS,
     spatial_block=None,
     lam="auto",
     mu: float = 0.2,
@@ -449,6 +453,7 @@ def online_tucker_admm(
         pan_weight=pan_weight,
         pan_tv_steps=pan_tv_steps,
         pan_spectrum=pan_spectrum,
+        pan_fit_tv_steps=pan_fit_tv_steps,
         spatial_block=spatial_block,
         progress=bool(progress),
     )

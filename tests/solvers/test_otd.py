@@ -497,7 +497,8 @@ def test_first_stage_weighted_by_the_fitted_spectrum_under_an_led():
 
 def test_fitted_z_takes_z_from_the_weighted_atoms_and_the_start_from_the_plain_ones():
     """``pan_spectrum="fitted_z"``: ``Z`` is the weighted-atom estimate's band sum (the
-    ``"fitted"`` run's), the starting cube the plain-atom one (the ``"flat"`` run's)."""
+    ``"fitted"`` run's whose plain stage takes ``pan_tv_steps`` too), the starting cube the
+    plain-atom one (the ``"flat"`` run's)."""
     from tensor_cosdi.colour import radiance
     from tensor_cosdi.scenes import colorchecker
     from tensor_cosdi.solvers.panchromatic import panchromatic_estimate
@@ -506,11 +507,47 @@ def test_fitted_z_takes_z_from_the_weighted_atoms_and_the_start_from_the_plain_o
     sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
     g = sd.forward(radiance(colorchecker((32, 32), wl), wl, "LED-B3"))
     modes = ("flat", "fitted", "fitted_z")
-    runs = {m: panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=m) for m in modes}
+    runs = {
+        m: panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=m, pan_fit_tv_steps=10)
+        for m in modes
+    }
     z, start = runs["fitted_z"]
     np.testing.assert_array_equal(z, runs["fitted"][0])
     np.testing.assert_array_equal(start, runs["flat"][1])
     assert np.abs(runs["fitted"][0] - runs["flat"][0]).max() > 1e-3  # the two differ here
+
+
+def test_the_plain_stage_that_fits_the_spectrum_takes_its_own_tv_steps():
+    """``pan_fit_tv_steps`` is the plain stage's Chambolle steps where that stage fits the mean
+    spectrum (``"fitted"``; ``"auto"`` on clean data): the weighted stage is the one fitted from
+    a plain stage of those steps, computed here by hand.  ``"flat"`` and ``"fitted_z"``'s
+    starting cube keep ``pan_tv_steps``; a bad count is refused before any work."""
+    from tensor_cosdi.colour import radiance
+    from tensor_cosdi.scenes import colorchecker
+    from tensor_cosdi.solvers.panchromatic import pan_weight_for, panchromatic_estimate
+    from tensor_cosdi.solvers.subspace import fitted_mean_spectrum, subspace_gap_tv
+
+    wl = np.linspace(453.3, 648.1, 28)
+    sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
+    g = sd.forward(radiance(colorchecker((32, 32), wl), wl, "LED-B3"))
+    axis = sd.panchromatic_axes[0]
+    common = dict(n_atoms="auto", max_iter=20, tv_weight=pan_weight_for(sd, g, "auto"))
+    plain = subspace_gap_tv(sd, g, tv_steps=1, **common)
+    w = fitted_mean_spectrum(sd, g, plain, axis)
+    by_hand = subspace_gap_tv(sd, g, spectral_weights={axis: w}, tv_steps=10, **common)
+
+    def run(mode, steps):
+        return panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=mode, pan_fit_tv_steps=steps)
+
+    np.testing.assert_array_equal(run("fitted", 1)[1], by_hand)
+    assert np.abs(run("fitted", 10)[1] - by_hand).max() > 1e-4  # the steps matter here
+    for mode in ("flat", "fitted_z"):  # the plain-atom cube at pan_tv_steps, whatever the fit's
+        np.testing.assert_array_equal(run(mode, 1)[1], run(mode, 10)[1])
+    for bad in (0, -3, 2.5, "5", True):
+        with pytest.raises(ValueError, match="pan_fit_tv_steps"):
+            run("fitted", bad)
+    with pytest.raises(ValueError, match="pan_fit_tv_steps"):
+        tc.reconstruct(sd, g, "otd", pan_fit_tv_steps=0)
 
 
 def test_spectral_roughness_reads_sharp_lines_and_not_smooth_spectra():
@@ -703,9 +740,9 @@ def test_auto_first_stage_keeps_the_weighted_one_within_the_margin(monkeypatch):
     sd = SDCASSI(tc.codes.random_binary((32, 32), rng=0), n_bands=28, wavelengths=wl)
     g = sd.forward(colorchecker((32, 32), wl))
     monkeypatch.setattr(pm, "FITTED_SPECTRUM_ABOVE_DB", 0.0)  # count it clean at this size
+    same = {"pan_iter": 20, "pan_fit_tv_steps": 10}  # the plain stage as "flat" runs it
     stage = {
-        ps: pm.panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum=ps)[1]
-        for ps in ("flat", "fitted")
+        ps: pm.panchromatic_estimate(sd, g, pan_spectrum=ps, **same)[1] for ps in ("flat", "fitted")
     }
     misfit = {ps: np.linalg.norm(sd.forward(x) - g) for ps, x in stage.items()}
     ratio = misfit["fitted"] / misfit["flat"] - 1.0
@@ -714,7 +751,7 @@ def test_auto_first_stage_keeps_the_weighted_one_within_the_margin(monkeypatch):
         monkeypatch.setattr(pm, "FITTED_MARGIN", margin)
         assert pm.keeps_fitted(misfit["fitted"], misfit["flat"]) is (kept == "fitted")
         np.testing.assert_array_equal(
-            pm.panchromatic_estimate(sd, g, pan_iter=20, pan_spectrum="auto")[1], stage[kept]
+            pm.panchromatic_estimate(sd, g, pan_spectrum="auto", **same)[1], stage[kept]
         )
     for bad in (-0.1, float("nan"), float("inf"), "0.1", True):
         with pytest.raises(ValueError, match="margin must be a finite number"):

@@ -413,7 +413,11 @@ def online_tucker_admm(
     whose atoms follow the fitted spectrum part-way through only under a lamp's lines, shut below an
     estimated 25 dB; with tuning views lit by FL11 added, 30 dB 31.94 → 33.95 dB over 32 views,
     every fold (``benchmarks/results/cv_otd_noisy_gate.md``).  On clean data it costs a second first
-    stage, about 2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run);
+    stage, about 2.8 s at 256×256×28 (medians 5.6 → 8.4 s a cube over that run), less since
+    the plain stage that fits the spectrum takes ``pan_fit_tv_steps``
+    (:data:`~.panchromatic.FIT_TV_STEPS`, 5) Chambolle steps an iteration instead of 20:
+    medians 9.22 → 8.39 s a cube on 32 tuning views, TSA, at 35.21 → 35.19 dB
+    (``benchmarks/results/cv_otd_pan_fit_tv_steps.md``);
     ``pan_spectrum="flat"`` is the faster, single first stage.  ``"fitted_z"`` (the spatial bases
     from the weighted atoms' estimate, the start from the plain one's) gained 0.06 dB at 30 dB in
     the same cross-validation and lost 0.47 at 20 dB (``benchmarks/results/cv_otd_fitted_z.md``).

@@ -180,6 +180,16 @@ class ParamCache:
         self.__init__()
 
 
+def jit_enabled() -> bool:
+    """Whether the library may use its numba-compiled kernels: the environment variable
+    ``TENSOR_COSDI_JIT`` is unset, ``1`` or empty (``0`` keeps the NumPy code; any other value
+    is a ``ValueError``).  Whether numba is installed is each kernel's own question."""
+    flag = os.environ.get("TENSOR_COSDI_JIT", "1").strip()
+    if flag not in ("0", "1", ""):
+        raise ValueError(f"TENSOR_COSDI_JIT must be 0 or 1, got {flag!r}")
+    return flag != "0"
+
+
 # ---------------------------------------------------------------- FFT and solves
 def thread_limit() -> int:
     """Threads the library's own parallel NumPy work (FFTs, TV channel chunks) may use: the

@@ -193,6 +193,7 @@ class WarmTV:
         if compiled is True and _numba_kernel() is None:
             raise ImportError("WarmTV(compiled=True) needs numba: pip install 'tensor_cosdi[fast]'")
         self.n_iter, self.p, self.compiled = int(n_iter), None, compiled
+        self._transposed = False  # how the planes of the dual ``p`` lie (:meth:`_match_dual`)
 
     def reset(self):
         self.p = None
@@ -202,29 +203,56 @@ class WarmTV:
         if B.on_accelerator(x):  # a CUDA tensor, say: stays on its device
             return self._on_device(x, w)
         flat, shape = _host(x, "WarmTV")
-        f = np.ascontiguousarray(np.moveaxis(flat, 2, 0))  # (channels, H, W): planes contiguous
-        if not isinstance(self.p, np.ndarray) or self.p.shape[1:] != f.shape:
-            self.p = np.zeros((2,) + f.shape, f.dtype)
-        elif self.p.dtype != f.dtype:
-            self.p = self.p.astype(f.dtype)
+        f = np.moveaxis(flat, 2, 0)  # (channels, H, W)
+        # Planes held column by column (a Fortran-ordered cube, as the solvers keep theirs) are
+        # stepped as they lie, as the transposed images: TV does not change under a transpose
+        # (the dual's two halves trade places), and the planes are then read and returned
+        # without two transposing copies (subspace TV at 256×256×28, 8 coefficient images:
+        # ``benchmarks/results/solver_steps.md``).  Each step adds the divergence's two terms
+        # in the untransposed order (``swap``), so the result is the same bit for bit.
+        transposed = not f.flags.c_contiguous and f.transpose(0, 2, 1).flags.c_contiguous
+        f = f.transpose(0, 2, 1) if transposed else np.ascontiguousarray(f)
+        self._match_dual(f, transposed)
         out = np.empty_like(f)
         n = _workers(f.shape[0])
         use = compiled_tv() if self.compiled == "auto" else self.compiled
         kernel = _numba_kernel() if use else None
         if n == 1:
-            _chambolle_steps(f, self.p, out, w, self.n_iter, kernel)
+            _chambolle_steps(f, self.p, out, w, self.n_iter, kernel, transposed)
         else:  # channels are independent: chunks in threads (both step loops release the GIL)
             cuts = np.linspace(0, f.shape[0], n + 1).astype(int)
             pool = _pool()
             jobs = [
                 pool.submit(
-                    _chambolle_steps, f[a:b], self.p[:, a:b], out[a:b], w, self.n_iter, kernel
+                    _chambolle_steps,
+                    f[a:b],
+                    self.p[:, a:b],
+                    out[a:b],
+                    w,
+                    self.n_iter,
+                    kernel,
+                    transposed,
                 )
                 for a, b in zip(cuts[:-1], cuts[1:])
             ]
             for job in jobs:
                 job.result()
+        if transposed:
+            out = out.transpose(0, 2, 1)
         return _like(np.moveaxis(out, 0, 2).reshape(shape), x)
+
+    def _match_dual(self, f, transposed: bool) -> None:
+        """The dual ``p`` for channel-first planes ``f``: zeros where it does not fit them, turned
+        over (its halves swapped, each plane transposed) where the last call's planes lay the
+        other way; ``transposed`` says how these lie."""
+        p = self.p
+        if isinstance(p, np.ndarray) and self._transposed != transposed:
+            p = np.ascontiguousarray(p[::-1].transpose(0, 1, 3, 2))
+        if not isinstance(p, np.ndarray) or p.shape[1:] != f.shape:
+            p = np.zeros((2,) + f.shape, f.dtype)
+        elif p.dtype != f.dtype:
+            p = p.astype(f.dtype)
+        self.p, self._transposed = p, transposed
 
     def _on_device(self, x, w):
         """The same steps with backend operations on ``x``'s device (no host round trip)."""
@@ -246,9 +274,11 @@ class WarmTV:
         return tl.reshape(tl.moveaxis(out, 0, 2), shape)
 
 
-def _chambolle_steps(f, p, out, w: float, n_iter: int, kernel=None) -> None:
+def _chambolle_steps(f, p, out, w: float, n_iter: int, kernel=None, swap: bool = False) -> None:
     """``n_iter`` Chambolle steps on channel-first planes ``f``, updating the dual ``p`` (shape
-    ``(2,) + f.shape``) in place; ``out`` receives the primal of the last step.
+    ``(2,) + f.shape``) in place; ``out`` receives the primal of the last step.  ``swap``: the
+    planes are transposed images, and each step adds the divergence's two terms in the order of
+    the untransposed ones (the second axis' first), so that the result is theirs bit for bit.
 
     ``kernel``: the compiled :func:`_chambolle_kernel` (:func:`_numba_kernel`) takes the steps,
     else (``None``) :func:`_numpy_steps`; both give the same primal and dual bit for bit
@@ -259,13 +289,13 @@ def _chambolle_steps(f, p, out, w: float, n_iter: int, kernel=None) -> None:
         or f.size == 0  # the kernel reads the first pixel of every plane
         or not all(a.flags.c_contiguous for a in (f, p[0], p[1], out))
     ):
-        _numpy_steps(f, p, out, w, n_iter)
+        _numpy_steps(f, p, out, w, n_iter, swap)
         return
     t = f.dtype.type  # every constant in the planes' precision, as NumPy casts a Python float
-    kernel(f, p[0], p[1], out, t(0.25 / w), t(0.25), t(1), t(0), int(n_iter))
+    kernel(f, p[0], p[1], out, t(0.25 / w), t(0.25), t(1), t(0), int(n_iter), bool(swap))
 
 
-def _numpy_steps(f, p, out, w: float, n_iter: int) -> None:
+def _numpy_steps(f, p, out, w: float, n_iter: int, swap: bool = False) -> None:
     """:func:`_chambolle_steps` in NumPy operations.
 
     The planes are independent, so each takes all its steps before the next: one plane's
@@ -284,8 +314,12 @@ def _numpy_steps(f, p, out, w: float, n_iter: int) -> None:
         for _ in range(n_iter):
             np.add(p0, p1, out=d)  # d = div p (scikit-image's sign)
             np.negative(d, out=d)
-            d[:, 1:] += p0[:, :-1]
-            d[:, :, 1:] += p1[:, :, :-1]
+            if swap:  # transposed images: the untransposed order of the two terms
+                d[:, :, 1:] += p1[:, :, :-1]
+                d[:, 1:] += p0[:, :-1]
+            else:
+                d[:, 1:] += p0[:, :-1]
+                d[:, :, 1:] += p1[:, :, :-1]
             np.add(fc, d, out=oc)
             np.subtract(oc[:, 1:], oc[:, :-1], out=g0[:, :-1])  # the last row / column stay 0
             np.subtract(oc[:, :, 1:], oc[:, :, :-1], out=g1[:, :, :-1])
@@ -301,10 +335,11 @@ def _numpy_steps(f, p, out, w: float, n_iter: int) -> None:
             p1 /= nrm
 
 
-def _chambolle_kernel(f, p0, p1, out, k, tau, one, zero, n_iter):  # pragma: no cover (compiled)
+def _chambolle_kernel(f, p0, p1, out, k, tau, one, zero, n_iter, swap):  # pragma: no cover
     """The loop that numba compiles for :func:`_chambolle_steps`: C-contiguous planes ``f``,
     ``out`` and dual halves ``p0``, ``p1`` of one shape ``(planes, H, W)``; ``k = τ / w``,
-    ``τ``, 1 and 0 as scalars of the planes' dtype, so that no operation is promoted.
+    ``τ``, 1 and 0 as scalars of the planes' dtype, so that no operation is promoted; ``swap``
+    as there (the divergence's two terms added in the other order).
 
     One sweep a step: the primal row ``i + 1`` is formed from the old dual before the dual's
     row ``i``, which needs the primal rows ``i`` and ``i + 1``, is updated, so the dual is
@@ -324,8 +359,12 @@ def _chambolle_kernel(f, p0, p1, out, k, tau, one, zero, n_iter):  # pragma: no 
                 if not last:  # the primal row below, from the dual not yet updated
                     r = i + 1
                     oc[r, 0] = fc[r, 0] + ((-(a[r, 0] + b[r, 0])) + a[i, 0])
-                    for j in range(1, w):
-                        oc[r, j] = fc[r, j] + (((-(a[r, j] + b[r, j])) + a[i, j]) + b[r, j - 1])
+                    if swap:  # outside the loops over j: each stays free of branches
+                        for j in range(1, w):
+                            oc[r, j] = fc[r, j] + (((-(a[r, j] + b[r, j])) + b[r, j - 1]) + a[i, j])
+                    else:
+                        for j in range(1, w):
+                            oc[r, j] = fc[r, j] + (((-(a[r, j] + b[r, j])) + a[i, j]) + b[r, j - 1])
                     for j in range(w - 1):  # the dual row i
                         g0 = oc[r, j] - oc[i, j]
                         g1 = oc[i, j + 1] - oc[i, j]
@@ -381,10 +420,7 @@ def compiled_tv() -> bool:
     >>> isinstance(compiled_tv(), bool)
     True
     """
-    flag = os.environ.get("TENSOR_COSDI_JIT", "1").strip()
-    if flag not in ("0", "1", ""):
-        raise ValueError(f"TENSOR_COSDI_JIT must be 0 or 1, got {flag!r}")
-    return flag != "0" and _numba_kernel() is not None
+    return B.jit_enabled() and _numba_kernel() is not None
 
 
 def wavelet(x, sigma: float, *, wavelet_name: str = "db2", mode: str = "soft"):

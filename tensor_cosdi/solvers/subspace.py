@@ -381,17 +381,26 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
     a = x.sum(axis=mode, keepdims=True)
     g = np.asarray(B.to_numpy(measurement), dtype=np.float32).ravel()
     n = x.shape[mode]
-    cols = np.empty((g.size, n), dtype=np.float32)  # one measurement per band: a cube's worth
-    e = np.zeros(x.shape, dtype=np.float32)  # one cube, its band slice filled in turn
+    # one measurement per band, a column each (contiguous: written in one pass), from one cube
+    # whose band slice is filled in turn, in the estimate's memory order: a solver's
+    # Fortran-ordered iterate gives contiguous band slices and the shear kernels' fast layout.
+    # A NumPy measurement's cube goes to the operator as it is, not copied per band.
+    # 256×256×28, TSA mask: ``benchmarks/results/solver_steps.md``.
+    cols = np.empty((g.size, n), dtype=np.float32, order="F")
+    e = np.zeros(x.shape, dtype=np.float32, order="F" if x.flags.f_contiguous else "C")
+    numpy_in = isinstance(measurement, np.ndarray)
+    if numpy_in and measurement.dtype != e.dtype:
+        e = e.astype(measurement.dtype, order="K")
     index = [slice(None)] * x.ndim
     for band in range(n):
         index[mode] = slice(band, band + 1)
         e[tuple(index)] = a
-        cols[:, band] = np.asarray(
-            B.to_numpy(system.operator.apply(B.tensor_like(e, measurement)))
-        ).ravel()
+        cube_in = e if numpy_in else B.tensor_like(e, measurement)
+        cols[:, band] = np.asarray(B.to_numpy(system.operator.apply(cube_in))).ravel()
         e[tuple(index)] = 0.0
-    s, _ = nnls((cols.T @ cols).astype(np.float64), (cols.T @ g).astype(np.float64))
+    cols = cols.astype(np.float64)  # the normal equations summed in float64: 79,360 terms a
+    # sum at 256×256×28, where a float32 sum's rounding depends on the order BLAS takes
+    s, _ = nnls(cols.T @ cols, cols.T @ g.astype(np.float64))
     peak = s.max()
     if not peak > 0:
         return np.ones(n)

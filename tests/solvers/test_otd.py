@@ -462,6 +462,14 @@ def test_fitted_mean_spectrum_recovers_a_shared_spectrum_with_a_sharp_peak():
     cube = a[:, :, None] * s
     got = fitted_mean_spectrum(sd, sd.forward(cube), cube, "λ")
     np.testing.assert_allclose(got, s / s.max(), rtol=1e-4)  # float32 columns
+    # a solver's Fortran-ordered estimate and a float32 measurement: the same columns
+    g32 = np.asarray(sd.forward(cube), dtype=np.float32)
+    f_order, c_order = (
+        fitted_mean_spectrum(sd, g32, est, "λ")
+        for est in (np.asfortranarray(cube), np.ascontiguousarray(cube))
+    )
+    np.testing.assert_allclose(f_order, c_order, rtol=1e-6)  # the band sums' rounding
+    np.testing.assert_allclose(f_order, got, rtol=1e-6)
     with pytest.raises(ValueError, match="'x' is not a panchromatic axis"):
         fitted_mean_spectrum(sd, sd.forward(cube), cube, "x")
     with pytest.raises(ValueError, match="does not match"):

@@ -77,8 +77,9 @@ _check_int = engine.check_int
 #: ``cv_otd_pan_tv_steps_lit.md``) every fold chose 20 again, 35.11 → 35.15 dB.  On the report
 #: scenes (``real_spectra.md``) every cell moved by +0.00 to +0.07 dB; that table's medians
 #: (2 cores, compiled TV steps, the 30-line GAP-TV timed in the same run) put a noiseless cube
-#: at 0.60-0.62× GAP-TV's seconds since the plain stage that fits the spectrum takes
-#: :data:`~.panchromatic.FIT_TV_STEPS` (0.69-0.72× with 20), a noisy one at 0.50-0.52×.
+#: at 0.54-0.55× GAP-TV's seconds (0.69-0.72× when the plain stage that fits the spectrum took
+#: 20 steps instead of :data:`~.panchromatic.FIT_TV_STEPS`, 0.60-0.62× before the first stages'
+#: steps of ``benchmarks/results/solver_steps.md``), a noisy one at 0.42-0.46×.
 #: :func:`~tensor_cosdi.solvers.pnp_gap.pnp_gap`'s OTD start keeps 10
 #: (:data:`~tensor_cosdi.solvers.pnp_gap.START_PAN_TV_STEPS`), the value its own defaults were
 #: chosen with.

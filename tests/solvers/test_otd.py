@@ -360,6 +360,37 @@ def test_the_subspace_denoiser_keeps_a_fortran_iterate_and_its_values():
     assert np.linalg.norm(c_out - v) > 0.1 * np.linalg.norm(v)  # it did project and denoise
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_the_first_stage_in_coefficients_is_gap_with_the_subspace_tv(dtype):
+    """``subspace_gap_tv`` on NumPy data through a shearing system holds its iterates as the
+    coefficient images of the atoms: the same cube, to float rounding, as accelerated GAP on
+    full cubes with the subspace TV as its prior (the general path), at every iteration count
+    (the tolerance stop included)."""
+    from tensor_cosdi.solvers import engine
+    from tensor_cosdi.solvers.denoisers import WarmTV
+    from tensor_cosdi.solvers.panchromatic import pan_atoms_for, subspace_denoise
+    from tensor_cosdi.solvers.priors import TV
+
+    rng = np.random.default_rng(2)
+    sd = SDCASSI(tc.codes.random_binary((24, 20), rng=3), n_bands=28)
+    lam = np.linspace(0, 1, 28)
+    spectra = np.stack([np.exp(-(((lam - m) / 0.3) ** 2)) for m in (0.2, 0.5, 0.8)])
+    cube = np.kron(rng.random((6, 5, 3)), np.ones((4, 4, 1))) @ spectra  # smooth spectra
+    g = np.asarray(sd.forward(cube), dtype=dtype)
+    k = pan_atoms_for(28, "auto")
+    for n in (1, 7, 40):
+        got = subspace_gap_tv(sd, g, max_iter=n, tv_weight=0.05, tv_steps=3)
+        atoms = [np.asarray(dct(28)[:, :k], dtype=dtype)]
+        warm = WarmTV(3)
+        prior = TV(0.05, denoise=lambda v, w, a=atoms, d=warm: subspace_denoise(v, a, [2], d, w))
+        ref, _, _ = engine.gap(sd.operator, g, prior, eps=1e-6, max_iter=n, objective=False)
+        assert got.dtype == dtype and got.flags.f_contiguous
+        tol = 2e-5 if dtype == np.float32 else 1e-10
+        np.testing.assert_allclose(got, ref, rtol=0, atol=tol * np.abs(ref).max())
+    start = engine.least_norm(sd.operator, g)  # it did reconstruct, past the start
+    assert np.linalg.norm(got - cube) < 0.5 * np.linalg.norm(start - cube)
+
+
 def test_the_first_stage_spans_many_bands_with_more_atoms():
     """``pan_atoms="auto"``: 3 DCT atoms below 24 bands, the cross-validated count from there
     (three atoms cannot follow 28-band spectra); an explicit count is kept, capped at the axis."""

@@ -201,6 +201,17 @@ def run(method: str, system, g, options: dict):
     return cube, time.perf_counter() - t0
 
 
+def median_ms(fn, repeats: int) -> float:
+    """Median milliseconds of ``repeats`` calls of ``fn`` after one untimed call."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * float(np.median(times))
+
+
 def provenance() -> dict:
     """Date, machine, commit and command of this run (for every results file)."""
     try:

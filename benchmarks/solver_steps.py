@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -48,21 +47,11 @@ from tensor_cosdi.solvers.subspace import (
 )
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _protocol import RESULTS, load_mask, problem, write_results  # noqa: E402
+from _protocol import RESULTS, load_mask, median_ms, problem, write_results  # noqa: E402
 
 ATOMS = 8
 TV_STEPS = 3
 TV_WEIGHT = 0.05
-
-
-def median_ms(fn, repeats: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
 
 
 def numpy_change(new, old):

@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +34,7 @@ from tensor_cosdi.solvers.denoisers import WarmTV, compiled_tv
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _protocol import RESULTS, write_results  # noqa: E402
+from _protocol import median_ms as _median_ms  # noqa: E402
 
 STEPS = 5
 WEIGHT = 0.3
@@ -68,17 +68,11 @@ def median_ms(fn, repeats, threads=None):
         if threads:
             os.environ["OMP_NUM_THREADS"] = threads
     try:
-        fn()
-        times = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t0)
+        return _median_ms(fn, repeats)
     finally:
         os.environ.pop("OMP_NUM_THREADS", None)
         if saved is not None:
             os.environ["OMP_NUM_THREADS"] = saved
-    return 1e3 * float(np.median(times))
 
 
 def main(argv=None):

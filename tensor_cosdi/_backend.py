@@ -190,6 +190,25 @@ def jit_enabled() -> bool:
     return flag != "0"
 
 
+_NUMBA: dict = {}  # the compiled kernels, one a function (None: numba is not installed)
+
+
+def numba_compiled(func, **options):
+    """``func`` compiled by numba (``njit`` without the GIL, cached on disk, no bounds checks,
+    NumPy's error model, and ``options``), made once a process, or ``None`` where numba is not
+    installed (the ``fast`` extra).  Whether to use it is :func:`jit_enabled`'s question."""
+    if func not in _NUMBA:
+        try:
+            import numba
+        except ImportError:
+            _NUMBA[func] = None
+        else:
+            _NUMBA[func] = numba.njit(
+                nogil=True, cache=True, boundscheck=False, error_model="numpy", **options
+            )(func)
+    return _NUMBA[func]
+
+
 # ---------------------------------------------------------------- FFT and solves
 def thread_limit() -> int:
     """Threads the library's own parallel NumPy work (FFTs, TV channel chunks) may use: the

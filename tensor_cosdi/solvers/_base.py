@@ -492,9 +492,6 @@ def _change_sums(new, old):  # pragma: no cover (compiled)
     return d2, n2
 
 
-_COMPILED: dict = {}
-
-
 def compiled_change() -> bool:
     """Whether :func:`relative_change` takes its compiled pass for two NumPy arrays of one float
     dtype and memory order: numba is installed and :func:`~tensor_cosdi._backend.jit_enabled`.
@@ -506,21 +503,12 @@ def compiled_change() -> bool:
 
 
 def _change_kernel():
-    """:func:`_change_sums` compiled by numba (reassociation allowed, so that the sums
-    vectorise; cached on disk), or ``None`` without numba or with ``TENSOR_COSDI_JIT=0``."""
+    """:func:`_change_sums` compiled by numba (:func:`~tensor_cosdi._backend.numba_compiled`,
+    reassociation allowed so that the sums vectorise), or ``None`` without numba or with
+    ``TENSOR_COSDI_JIT=0``."""
     if not B.jit_enabled():
         return None
-    if "change" not in _COMPILED:
-        try:
-            import numba
-        except ImportError:
-            _COMPILED["change"] = None
-        else:
-            _COMPILED["change"] = numba.njit(
-                nogil=True, cache=True, boundscheck=False, error_model="numpy",
-                fastmath={"reassoc", "contract", "nsz"},
-            )(_change_sums)  # fmt: skip
-    return _COMPILED["change"]
+    return B.numba_compiled(_change_sums, fastmath={"reassoc", "contract", "nsz"})
 
 
 def relative_residual(system, cube, g) -> float:

@@ -384,23 +384,11 @@ def _chambolle_kernel(f, p0, p1, out, k, tau, one, zero, n_iter, swap):  # pragm
                 b[i, w - 1] = (b[i, w - 1] - zero * tau) / nrm
 
 
-#: The compiled kernel (or ``None`` without numba), made on first use: :func:`_numba_kernel`.
-_KERNEL: dict = {}
-
-
 def _numba_kernel():
-    """:func:`_chambolle_kernel` compiled by numba (cached on disk: the first call on a machine
-    compiles it, a few seconds), or ``None`` where numba is not installed."""
-    if "kernel" not in _KERNEL:
-        try:
-            import numba
-        except ImportError:
-            _KERNEL["kernel"] = None
-        else:
-            _KERNEL["kernel"] = numba.njit(
-                nogil=True, cache=True, boundscheck=False, error_model="numpy"
-            )(_chambolle_kernel)
-    return _KERNEL["kernel"]
+    """:func:`_chambolle_kernel` compiled by numba (:func:`~tensor_cosdi._backend.numba_compiled`:
+    the first call on a machine compiles it, a few seconds), or ``None`` where numba is not
+    installed."""
+    return B.numba_compiled(_chambolle_kernel)
 
 
 def compiled_tv() -> bool:

@@ -44,3 +44,16 @@ def test_compiled_change_edge_values():
     c = np.ones(5) * (1 + 1j)
     assert relative_change(c, c * 0.5) == pytest.approx(0.5)
     assert relative_change(np.ones(5, np.float32), np.zeros(5)) == pytest.approx(1.0)
+
+
+def test_without_numba_the_change_takes_numpys_path(monkeypatch):
+    import sys
+
+    from tensor_cosdi import _backend
+
+    new = np.random.default_rng(1).random((16, 12, 5))
+    want = relative_change(new, new * 0.9)
+    monkeypatch.setitem(sys.modules, "numba", None)  # as if numba were not installed
+    monkeypatch.setattr(_backend, "_NUMBA", {})
+    assert not compiled_change()
+    assert relative_change(new, new * 0.9) == pytest.approx(want, rel=1e-12)

@@ -204,10 +204,11 @@ def test_compiled_option_and_environment(monkeypatch):
 def test_compiled_true_without_numba_names_the_extra(monkeypatch):
     import sys
 
+    from tensor_cosdi import _backend
     from tensor_cosdi.solvers import denoisers
 
     monkeypatch.setitem(sys.modules, "numba", None)  # as if numba were not installed
-    monkeypatch.setattr(denoisers, "_KERNEL", {})
+    monkeypatch.setattr(_backend, "_NUMBA", {})
     with pytest.raises(ImportError, match=r"needs numba: pip install 'tensor_cosdi\[fast\]'"):
         WarmTV(3, compiled=True)
     assert denoisers.compiled_tv() is False

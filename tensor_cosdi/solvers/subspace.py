@@ -467,8 +467,8 @@ def fitted_mean_spectrum(system, measurement, cube, axis: str, *, floor: float =
     cols = np.empty((g.size, n), dtype=np.float32, order="F")
     e = np.zeros(x.shape, dtype=np.float32, order="F" if x.flags.f_contiguous else "C")
     numpy_in = isinstance(measurement, np.ndarray)
-    if numpy_in and measurement.dtype != e.dtype:
-        e = e.astype(measurement.dtype, order="K")
+    if numpy_in and measurement.dtype.kind == "f" and measurement.dtype != e.dtype:
+        e = e.astype(measurement.dtype, order="K")  # (integer counts: the float32 cube)
     index = [slice(None)] * x.ndim
     for band in range(n):
         index[mode] = slice(band, band + 1)

@@ -501,6 +501,9 @@ def test_fitted_mean_spectrum_recovers_a_shared_spectrum_with_a_sharp_peak():
     )
     np.testing.assert_allclose(f_order, c_order, rtol=1e-6)  # the band sums' rounding
     np.testing.assert_allclose(f_order, got, rtol=1e-6)
+    # integer counts (a camera's): the estimate's cube is not rounded to integers
+    counts = np.round(1000 * np.asarray(sd.forward(cube))).astype(np.uint16)
+    np.testing.assert_allclose(fitted_mean_spectrum(sd, counts, cube, "λ"), got, atol=2e-3)
     with pytest.raises(ValueError, match="'x' is not a panchromatic axis"):
         fitted_mean_spectrum(sd, sd.forward(cube), cube, "x")
     with pytest.raises(ValueError, match="does not match"):

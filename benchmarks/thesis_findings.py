@@ -1050,6 +1050,12 @@ def _per_seed(rows, fn) -> np.ndarray:
     return np.array([fn([r for r in rows if r["seed"] == q]) for q in seeds])
 
 
+def _printed(values, fmt="{:+.2f}") -> np.ndarray:
+    """``values`` as the table prints them (``fmt``): the numbers a verdict beside them is read
+    from, so that a gain printed as +0.00 (or -0.00) counts as none."""
+    return np.array([float(fmt.format(v)) for v in np.asarray(values, dtype=float)])
+
+
 def _gain_verdict(values, over="seeds") -> str:
     """A "better" finding from its gains per seed (or per ``over``: ``"cases"`` for scene ×
     noise level with one trained network per arm): reproduced when every one gains,
@@ -1164,7 +1170,7 @@ def verdicts(data):
                 rs, "psnr", system="sd_cassi"))  # fmt: skip
             row(
                 "CASSI-VSI (αT 0.7) over SD-CASSI at equal light, OTD", "better",
-                _spread(gains, unit=" dB"), _gain_verdict(gains),
+                _spread(gains, unit=" dB"), _gain_verdict(_printed(gains)),
                 "same code, same absolute noise",
             )  # fmt: skip
     if "vsi_noise" in data:
@@ -1196,7 +1202,7 @@ def verdicts(data):
         g = diff("psnr", "cassi_vsi", "sd_cassi")
         row(
             "CASSI-VSI (αT 0.7) over SD-CASSI, 30 dB each (Sec. 3.3.4, Fig. 23)",
-            "better PSNR, RMSE, SSIM", _spread(g, unit=" dB"), _gain_verdict(g),
+            "better PSNR, RMSE, SSIM", _spread(g, unit=" dB"), _gain_verdict(_printed(g)),
             f"SSIM: {_gain_verdict(diff('ssim', 'cassi_vsi', 'sd_cassi'))}; "
             f"RMSE: {_gain_verdict(-diff('rmse', 'cassi_vsi', 'sd_cassi'))}",
         )  # fmt: skip
@@ -1204,14 +1210,14 @@ def verdicts(data):
         row(
             "CASSI-VSI against the dual-arm CASSI (noise-free panchromatic image)",
             "comparable (read here: within ±1 dB)", _spread(d, unit=" dB"),
-            _range_verdict(d, -1.0, 1.0), f"difference {_direction(d)}",
+            _range_verdict(_printed(d), -1.0, 1.0), f"difference {_direction(_printed(d))}",
         )  # fmt: skip
         sam = _per_seed(r, lambda rs: min(
             _mean(rs, "sam", system="cassi_vsi"), _mean(rs, "sam", system="sd_cassi")
         ) - _mean(rs, "sam", system="dual_camera_cassi"))  # fmt: skip
         row(
             "the dual-arm CASSI has the least SAM of the three", "least SAM",
-            _spread(sam, "{:+.1f}", "°"), _gain_verdict(sam),
+            _spread(sam, "{:+.1f}", "°"), _gain_verdict(_printed(sam, "{:+.1f}")),
             "ours: the better of CASSI-VSI and SD-CASSI minus the dual arm; mean SAM "
             + ", ".join(f"{n} {_mean(r, 'sam', system=k):.1f}°" for k, n in (
                 ("dual_camera_cassi", "dual arm"), ("cassi_vsi", "CASSI-VSI"),
@@ -1232,7 +1238,7 @@ def verdicts(data):
         g41, g9 = z6_gain(41), z6_gain(9)
         row(
             "Z6 astigmatism (≈ 0.9 wave) beats pure defocus for depth, 41-px PSFs", "better",
-            _spread(g41, unit=" planes right"), _gain_verdict(g41),
+            _spread(g41, unit=" planes right"), _gain_verdict(_printed(g41)),
             f"with 9-px PSFs: {_spread(g9)}; most planes right at 41 px: "
             f"{_case_name(*best)}",
         )  # fmt: skip
@@ -1242,7 +1248,7 @@ def verdicts(data):
                       - _mean(rs, "depth_accuracy", mode=0))  # fmt: skip
         row(
             "Z6 astigmatism beats pure defocus, focal-sweep model", "better",
-            _spread(g, unit=" planes right"), _gain_verdict(g),
+            _spread(g, unit=" planes right"), _gain_verdict(_printed(g)),
             "most planes right: " + _best_case(r),
         )  # fmt: skip
     if "dfa_forms" in data and "dfa" in data:
@@ -1297,7 +1303,7 @@ def verdicts(data):
             row(
                 f"CS2LI over structured light + SD-CASSI, fringes {fr} the dispersion",
                 "up to +4 dB depth (Sec. 6.3)", _spread(g, unit=" dB"),
-                _range_verdict(g, 0.0, 4.0),
+                _range_verdict(_printed(g), 0.0, 4.0),
                 "same code, light and frame count; "
                 + ("mean gain above the thesis' +4 dB" if g.mean() > 4.0
                    else "mean gain within 0 … +4 dB" if g.mean() >= 0 else "mean loss"),
@@ -1314,23 +1320,27 @@ def verdicts(data):
             d = diff("depth_psnr", binary, sl)
             row(
                 f"CS2LI (binary code) over SL + SD-CASSI, depth, {snr:g} dB (Fig. 56B)",
-                "up to +4 dB on average", _spread(d, unit=" dB"), _range_verdict(d, 0.0, 4.0),
-                f"gain {_direction(d)}; colour code over SL + SD-CASSI: "
+                "up to +4 dB on average", _spread(d, unit=" dB"),
+                _range_verdict(_printed(d), 0.0, 4.0),
+                f"gain {_direction(_printed(d))}; colour code over SL + SD-CASSI: "
                 f"{diff('depth_psnr', colour, sl).mean():+.2f} dB (mean)",
             )  # fmt: skip
             ss = diff("ssim", binary, sl)
             row(
                 f"CS2LI (binary code) over SL + SD-CASSI, reflectance SSIM, {snr:g} dB (Fig. 56A)",
-                "up to +0.10", _spread(ss, "{:+.3f}"), _range_verdict(ss, 0.0, 0.10),
-                f"gain {_direction(ss)}; SAM difference {diff('sam', binary, sl).mean():+.2f}° "
+                "up to +0.10", _spread(ss, "{:+.3f}"),
+                _range_verdict(_printed(ss, "{:+.3f}"), 0.0, 0.10),
+                f"gain {_direction(_printed(ss, '{:+.3f}'))}; "
+                f"SAM difference {diff('sam', binary, sl).mean():+.2f}° "
                 "(mean; the thesis: comparable)",
             )  # fmt: skip
             c = diff("cube_psnr", colour, binary)
             row(
                 f"CS2LI colour code (#f 6, κ 0.50) over the binary code, {snr:g} dB (Fig. 56)",
                 "up to +1 dB, up to 0.5° less SAM", _spread(c, unit=" dB"),
-                _range_verdict(c, 0.0, 1.0),
-                f"gain {_direction(c)}; SAM: {_gain_verdict(-diff('sam', colour, binary))}; depth "
+                _range_verdict(_printed(c), 0.0, 1.0),
+                f"gain {_direction(_printed(c))}; "
+                f"SAM: {_gain_verdict(-diff('sam', colour, binary))}; depth "
                 f"{diff('depth_psnr', colour, binary).mean():+.2f} dB (mean)",
             )  # fmt: skip
     if "cs2li_code" in data:
@@ -1376,7 +1386,8 @@ def verdicts(data):
             g = _per_seed(r, lambda rs, f=form: share(rs, f, "wdct") - share(rs, f, "otd"))
             row(
                 f"C3SLFI: OTD's basis sparser than WDCT, {form.upper()} form (Fig. 45)", "sparser",
-                _spread(np.asarray(g) * 100, "{:+.2f}", " %"), _gain_verdict(g),
+                _spread(np.asarray(g) * 100, "{:+.2f}", " %"),
+                _gain_verdict(_printed(np.asarray(g) * 100)),
                 "ours: WDCT's minus OTD's share of coefficients holding 99.9 % of the energy; "
                 f"means {share(r, form, 'wdct'):.2e} and {share(r, form, 'otd'):.2e}",
             )  # fmt: skip
@@ -1386,7 +1397,8 @@ def verdicts(data):
         )
         row(
             "C3SLFI: the 3-D form sparser than the 5-D one, OTD's basis (Fig. 45)", "sparser",
-            _spread(np.asarray(g) * 100, "{:+.2f}", " %"), _gain_verdict(g),
+            _spread(np.asarray(g) * 100, "{:+.2f}", " %"),
+                _gain_verdict(_printed(np.asarray(g) * 100)),
             "ours: the 5-D minus the 3-D share holding 99.9 % of the energy; WDCT: "
             f"{_gain_verdict(gw)}",
         )  # fmt: skip
@@ -1401,15 +1413,16 @@ def verdicts(data):
             row(
                 f"Table 1: OTD-3D over WDCT-3D, {group}", "+2.6 to +9.3 dB, 1.9-11.1° less SAM",
                 f"{_spread(gain, unit=' dB')}; SAM {_spread(sam, '{:+.1f}', '°')}",
-                _range_verdict(gain, 2.6, 9.3),
-                f"SAM: {_range_verdict(-sam, 1.9, 11.1)}; gain {_direction(gain)}; "
+                _range_verdict(_printed(gain), 2.6, 9.3),
+                f"SAM: {_range_verdict(-_printed(sam, '{:+.1f}'), 1.9, 11.1)}; "
+                f"gain {_direction(_printed(gain))}; "
                 "means over K and SNR",
             )  # fmt: skip
         d35 = _per_seed(r, lambda rs: _mean(rs, "psnr", method="otd", form="3d")
                         - _mean(rs, "psnr", method="otd", form="5d"))  # fmt: skip
         row("Table 1: OTD-3D over OTD-5D", "+0.4 to +4.4 dB", _spread(d35, unit=" dB"),
-            _range_verdict(d35, 0.4, 4.4),
-            f"gain {_direction(d35)}; one linear system in two layouts")  # fmt: skip
+            _range_verdict(_printed(d35), 0.4, 4.4),
+            f"gain {_direction(_printed(d35))}; one linear system in two layouts")  # fmt: skip
     if "table1_dl" in data:
         r = data["table1_dl"]["rows"]
         for other, label, thesis in (

@@ -512,9 +512,6 @@ def subspace_denoise(v, atoms, modes, denoise, weight):
         and not v.flags.c_contiguous
     ):
         m = np.asarray(atoms[0])
-        rev = v.shape[::-1]
-        coef = (m.T @ v.T.reshape(rev[0], -1)).reshape((m.shape[1], *rev[1:])).T
-        den = np.asfortranarray(denoise(coef, weight))
-        return (m @ den.T.reshape(m.shape[1], -1)).reshape(rev).T
+        return _cube(np.asfortranarray(denoise(_coefficients(v, m), weight)), m)
     coef = tenalg.multi_mode_dot(v, atoms, modes=modes, transpose=True)
     return tenalg.multi_mode_dot(denoise(coef, weight), atoms, modes=modes)

@@ -254,6 +254,7 @@ def gap(
     desc: str = "GAP",
     objective: bool = True,
     guard: float | None = None,
+    step=None,
 ):
     """(Accelerated) generalised alternating projection.  Returns ``(x, history, converged)``.
 
@@ -268,8 +269,16 @@ def gap(
     prior cannot express the scene (a plug-and-play denoiser at a low level),
     that feedback grows instead of shrinking and the iterates diverge — the
     residual is the signal, and it needs no ground truth.
+
+    ``step`` (optional): a callable ``(x, w) -> (x_new, change)`` that takes the place of
+    ``x_new = prior.prox(x + w)`` and its ``relative_change(x_new, x)``, for a prior that keeps
+    the iterate in a form of its own between iterations (the subspace first stage holds
+    coefficient images: :func:`~tensor_cosdi.solvers.subspace.subspace_gap_tv`); ``prior``
+    still gets ``setup`` and ``update`` as usual.
     """
     guard = check_guard(guard)
+    if step is not None and not callable(step):
+        raise ValueError(f"step must be a callable (x, w) -> (x_new, change), got {step!r}")
     best, rises, last = (np.inf, None), 0, np.inf
     lam = eps * sensing_gain(op, g)
     x = least_norm(op, g, eps) if start is None else start
@@ -281,8 +290,16 @@ def gap(
     for it in loop:
         if accelerate:
             g_hat = g_hat + (g - ax)
-        x_new = prior.prox(x + op.apply_adjoint(op.solve_dual(g_hat - ax, lam)))
-        change = relative_change(x_new, x)
+        w = op.apply_adjoint(op.solve_dual(g_hat - ax, lam))
+        if step is None:
+            v = x + w
+            del w  # (the step's cube is not held through the prox)
+            x_new = prior.prox(v)
+            del v
+            change = relative_change(x_new, x)
+        else:
+            x_new, change = step(x, w)
+            del w
         x = x_new
         ax = op.apply(x)
         res = float(tl.norm(ax - g))

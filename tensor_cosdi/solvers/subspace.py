@@ -202,10 +202,7 @@ def subspace_gap_tv(
         prior = _RefitTV(tv_weight, denoise=subspace_tv, at=refit_at, refit=refit)
     desc = "OTD stage 1: panchromatic"
     x0 = engine.least_norm(system.operator, g, eps)
-    if _in_coefficients(g, x0, modes):
-        return _gap_in_coefficients(
-            system.operator, g, x0, prior, mats, denoise, eps, max_iter, progress, desc
-        )
+    step = _CoefficientStep(prior, mats, denoise) if _in_coefficients(g, x0, modes) else None
     x, _, _ = engine.gap(
         system.operator,
         g,
@@ -216,12 +213,13 @@ def subspace_gap_tv(
         progress=progress,
         desc=desc,
         objective=False,  # an internal stage: its history is not returned
+        step=step,
     )
     return x
 
 
 def _in_coefficients(g, x0, modes) -> bool:
-    """Whether :func:`_gap_in_coefficients` can run: NumPy arrays, one spanned axis, the last,
+    """Whether :class:`_CoefficientStep` can run: NumPy arrays, one spanned axis, the last,
     and a Fortran-ordered start (the shear kernels' layout, whose band planes are contiguous)."""
     return (
         isinstance(g, np.ndarray)
@@ -246,45 +244,33 @@ def _cube(c, m):
     return (m @ c.T.reshape(rev[0], -1)).reshape((m.shape[0], *rev[1:])).T
 
 
-def _gap_in_coefficients(op, g, x0, prior, mats, denoise, eps, max_iter, progress, desc):
-    """The accelerated GAP of :func:`~tensor_cosdi.solvers.engine.gap` with the subspace TV
-    prior, its iterates held as the coefficient images ``c`` of ``x = P c``: every iterate
-    after the prox lies in the span of the atoms ``P`` (orthonormal columns), so
-    ``Pᵀ(x + w) = c + Pᵀ w`` and ``‖x′ − x‖ / ‖x′‖ = ‖c′ − c‖ / ‖c′‖``, and the cube-sized sum
-    and stopping quantity of an iteration shrink to the few coefficient images.  The same
-    iterates up to float rounding; the start (the least-norm cube, outside the span) and an
-    iteration after ``refit`` changed ``P`` take the full cube
-    (``benchmarks/results/solver_steps.md``: a first stage at 256×256×28)."""
-    lam = eps * engine.sensing_gain(op, g)
-    prior.setup(x0, penalty=1.0, gain=lam / eps)
-    x, c, basis = x0, None, None  # c: x's coefficients in ``basis`` (None: x is not in a span)
-    g_hat, ax = g, op.apply(x0)
-    loop = engine.Loop(max_iter, 1e-4, progress=progress, desc=desc, objective=False)
-    gnorm = max(float(np.linalg.norm(g)), np.finfo(float).tiny)
-    for it in loop:
-        g_hat = g_hat + (g - ax)
-        w = op.apply_adjoint(op.solve_dual(g_hat - ax, lam))
-        m = mats[0]
-        if c is not None and basis is m:
+class _CoefficientStep:
+    """:func:`~tensor_cosdi.solvers.engine.gap`'s ``step`` for the subspace TV prior with the
+    iterates held as the coefficient images ``c`` of ``x = P c``: every iterate after the prox
+    lies in the span of the atoms ``P`` (orthonormal columns), so ``Pᵀ(x + w) = c + Pᵀ w`` and
+    ``‖x′ − x‖ / ‖x′‖ = ‖c′ − c‖ / ‖c′‖``, and the cube-sized sum and stopping quantity of an
+    iteration shrink to the few coefficient images.  The same iterates up to float rounding;
+    the start (the least-norm cube, outside the span) and an iteration after ``refit`` changed
+    ``P`` take the full cube (``benchmarks/results/solver_steps.md``: a first stage at
+    256×256×28)."""
+
+    def __init__(self, prior, mats, denoise):
+        self.prior, self.mats, self.denoise = prior, mats, denoise
+        self.c, self.basis = None, None  # x's coefficients in ``basis`` (None: x is in no span)
+
+    def __call__(self, x, w):
+        m = self.mats[0]
+        held = self.c is not None and self.basis is m
+        if held:
             v = _coefficients(w, m)
-            v += c
+            v += self.c
         else:  # the start, or the atoms changed: the full cube's coefficients
             v = _coefficients(w + x, m)
-        del w
-        c_new = np.asfortranarray(denoise(v, prior.strength))
+        c_new = np.asfortranarray(self.denoise(v, self.prior.strength))
         x_new = _cube(c_new, m)
-        if c is not None and basis is m:
-            change = relative_change(c_new, c)
-        else:
-            change = relative_change(x_new, x)
-        x, c, basis = x_new, c_new, m
-        ax = op.apply(x)
-        res = float(np.linalg.norm(ax - g))
-        if loop.record(it, residual_norm=res, gnorm=gnorm, change=change, prior_term=np.nan):
-            break
-        if it + 1 < loop.max_iter:
-            prior.update(x, it + 1)
-    return x
+        change = relative_change(c_new, self.c) if held else relative_change(x_new, x)
+        self.c, self.basis = c_new, m
+        return x_new, change
 
 
 #: ``refit_at``'s gate: a fitted mean spectrum whose :func:`spectral_roughness` exceeds this

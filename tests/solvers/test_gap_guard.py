@@ -225,3 +225,30 @@ def test_pnp_gap_splits_by_the_estimated_snr(monkeypatch):
     ):
         with pytest.raises(ValueError, match=match):
             run(p.measurement, **bad)
+
+
+def test_a_step_takes_the_place_of_the_prox_and_its_change(problem):
+    """``engine.gap(step=…)``: a step computing ``prior.prox(x + w)`` and its relative change
+    gives the default run's iterates bit for bit; a step that damps the update gives another
+    run; a step that is not callable is refused before any work."""
+    from tensor_cosdi.solvers._base import relative_change
+    from tensor_cosdi.solvers.priors import TV
+
+    op, g = problem
+    ref, ref_hist, _ = engine.gap(op, g, TV(0.05), max_iter=8)
+    prior, seen = TV(0.05), []
+
+    def step(x, w):
+        seen.append(w.shape)
+        x_new = prior.prox(x + w)
+        return x_new, relative_change(x_new, x)
+
+    got, hist, _ = engine.gap(op, g, prior, max_iter=8, step=step)
+    np.testing.assert_array_equal(got, ref)
+    assert hist["change"] == ref_hist["change"] and len(seen) == 8
+    damped, _, _ = engine.gap(
+        op, g, TV(0.05), max_iter=8, step=lambda x, w: (x + 0.5 * w, 0.5)
+    )  # fmt: skip
+    assert np.linalg.norm(damped - ref) > 1e-3 * np.linalg.norm(ref)
+    with pytest.raises(ValueError, match="step must be a callable"):
+        engine.gap(op, g, TV(0.05), step="prox")

@@ -1,19 +1,11 @@
 """The cross-validation helpers of ``benchmarks/_protocol.py`` (choices and scene views)."""
 
-import importlib.util
-from pathlib import Path
-
 import pytest
-
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "_protocol.py"
 
 
 @pytest.fixture(scope="module")
-def protocol():
-    spec = importlib.util.spec_from_file_location("bench_protocol", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+def protocol(benchmark_script):
+    return benchmark_script("_protocol")
 
 
 def _two_candidates(seconds_a, seconds_b):
@@ -150,12 +142,8 @@ def test_scene_views(protocol):
         (["--methods", "otd,gap_tv", "--versus", "otd"], "must be METHOD:OTHER"),
     ],
 )
-def test_real_spectra_refuses_bad_cv_options(argv, message, monkeypatch, tmp_path):
-    monkeypatch.syspath_prepend(str(_PATH.parent))
-    path = _PATH.parent / "real_spectra.py"
-    spec = importlib.util.spec_from_file_location("bench_real_spectra", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+def test_real_spectra_refuses_bad_cv_options(argv, message, benchmark_script, tmp_path):
+    mod = benchmark_script("real_spectra")
     with pytest.raises(SystemExit, match=message):
         mod.main([*argv, "--out", str(tmp_path)])
     assert not any(tmp_path.iterdir())  # refused before any run or file
@@ -166,14 +154,6 @@ def test_positive_numbers_parses_a_list_and_refuses_anything_else_by_flag(protoc
     for bad in ("", "0.1,", "x", "0", "-0.1", "nan", "inf", "0.1;0.2"):
         with pytest.raises(SystemExit, match="--lams takes finite numbers > 0"):
             protocol.positive_numbers(bad, "--lams")
-
-
-def _script(name, monkeypatch):
-    monkeypatch.syspath_prepend(str(_PATH.parent))
-    spec = importlib.util.spec_from_file_location(f"bench_{name}", _PATH.parent / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 @pytest.mark.parametrize(
@@ -187,9 +167,9 @@ def _script(name, monkeypatch):
     ],
 )
 def test_otd_lam_systems_refuses_bad_options_before_any_run(
-    options, message, monkeypatch, tmp_path
+    benchmark_script, options, message, tmp_path
 ):
-    mod = _script("otd_lam_systems", monkeypatch)
+    mod = benchmark_script("otd_lam_systems")
     out = tmp_path / "lam.md"
     with pytest.raises(SystemExit, match=message):
         mod.main(["--system", "cs2li", "--options", options, "--out", str(out)])
@@ -207,16 +187,18 @@ def test_otd_lam_systems_refuses_bad_options_before_any_run(
         (["--light", "A,daylight"], "--light: .*must be a key of colour.SDS_ILLUMINANTS"),
     ],
 )
-def test_pan_spectrum_pick_refuses_bad_options_before_any_run(argv, message, monkeypatch, tmp_path):
-    mod = _script("pan_spectrum_pick", monkeypatch)
+def test_pan_spectrum_pick_refuses_bad_options_before_any_run(
+    benchmark_script, argv, message, tmp_path
+):
+    mod = benchmark_script("pan_spectrum_pick")
     with pytest.raises(SystemExit, match=message):
         mod.main([*argv, "--out", str(tmp_path)])
     assert not any(tmp_path.iterdir())
 
 
-def test_pan_spectrum_pick_margin_rule_is_the_library_s(monkeypatch):
+def test_pan_spectrum_pick_margin_rule_is_the_library_s(benchmark_script):
     """A margin picks the weighted stage exactly where ``keeps_fitted`` does; ``inf`` always."""
-    mod = _script("pan_spectrum_pick", monkeypatch)
+    mod = benchmark_script("pan_spectrum_pick")
     row = {"misfit_flat": 2.0, "misfit_fitted": 2.1}  # 5 % above
     assert [mod.kept(row, m) for m in (0.0, 0.04, 0.05, 0.2, float("inf"))] == [
         False, False, True, True, True
@@ -224,9 +206,9 @@ def test_pan_spectrum_pick_margin_rule_is_the_library_s(monkeypatch):
     assert mod.kept({"misfit_flat": 2.0, "misfit_fitted": 1.0}, 0.0)
 
 
-def test_denoiser_weights_refuses_an_unknown_illuminant(monkeypatch, tmp_path):
+def test_denoiser_weights_refuses_an_unknown_illuminant(benchmark_script, tmp_path):
     pytest.importorskip("torch")
-    mod = _script("denoiser_weights", monkeypatch)
+    mod = benchmark_script("denoiser_weights")
     weights = tmp_path / "w.pt"
     weights.write_bytes(b"")
     with pytest.raises(SystemExit, match="--illuminant: unknown 'a'"):
@@ -262,10 +244,10 @@ def test_machine_names_the_cpu_and_whether_it_runs_bfloat16_natively(protocol, m
     ],
 )
 def test_denoiser_weights_refuses_a_bad_budget_question_or_reference(
-    extra, message, monkeypatch, tmp_path
+    benchmark_script, extra, message, tmp_path
 ):
     pytest.importorskip("torch")
-    mod = _script("denoiser_weights", monkeypatch)
+    mod = benchmark_script("denoiser_weights")
     weights = tmp_path / "w.pt"
     weights.write_bytes(b"")
     if "--reference" in extra:
@@ -275,8 +257,8 @@ def test_denoiser_weights_refuses_a_bad_budget_question_or_reference(
     assert not (tmp_path / "dw.md").exists()
 
 
-def test_denoiser_weights_verdict_is_computed_from_the_means_and_the_seconds(monkeypatch):
-    mod = _script("denoiser_weights", monkeypatch)
+def test_denoiser_weights_verdict_is_computed_from_the_means_and_the_seconds(benchmark_script):
+    mod = benchmark_script("denoiser_weights")
     snrs = [None, 30.0]
     assert "candidate replaces the reference (noiseless +0.00 dB, 30 dB +0.10 dB)" in mod.verdict(
         "candidate", [30.0, 28.1], [30.0, 28.0], snrs, [9.0]
@@ -288,12 +270,12 @@ def test_denoiser_weights_verdict_is_computed_from_the_means_and_the_seconds(mon
     assert "is within 1 dB" in line and "(5.0 s) fits the 5-s budget" in line
 
 
-def test_real_spectra_versus_lines_are_computed_from_the_rows(monkeypatch):
+def test_real_spectra_versus_lines_are_computed_from_the_rows(benchmark_script):
     """``--versus A:B``: a line for ``A`` against ``B`` over every scene and condition, from the
     stored PSNRs, beside the lines against the reference."""
     import argparse
 
-    mod = _script("real_spectra", monkeypatch)
+    mod = benchmark_script("real_spectra")
     psnr = {("plain_gap_tv", "a"): 25.0, ("plain_gap_tv", "b"): 25.0, ("otd", "a"): 27.0,
             ("otd", "b"): 24.0, ("dcosnet", "a"): 26.0, ("dcosnet", "b"): 26.5}  # fmt: skip
 
@@ -315,13 +297,13 @@ def test_real_spectra_versus_lines_are_computed_from_the_rows(monkeypatch):
         "(-1.00 to +2.50 dB, mean +0.75)." in text  # fmt: skip
 
 
-def test_real_spectra_loads_torch_only_for_a_learned_method(monkeypatch):
+def test_real_spectra_loads_torch_only_for_a_learned_method(benchmark_script):
     """Stored runs of a learned method still get the machine's bfloat16 line: torch is loaded
     for it (and only for it) before the results are written."""
     pytest.importorskip("torch")
     import sys
 
-    mod = _script("real_spectra", monkeypatch)
+    mod = benchmark_script("real_spectra")
     assert mod._load_torch_if_needed(["plain_gap_tv", "otd", "gap_tv"]) is False
     assert mod._load_torch_if_needed(["otd", "pnp_fast+bf16"]) is True
     assert "torch" in sys.modules

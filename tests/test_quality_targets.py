@@ -1,21 +1,15 @@
 """``benchmarks/quality_targets.py``: every verdict follows from the leads and seconds it prints."""
 
-import importlib.util
 import json
-from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "quality_targets.py"
 SCENES = ("beads", "face", "real_and_fake_apples")
 
 
 @pytest.fixture(scope="module")
-def targets():
-    spec = importlib.util.spec_from_file_location("bench_quality_targets", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+def targets(benchmark_script):
+    return benchmark_script("quality_targets")
 
 
 def _runs(method, snr, psnrs, seconds, mask="tsa", options=None):

@@ -14,7 +14,9 @@ the targets:
 Every verdict is computed from the numbers printed beside it (rounded as printed), never
 typed.  Seconds are those of the run that wrote each file on its machine (its
 ``plain_gap_tv`` seconds give that run's scale); ``pnp_fast`` on the plain report scenes
-comes from its own file (the float32 network of a CPU without native bfloat16).
+comes from its own file (the float32 network of a CPU without native bfloat16), and a block
+of its own gives ``pnp_fast`` where bfloat16 is native (``pnp_precision.json``, whose rows
+are older: the sources line names each file's commits).
 
     python benchmarks/quality_targets.py [--out benchmarks/results]
 """
@@ -37,6 +39,9 @@ SOURCES = (
         ("real_spectra.json", ("plain_gap_tv", "otd", "pnp_gap")),
         ("pnp_fast_no_bf16.json", ("plain_gap_tv", "pnp_fast")),
     ]),
+    ("report scenes, CPU with native bfloat16", [
+        ("pnp_precision.json", ("plain_gap_tv", "pnp_gap", "pnp_fast")),
+    ]),
     ("lit by CIE A", [("real_spectra_lit_a.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast"))]),
     ("lit by LED-B3", [
         ("real_spectra_lit_led.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast")),
@@ -45,6 +50,10 @@ SOURCES = (
         ("real_spectra_lit_fl2.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast")),
     ]),
 )  # fmt: skip
+
+#: Blocks whose rows speak to the fast path only (the learned method's own verdicts come from the
+#: current report table above them; here ``pnp_gap`` is the reference ``pnp_fast`` is held to).
+FAST_ONLY = ("report scenes, CPU with native bfloat16",)
 
 TRAINING_FREE = {"method": "otd", "lead_db": 3.0, "seconds": 10.0}
 LEARNED = {"method": "pnp_gap", "lead_db": 6.0, "snrs": (None, 30.0)}
@@ -153,6 +162,8 @@ def table(results: Path) -> tuple[list[str], dict]:
             slot = per_cond[(mask, snr)]
             values = condition(slot["methods"], slot["gap_tv"] or {})
             v = verdicts(values, snr)
+            if label in FAST_ONLY:
+                v["training-free"] = v["learned"] = "—"
             for k, verdict in v.items():
                 if verdict != "—":
                     tally[k].append(verdict)

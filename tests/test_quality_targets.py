@@ -68,3 +68,12 @@ def test_the_table_reads_each_file_and_counts_the_verdicts_it_prints(targets, tm
     assert "rows computed at commit abc1234 (9 rows)" in text
     assert "`pnp_fast_no_bf16.md`: no table" in text
     assert (tmp_path / "quality_targets.md").read_text().startswith("# Quality targets")
+    # the bfloat16 block speaks to the fast path only: no second verdict on pnp_gap's own target
+    bf16 = base + _runs("pnp_gap", None, (26, 31, 36), 20.0)
+    bf16 += _runs("pnp_fast", None, (25.5, 30.5, 35.5), 4.5)
+    (tmp_path / "pnp_precision.json").write_text(json.dumps({"runs": bf16}))
+    text = targets.main(["--out", str(tmp_path)])
+    row = next(line for line in text.splitlines() if "native bfloat16 |" in line)
+    assert [c.strip() for c in row.strip("|").split("|")][7:] == ["0.50", "—", "—", "yes", "yes"]
+    assert "* pnp_gap ≥ +6 dB (noiseless, 30 dB): met in 1 of 1 conditions." in text
+    assert "* pnp_fast within 1 dB of pnp_gap: met in 1 of 2 conditions." in text

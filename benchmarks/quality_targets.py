@@ -42,6 +42,9 @@ SOURCES = (
     ("report scenes, CPU with native bfloat16", [
         ("pnp_precision.json", ("plain_gap_tv", "pnp_gap", "pnp_fast")),
     ]),
+    ("report scenes magnified 4×", [
+        ("real_spectra_zoom4.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast")),
+    ]),
     ("lit by CIE A", [("real_spectra_lit_a.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast"))]),
     ("lit by LED-B3", [
         ("real_spectra_lit_led.json", ("plain_gap_tv", "otd", "pnp_gap", "pnp_fast")),

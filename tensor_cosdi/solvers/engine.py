@@ -293,7 +293,7 @@ def gap(
         w = op.apply_adjoint(op.solve_dual(g_hat - ax, lam))
         if step is None:
             v = x + w
-            del w  # (the step's cube is not held through the prox)
+            del w  # freed before the prox runs, as the one-expression form did
             x_new = prior.prox(v)
             del v
             change = relative_change(x_new, x)

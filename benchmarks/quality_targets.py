@@ -127,11 +127,12 @@ def _yes(ok: bool) -> str:
     return "yes" if ok else "no"
 
 
-def _cell(values: dict, method: str, seconds: bool = True) -> str:
+def _cell(values: dict, method: str) -> str:
+    """A method's lead and median seconds as the table prints them (``—``: not run)."""
     if method not in values:
         return "—"
     lead, s = values[method]
-    return f"{lead:+.2f} ({s:.2f} s)" if seconds else f"{lead:+.2f}"
+    return f"{lead:+.2f} ({s:.2f} s)"
 
 
 def table(results: Path) -> tuple[list[str], dict]:

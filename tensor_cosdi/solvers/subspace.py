@@ -200,7 +200,6 @@ def subspace_gap_tv(
                 mats[0] = span(modes[0], np.maximum(w, refit_floor))
 
         prior = _RefitTV(tv_weight, denoise=subspace_tv, at=refit_at, refit=refit)
-    desc = "OTD stage 1: panchromatic"
     x0 = engine.least_norm(system.operator, g, eps)
     step = _CoefficientStep(prior, mats, denoise) if _in_coefficients(g, x0, modes) else None
     x, _, _ = engine.gap(
@@ -211,7 +210,7 @@ def subspace_gap_tv(
         start=x0,
         max_iter=max_iter,
         progress=progress,
-        desc=desc,
+        desc="OTD stage 1: panchromatic",
         objective=False,  # an internal stage: its history is not returned
         step=step,
     )

@@ -1398,7 +1398,7 @@ def verdicts(data):
         row(
             "C3SLFI: the 3-D form sparser than the 5-D one, OTD's basis (Fig. 45)", "sparser",
             _spread(np.asarray(g) * 100, "{:+.2f}", " %"),
-                _gain_verdict(_printed(np.asarray(g) * 100)),
+            _gain_verdict(_printed(np.asarray(g) * 100)),
             "ours: the 5-D minus the 3-D share holding 99.9 % of the energy; WDCT: "
             f"{_gain_verdict(gw)}",
         )  # fmt: skip
